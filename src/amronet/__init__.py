@@ -1,0 +1,27 @@
+"""amronet: build and evaluate Ad-hoc Mobile Router Networks (AMRoNet).
+
+Example:
+    >>> import amronet
+    >>> result = amronet.run("self-spreading-6x6", seed=3, overrides={"sim.time_limit": 5})
+    >>> 0.0 <= result.summary["coverage"] <= 1.0
+    True
+"""
+
+__version__ = "0.1.0"
+
+from amronet.api import run  # noqa: E402
+from amronet.errors import AmronetError, MapError, ScenarioError  # noqa: E402
+from amronet.scenario import Scenario, list_presets, load_scenario  # noqa: E402
+from amronet.sim import Simulation  # noqa: E402
+
+__all__ = [
+    "AmronetError",
+    "MapError",
+    "Scenario",
+    "ScenarioError",
+    "Simulation",
+    "__version__",
+    "list_presets",
+    "load_scenario",
+    "run",
+]

@@ -1,0 +1,179 @@
+"""Self-spreading (paper section 4.2, with the triangular deployment and optimizations of 4.3).
+
+Routers start at the base stations with status -1 in state *explore* and random-walk with obstacle avoidance.
+Each keeps a current reference (a base node or deployed router within ``r_c``). A router that is **about to
+lose its last reference** — every reference it hears is at least ``(1 - loss_margin) r_c`` away — stops,
+becomes a *reference* and takes the status of its current reference. A router whose current reference has
+status ``i`` that hears a reference of status ``p != i`` goes into *triangle* state with status ``i`` and drives
+to the triangular goal point (:mod:`amronet.algorithms.triangular`); it settles there, or earlier when it is
+blocked for ``give_up_steps`` steps in a row, or when a move would take it farther than
+``(1 - loss_margin) r_c`` from either of its two references.
+
+Everything a router decides comes from its own range readings and its own row of the neighbour table:
+distances to the nodes within ``r_c`` and what they announce (state, status, the local-rule flag, position for
+the triangle goal). The ``global`` rule additionally asks the deployed network whether two components are
+already joined, which is the paper's global-communication strategy.
+
+Why ``loss_margin`` default 0.05: a router moves at most ``max_speed * dt`` per step and must not cross the band
+``[(1 - loss_margin) r_c, r_c]`` in one step, or it would lose its reference before noticing. With the Bebot
+defaults (0.2 m/s, dt 0.1 s) one step is 0.02 m, well inside the 0.05 m band at ``r_c`` = 1 m. The band is
+checked against the step length when a run starts.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, StrictInt
+
+from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.references import track_references
+from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
+from amronet.errors import ScenarioError
+from amronet.motion import go_to_goal, random_walk
+from amronet.robots import Kind, State
+
+__all__ = ["SelfSpreading", "SelfSpreadingParams"]
+
+
+class SelfSpreadingParams(BaseModel):
+    """Parameters of self-spreading.
+
+    Attributes:
+        triangular: Triangular deployment: ``off`` (greedy only, an ablation), ``none`` (triangular deployment
+            without optimization), ``global`` or ``local`` (the optimizations of paper 4.3).
+        loss_margin: Width of the "about to lose" band as a fraction of ``r_c``.
+        turn_noise: Heading noise of the random walk, radians per square-root second.
+        give_up_steps: Consecutive blocked steps after which a triangle router stops short of its goal.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    triangular: TriangularMode = "local"
+    loss_margin: Annotated[float, Field(gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
+    turn_noise: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
+    give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
+
+
+@register_algorithm("self-spreading")
+class SelfSpreading(Controller):
+    """Controller of self-spreading routers."""
+
+    Params = SelfSpreadingParams
+    params: SelfSpreadingParams
+
+    def __init__(self, *args, **kwargs) -> None:  # noqa: D107
+        super().__init__(*args, **kwargs)
+        sw = self.swarm
+        n = len(sw)
+        self.r_eff = (1.0 - self.params.loss_margin) * self.r_c
+        routers = sw.kind == Kind.ROUTER
+        step = float(sw.max_speed[routers].max(initial=0.0)) * self.dt
+        band = self.params.loss_margin * self.r_c
+        if step >= band:
+            raise ScenarioError(
+                "algorithm.params.loss_margin",
+                f"the 'about to lose' band ({band:.3g} m) must be wider than one router step ({step:.3g} m); "
+                "raise loss_margin or lower sim.dt",
+            )
+        self.current = np.full(n, -1, dtype=np.int64)
+        self.goal = np.zeros((n, 2))
+        self.tri_refs = np.full((n, 2), -1, dtype=np.int64)
+        self.blocked_steps = np.zeros(n, dtype=np.int64)
+        self.disabled = np.zeros(n, dtype=bool)
+        self.refused = np.zeros(n, dtype=bool)
+        self.router_model = int(sw.model[routers][0]) if routers.any() else 0
+
+    @property
+    def settled(self) -> bool:  # noqa: D102
+        return not np.isin(self.swarm.state, (State.EXPLORE, State.TRIANGLE)).any()
+
+    def decide(self, step: StepInput) -> Command:  # noqa: D102
+        sw = self.swarm
+        explorers = np.flatnonzero(sw.state == State.EXPLORE)
+        if len(explorers):
+            self._decide_explorers(step, explorers)
+        movers = np.flatnonzero(np.isin(sw.state, (State.EXPLORE, State.TRIANGLE)))
+        speed = sw.max_speed[movers].copy()
+        if len(movers) == 0:
+            return Command(movers, speed)
+        model = self.router_model
+        scans = step.readings.of(movers, model)
+        sensor_range = sw.models[model].sensor_range
+        walking = sw.state[movers] == State.EXPLORE
+        w = movers[walking]
+        sigma = self.params.turn_noise * np.sqrt(self.dt)
+        sw.heading[w] = random_walk(sw.heading[w], scans[walking], sensor_range, self.refused[w], self.rng, sigma)
+        tri = movers[~walking]
+        if len(tri):
+            speed[~walking] = self._steer_triangles(tri, scans[~walking], sensor_range, speed[~walking])
+        return Command(movers, speed)
+
+    def _decide_explorers(self, step: StepInput, explorers: np.ndarray) -> None:
+        sw = self.swarm
+        is_ref = sw.deployed
+        view = track_references(step.table, explorers, self.current[explorers], is_ref, sw.status)
+        self.current[explorers] = view.current
+
+        triangles = np.zeros(len(explorers), dtype=bool)
+        if self.params.triangular != "off":
+            cand = np.flatnonzero(view.other >= 0)
+            if len(cand):
+                committed = is_ref | (sw.state == State.TRIANGLE)
+                go = select_triangles(
+                    self.params.triangular, explorers[cand], view.current[cand], view.other[cand], sw.xy,
+                    self.r_c, self.disabled, step.table.adjacency, committed,
+                )
+                triangles[cand[go]] = True
+        if triangles.any():
+            who = explorers[triangles]
+            ref_i, ref_j = view.current[triangles], view.other[triangles]
+            sw.state[who] = State.TRIANGLE
+            sw.status[who] = sw.status[ref_i]
+            self.tri_refs[who] = np.stack([ref_i, ref_j], axis=1)
+            self.goal[who] = triangle_goal(sw.xy[ref_i], sw.xy[ref_j], sw.xy[who], self.r_eff)
+            self.blocked_steps[who] = 0
+            if self.params.triangular == "local":
+                self.disabled[np.concatenate([who, ref_i, ref_j])] = True
+
+        losing = view.has_reference & (view.nearest_distance >= self.r_eff) & ~triangles
+        who = explorers[losing]
+        sw.state[who] = State.REFERENCE
+        sw.status[who] = sw.status[view.current[losing]]
+
+    def _steer_triangles(
+        self, tri: np.ndarray, scans: np.ndarray, sensor_range: float, speed: np.ndarray
+    ) -> np.ndarray:
+        sw = self.swarm
+        xy = sw.xy[tri]
+        goal = self.goal[tri]
+        to_goal = np.linalg.norm(goal - xy, axis=1)
+        sw.heading[tri] = go_to_goal(xy, sw.heading[tri], goal, scans, sensor_range)
+        speed = np.minimum(speed, to_goal / self.dt)
+        step_vec = (speed * self.dt)[:, None] * np.stack([np.cos(sw.heading[tri]), np.sin(sw.heading[tri])], axis=1)
+        nxt = xy + step_vec
+        refs = self.tri_refs[tri]
+        ok = np.ones(len(tri), dtype=bool)
+        for k in range(2):
+            p_ref = sw.xy[refs[:, k]]
+            now = np.linalg.norm(xy - p_ref, axis=1)
+            after = np.linalg.norm(nxt - p_ref, axis=1)
+            ok &= after <= np.maximum(now, self.r_eff)
+        speed = np.where(ok, speed, 0.0)
+        progress = to_goal - np.linalg.norm(goal - np.where(ok[:, None], nxt, xy), axis=1)
+        min_progress = 0.25 * sw.max_speed[tri] * self.dt
+        blocked = progress < min_progress
+        arrived = to_goal <= 1e-9
+        self.blocked_steps[tri] = np.where(blocked & ~arrived, self.blocked_steps[tri] + 1, 0)
+        give_up = self.blocked_steps[tri] >= self.params.give_up_steps
+        done = arrived | give_up
+        sw.state[tri[done]] = State.TRIANGLE_SETTLED
+        return np.where(done, 0.0, speed)
+
+    def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
+        self.refused[:] = False
+        self.refused[movers] = refused
+        tri = movers[self.swarm.state[movers] == State.TRIANGLE]
+        arrived = np.linalg.norm(self.swarm.xy[tri] - self.goal[tri], axis=1) <= 1e-9
+        self.swarm.state[tri[arrived]] = State.TRIANGLE_SETTLED

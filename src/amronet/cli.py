@@ -1,0 +1,159 @@
+"""The ``amronet`` command line.
+
+Every error a user can cause prints one line ``amronet: error: ...`` on stderr and exits with status 2;
+nothing is written then.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from amronet import __version__
+from amronet.errors import AmronetError
+
+__all__ = ["main"]
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from amronet.results import RunResult  # noqa: F401 - import cost paid here, not for --help
+    from amronet.scenario import load_scenario, parse_override
+    from amronet.sim import Simulation
+
+    if (args.scenario is None) == (args.preset is None):
+        raise AmronetError("run: give either a scenario file or --preset NAME (amronet presets lists them)")
+    overrides = dict(parse_override(item) for item in args.set or [])
+    scenario = load_scenario(args.scenario if args.scenario is not None else args.preset, overrides)
+    sim = Simulation(scenario, args.seed)
+    quiet = args.quiet
+
+    def progress(t: float, limit: float) -> None:
+        if not quiet and sys.stderr.isatty():
+            print(f"\r  t = {t:7.1f} s / {limit:g} s", end="", file=sys.stderr, flush=True)
+
+    result = sim.run(progress=progress)
+    if not quiet and sys.stderr.isatty():
+        print(file=sys.stderr)
+    result.save(args.out, snapshot=not args.no_snapshot)
+    s = result.summary
+    if not quiet:
+        print(f"{s['algorithm']} on {s['map']} (seed {s['seed']}, r_c = {s['r_c']:g} m): "
+              f"{s['stop_reason']} after {s['sim_time_s']:g} s simulated, {s['wall_time_s']:.1f} s wall")
+        print(f"  nodes: {s['nodes_total']} ({s['routers_deployed']} deployed routers of {s['routers_total']}, "
+              f"{s['nodes_total'] - s['routers_deployed']} base nodes); states {s['states']}")
+        print(f"  coverage {100 * s['coverage']:.2f} %, connected coverage {100 * s['connected_coverage']:.2f} % "
+              f"of {s['reachable_area_m2']:.1f} m² reachable ({s['coverage_method']})")
+        print(f"  wrote {args.out}/: summary.json timeseries.csv network.json"
+              + ("" if args.no_snapshot else " snapshot.png"))
+    return 0
+
+
+def _cmd_maps_list(args: argparse.Namespace) -> int:
+    from amronet.world.builtin import list_builtin_maps
+
+    infos = list_builtin_maps()
+    if args.json:
+        print(json.dumps([{"name": m.name, "width_m": m.size_m[0], "height_m": m.size_m[1],
+                           "resolution": m.resolution, "description": m.description, "licence": m.licence}
+                          for m in infos], indent=2))
+        return 0
+    print(f"{'name':<18} {'size (m)':>13} {'m/cell':>7}  description")
+    for m in infos:
+        size = f"{m.size_m[0]:.1f} x {m.size_m[1]:.1f}"
+        print(f"{m.name:<18} {size:>13} {m.resolution:>7g}  {m.description}")
+    return 0
+
+
+def _cmd_maps_show(args: argparse.Namespace) -> int:
+    from amronet.results import write_file_atomically
+    from amronet.viz import save_map_picture
+    from amronet.world.builtin import resolve_map
+
+    omap = resolve_map(args.map)
+    out = Path(args.out)
+    if out.suffix.lower() not in (".png", ".svg"):
+        raise AmronetError(f"--out: {args.out!r} must end in .png or .svg")
+    write_file_atomically(out, lambda tmp: save_map_picture(omap, tmp))
+    w, h = omap.size_m
+    print(f"{omap.name}: {w:.1f} m x {h:.1f} m at {omap.resolution:g} m/cell -> {out}")
+    return 0
+
+
+def _cmd_presets(args: argparse.Namespace) -> int:
+    from amronet.scenario import list_presets
+
+    for name, desc in list_presets().items():
+        print(f"{name:<30} {desc}")
+    return 0
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from amronet.bench import run_bench
+
+    report = run_bench(algorithm=args.algorithm, robots=args.robots, steps=args.steps, map_name=args.map,
+                       seed=args.seed, r_c=args.rc)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        for key, value in report.items():
+            print(f"{key:>26}: {value}")
+    return 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="amronet", description="Build and evaluate Ad-hoc Mobile Router Networks.")
+    p.add_argument("--version", action="version", version=f"amronet {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run one scenario with one seed")
+    r.add_argument("scenario", nargs="?", help="scenario YAML file")
+    r.add_argument("--preset", help="a built-in scenario instead of a file (amronet presets)")
+    r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    r.add_argument("--out", required=True, help="output folder (replaced atomically)")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field, e.g. radio.r_c=1.5")
+    r.add_argument("--no-snapshot", action="store_true", help="skip snapshot.png")
+    r.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    r.set_defaults(func=_cmd_run)
+
+    m = sub.add_parser("maps", help="built-in maps")
+    msub = m.add_subparsers(dest="maps_command", required=True)
+    ml = msub.add_parser("list", help="list built-in maps with their sizes")
+    ml.add_argument("--json", action="store_true")
+    ml.set_defaults(func=_cmd_maps_list)
+    ms = msub.add_parser("show", help="draw a map (free / occupied / unknown, to scale)")
+    ms.add_argument("map", help="built-in map name or ROS map_server YAML")
+    ms.add_argument("--out", required=True, help="picture to write (.png or .svg)")
+    ms.set_defaults(func=_cmd_maps_show)
+
+    ps = sub.add_parser("presets", help="list built-in scenarios")
+    ps.set_defaults(func=_cmd_presets)
+
+    b = sub.add_parser("bench", help="measure robot-steps per second of an algorithm's full step")
+    b.add_argument("--algorithm", default="self-spreading")
+    b.add_argument("--robots", type=int, default=3000)
+    b.add_argument("--steps", type=int, default=500)
+    b.add_argument("--map", default="hospital_section")
+    b.add_argument("--rc", type=float, default=1.0, help="communication radius (default 1 m)")
+    b.add_argument("--seed", type=int, default=0)
+    b.add_argument("--json", action="store_true", help="print the report as JSON")
+    b.set_defaults(func=_cmd_bench)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``amronet`` command."""
+    args = _parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except AmronetError as exc:
+        print(f"amronet: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("amronet: interrupted; nothing was written", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

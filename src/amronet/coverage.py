@@ -1,0 +1,349 @@
+"""Coverage, Eq. (1) of the paper: the area of the union of the nodes' disks over the area that counts.
+
+``Coverage = |(D_1 u ... u D_N) n M| / |M|`` where ``D_i`` is the disk of radius ``r`` around node ``i`` and
+``M`` is the area that counts (usually the reachable free space), given as a boolean mask of map cells.
+
+Two methods, one class that prepares the mask once:
+
+* ``"raster"`` (the default) counts the mask cells whose **centre** lies within ``r`` of some node, i.e. cell
+  ``(i, j)`` with centre ``(cx, cy) = (ox + (j + 0.5) * res, oy + (i + 0.5) * res)`` is covered when
+  ``(cx - x)**2 + (cy - y)**2 <= r**2`` (evaluated exactly this way in float64). It runs a scanline in
+  numba: nodes are bucketed by row, and for every grid row the column interval of cell centres inside each
+  disk that spans the row is computed in closed form, the intervals are merged and the mask cells under each
+  merged interval are read from a per-row prefix sum. No cell is ever painted.
+* ``"exact"`` intersects the polygonal union of the disks with the polygon of the mask cells (shapely 2).
+  Each disk is a regular ``4 * QUAD_SEGS``-gon with the **area-preserving** circumradius
+  ``r' = r * sqrt(2 pi / (n sin(2 pi / n)))``, so a lone disk has exactly the area ``pi r**2``.
+
+How far apart are the two? Raster error lives only on the disks' boundaries (a mask cell that a disk's
+boundary crosses counts 0 or 1 instead of its covered fraction), so the difference in cells is of the order
+of the boundary length in cells, with heavy cancellation (the Gauss circle problem). Measured over random
+maps and layouts (see ``tests/test_coverage.py``): for ``rho = r / res >= 10`` cells,
+``|raster - exact| <= 0.5 * N * rho / A`` with ``A`` the number of mask cells and ``N`` the number of nodes,
+which is well under 0.2 percentage points on maps of a few hundred cells a side; in practice the error is
+a few times smaller still.
+
+Example:
+    >>> import numpy as np
+    >>> from amronet.world import OccupancyMap
+    >>> omap = OccupancyMap("open", 0.02, (0.0, 0.0), np.zeros((300, 300), dtype=np.int8))
+    >>> area = CoverageArea(omap, omap.free)
+    >>> round(area.fraction(np.array([[3.0, 3.0]]), 1.0), 3)  # pi / 36
+    0.087
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from numba import njit
+
+from amronet.world.occupancy import OccupancyMap
+
+__all__ = ["METHODS", "QUAD_SEGS", "CoverageArea", "disk_radius_area_preserving"]
+
+METHODS: tuple[str, ...] = ("raster", "exact")
+"""The coverage methods :meth:`CoverageArea.fraction` accepts."""
+
+QUAD_SEGS: int = 16
+"""Segments per quarter circle of the ``exact`` method's disks (a 64-gon)."""
+
+_INSERTION_MAX = 24  # rows with at most this many intervals are merged after an insertion sort
+
+
+def disk_radius_area_preserving(r: float, n: int) -> float:
+    """Circumradius of the regular ``n``-gon whose area equals that of the disk of radius ``r``.
+
+    Args:
+        r: Disk radius.
+        n: Number of vertices of the polygon (``n >= 3``).
+
+    Returns:
+        ``r * sqrt(2 pi / (n sin(2 pi / n)))``.
+    """
+    return r * math.sqrt(2.0 * math.pi / (n * math.sin(2.0 * math.pi / n)))
+
+
+# --------------------------------------------------------------------------------------------------------
+# raster: the numba scanline
+# --------------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _inside(j, x, dy2, r2, ox, res):
+    dx = ox + (j + 0.5) * res - x
+    return dx * dx + dy2 <= r2
+
+
+@njit(cache=True)
+def _scan(xy, r, ox, oy, res, prefix, out, paint):
+    """Count (and, if ``paint``, mark in ``out``) the mask cells the disks cover; -1 if xy is not finite."""
+    n = xy.shape[0]
+    nrows = prefix.shape[0]
+    ncols = prefix.shape[1] - 1
+    for k in range(n):
+        if not (np.isfinite(xy[k, 0]) and np.isfinite(xy[k, 1])):
+            return -1
+    r2 = r * r
+    rc = r / res
+    # counting sort of the nodes by the row of their centre, clipped to -1 (below the map) .. nrows (above);
+    # a disk spans rows within w of its centre's row, so nodes further out than that cannot reach the map
+    w = int(min(math.ceil(rc) + 1.0, nrows + 2.0))
+    wf = rc + 2.0
+    bucket = np.empty(n, np.int64)
+    counts = np.zeros(nrows + 3, np.int64)
+    for k in range(n):
+        v = (xy[k, 1] - oy) / res
+        if v < -wf or v > nrows + wf:
+            bucket[k] = -1
+        else:
+            b = math.floor(min(max(v, -1.0), float(nrows))) + 1
+            bucket[k] = b
+            counts[b + 1] += 1
+    for b in range(nrows + 2):
+        counts[b + 1] += counts[b]
+    fill = counts[:-1].copy()
+    order = np.empty(counts[nrows + 2], np.int64)
+    for k in range(n):
+        b = bucket[k]
+        if b >= 0:
+            order[fill[b]] = k
+            fill[b] += 1
+
+    starts = np.empty(order.shape[0], np.int64)
+    ends = np.empty(order.shape[0], np.int64)
+    reach = np.zeros(ncols + 1, np.int64)
+    total = 0
+    for i in range(nrows):
+        cy = oy + (i + 0.5) * res
+        lo = counts[max(i - w, -1) + 1]  # nodes whose centre row is in i - w .. i + w
+        hi = counts[min(i + w, nrows) + 2]
+        m = 0
+        smin = ncols
+        emax = 0
+        for p in range(lo, hi):
+            k = order[p]
+            x = xy[k, 0]
+            dy = cy - xy[k, 1]
+            dy2 = dy * dy
+            if dy2 > r2:
+                continue
+            hw = math.sqrt(r2 - dy2)
+            flo = (x - hw - ox) / res - 0.5
+            fhi = (x + hw - ox) / res - 0.5
+            if flo > ncols or fhi < -1.0:
+                continue
+            jlo = math.ceil(max(flo, 0.0))
+            jhi = math.floor(min(fhi, ncols - 1.0))
+            # make the interval agree exactly with the cell-centre test
+            while jlo > 0 and _inside(jlo - 1, x, dy2, r2, ox, res):
+                jlo -= 1
+            while jlo <= jhi and not _inside(jlo, x, dy2, r2, ox, res):
+                jlo += 1
+            while jhi < ncols - 1 and _inside(jhi + 1, x, dy2, r2, ox, res):
+                jhi += 1
+            while jhi >= jlo and not _inside(jhi, x, dy2, r2, ox, res):
+                jhi -= 1
+            if jlo > jhi:
+                continue
+            starts[m] = jlo
+            ends[m] = jhi + 1
+            m += 1
+            smin = min(smin, jlo)
+            emax = max(emax, jhi + 1)
+        if m == 0:
+            continue
+        row = prefix[i]
+        if m <= _INSERTION_MAX:
+            for a in range(1, m):  # insertion sort by start
+                s = starts[a]
+                e = ends[a]
+                b = a - 1
+                while b >= 0 and starts[b] > s:
+                    starts[b + 1] = starts[b]
+                    ends[b + 1] = ends[b]
+                    b -= 1
+                starts[b + 1] = s
+                ends[b + 1] = e
+            cs = starts[0]
+            ce = ends[0]
+            for a in range(1, m):
+                if starts[a] > ce:
+                    total += row[ce] - row[cs]
+                    if paint:
+                        out[i, cs:ce] = True
+                    cs = starts[a]
+                    ce = ends[a]
+                elif ends[a] > ce:
+                    ce = ends[a]
+            total += row[ce] - row[cs]
+            if paint:
+                out[i, cs:ce] = True
+        else:
+            # counting sort by start: the furthest end of the intervals starting at each column, then a sweep
+            for a in range(m):
+                if ends[a] > reach[starts[a]]:
+                    reach[starts[a]] = ends[a]
+            cs = smin
+            ce = smin
+            for j in range(smin, emax):
+                e = reach[j]
+                if e > 0:
+                    reach[j] = 0
+                    if j > ce:
+                        total += row[ce] - row[cs]
+                        if paint:
+                            out[i, cs:ce] = True
+                        cs = j
+                        ce = e
+                    elif e > ce:
+                        ce = e
+            total += row[ce] - row[cs]
+            if paint:
+                out[i, cs:ce] = True
+    return total
+
+
+# --------------------------------------------------------------------------------------------------------
+# the area that counts
+# --------------------------------------------------------------------------------------------------------
+
+
+def _row_runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Horizontal runs of True cells: arrays ``(row, start, end)`` with ``end`` exclusive."""
+    padded = np.zeros((mask.shape[0], mask.shape[1] + 2), dtype=np.int8)
+    padded[:, 1:-1] = mask
+    d = np.diff(padded, axis=1)
+    r0, c0 = np.nonzero(d == 1)
+    _, c1 = np.nonzero(d == -1)  # same row-major order, so starts and ends pair up
+    return r0, c0, c1
+
+
+class CoverageArea:
+    """The area that counts, prepared once per map (and per mask) for fast repeated coverage queries.
+
+    Args:
+        omap: The map; only its shape, resolution and origin are used.
+        mask: Boolean array of the map's shape: the cells that count (e.g. the reachable free space).
+
+    Attributes:
+        omap: The map.
+        mask: The mask, a read-only boolean copy.
+        n_cells: Number of cells in the mask.
+        area_m2: Area of the mask in square metres, ``n_cells * resolution**2``.
+
+    Raises:
+        ValueError: If the mask's shape differs from the map's or the mask is empty.
+    """
+
+    def __init__(self, omap: OccupancyMap, mask: np.ndarray) -> None:
+        mask = np.array(mask, dtype=bool)  # a copy: later changes by the caller must not leak in
+        if mask.shape != omap.shape:
+            raise ValueError(f"mask shape {mask.shape} differs from the map's shape {omap.shape}")
+        self.n_cells = int(np.count_nonzero(mask))
+        if self.n_cells == 0:
+            raise ValueError("mask has no cells: the area that counts is empty")
+        mask.flags.writeable = False
+        self.omap = omap
+        self.mask = mask
+        self.area_m2 = self.n_cells * omap.resolution**2
+        self._res = float(omap.resolution)
+        self._ox = float(omap.origin[0])
+        self._oy = float(omap.origin[1])
+        prefix = np.zeros((mask.shape[0], mask.shape[1] + 1), dtype=np.int64)
+        np.cumsum(mask, axis=1, out=prefix[:, 1:])
+        self._prefix = prefix
+        self._no_paint = np.zeros((1, 1), dtype=bool)
+        self._polygon: shapely.Geometry | None = None
+        self._prepared = False
+
+    @property
+    def polygon(self) -> shapely.Geometry:
+        """The mask as a shapely (Multi)Polygon: the union of its cells, built on first use and cached."""
+        if self._polygon is None:
+            rows, c0, c1 = _row_runs(self.mask)
+            res, ox, oy = self._res, self._ox, self._oy
+            boxes = shapely.box(ox + c0 * res, oy + rows * res, ox + c1 * res, oy + (rows + 1) * res)
+            self._polygon = shapely.union_all(boxes)
+        return self._polygon
+
+    def _check(self, xy: np.ndarray, r: float) -> np.ndarray:
+        if not (isinstance(r, int | float | np.floating | np.integer) and math.isfinite(r) and r > 0):
+            raise ValueError(f"r must be a finite number > 0, got {r!r}")
+        xy = np.ascontiguousarray(xy, dtype=np.float64)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
+        return xy
+
+    def _raster(self, xy: np.ndarray, r: float, out: np.ndarray, paint: bool) -> int:
+        count = _scan(xy, float(r), self._ox, self._oy, self._res, self._prefix, out, paint)
+        if count < 0:
+            raise ValueError("xy must be finite")
+        return count
+
+    def fraction(self, xy: np.ndarray, r: float, method: str = "raster") -> float:
+        """Coverage, Eq. (1): the fraction of the area that counts within ``r`` of some node.
+
+        Args:
+            xy: Node positions in world coordinates, shape ``(N, 2)``; nodes outside the map still cover
+                what their disks reach inside it.
+            r: Disk (communication) radius in metres.
+            method: ``"raster"`` (mask cells whose centre is within ``r``; fast) or ``"exact"`` (polygon
+                areas).
+
+        Returns:
+            Coverage in ``[0, 1]``; ``0.0`` for no nodes.
+
+        Raises:
+            ValueError: If ``r`` is not finite and positive, ``method`` is unknown, or ``xy`` is not a finite
+                ``(N, 2)`` array.
+        """
+        xy = self._check(xy, r)
+        if method == "raster":
+            if xy.shape[0] == 0:
+                return 0.0
+            return self._raster(xy, r, self._no_paint, False) / self.n_cells
+        if method == "exact":
+            if not np.isfinite(xy).all():
+                raise ValueError("xy must be finite")
+            if xy.shape[0] == 0:
+                return 0.0
+            return min(self._exact_area(xy, float(r)) / self.area_m2, 1.0)
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+
+    def _exact_area(self, xy: np.ndarray, r: float) -> float:
+        n = 4 * QUAD_SEGS
+        disks = shapely.buffer(shapely.points(xy), disk_radius_area_preserving(r, n), quad_segs=QUAD_SEGS)
+        union = shapely.union_all(disks)
+        poly = self.polygon
+        if not self._prepared:
+            shapely.prepare(poly)
+            self._prepared = True
+        if shapely.contains_properly(poly, union):
+            return float(union.area)
+        xmin, ymin, xmax, ymax = union.bounds
+        clipped = shapely.clip_by_rect(poly, xmin, ymin, xmax, ymax)
+        return float(shapely.intersection(union, clipped).area)
+
+    def covered_mask(self, xy: np.ndarray, r: float) -> np.ndarray:
+        """Boolean ``(rows, cols)`` array of the mask cells whose centre lies within ``r`` of some node.
+
+        Args:
+            xy: Node positions in world coordinates, shape ``(N, 2)``.
+            r: Disk radius in metres.
+
+        Returns:
+            The covered mask cells (the raster method's picture: its count divided by ``n_cells`` is the
+            raster coverage).
+
+        Raises:
+            ValueError: If ``r`` is not finite and positive or ``xy`` is not a finite ``(N, 2)`` array.
+        """
+        xy = self._check(xy, r)
+        out = np.zeros(self.mask.shape, dtype=bool)
+        if xy.shape[0]:
+            self._raster(xy, r, out, True)
+            out &= self.mask
+        return out

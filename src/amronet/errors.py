@@ -1,0 +1,31 @@
+"""Typed exceptions of amronet.
+
+Every error a user can cause carries one line that names the offending field and says how to fix it.
+The command line prints that line and exits with status 2; the library raises the exception.
+"""
+
+from __future__ import annotations
+
+__all__ = ["AmronetError", "MapError", "ScenarioError"]
+
+
+class AmronetError(Exception):
+    """Base class of every error amronet raises on bad input."""
+
+
+class ScenarioError(AmronetError, ValueError):
+    """A scenario (file, preset, dict or override) is invalid.
+
+    Args:
+        field: Dotted path of the offending field, e.g. ``radio.r_c``.
+        message: What is wrong and how to fix it, in one line.
+    """
+
+    def __init__(self, field: str, message: str) -> None:
+        self.field = field
+        self.message = message
+        super().__init__(f"{field}: {message}" if field else message)
+
+
+class MapError(ScenarioError):
+    """A map file or image cannot be loaded or makes no sense."""

@@ -1,0 +1,207 @@
+"""The result of a run and its files: ``summary.json``, ``timeseries.csv``, ``network.json``, ``snapshot.png``.
+
+Files are written atomically as a set: everything is rendered in memory, written into a hidden staging folder
+beside the output folder and renamed into place at the end, so an interrupted or failed run leaves either the
+previous output or the complete new one, never half-written files.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from amronet import __version__
+from amronet.errors import AmronetError
+from amronet.robots import KIND_NAMES, STATE_NAMES, Kind
+
+if TYPE_CHECKING:
+    from amronet.sim import Metrics, Simulation
+
+__all__ = ["RunResult", "write_file_atomically", "write_files_atomically"]
+
+TIMESERIES_COLUMNS = ("t", "coverage", "connected_coverage", "routers_deployed", "components")
+
+
+@dataclass
+class RunResult:
+    """Everything a run produced.
+
+    Attributes:
+        summary: The ``summary.json`` content.
+        timeseries: Column name → array, one entry per recorded step (``timeseries.csv``).
+        network: The ``network.json`` content: ``r_c``, ``map`` and ``nodes``.
+        simulation: The finished simulation (world, swarm, neighbour table) for pictures and further analysis.
+    """
+
+    summary: dict[str, Any]
+    timeseries: dict[str, np.ndarray]
+    network: dict[str, Any]
+    simulation: Simulation
+
+    @classmethod
+    def from_simulation(cls, sim: Simulation, final: Metrics, wall_time_s: float) -> RunResult:
+        """Collect the result of a finished simulation."""
+        sc, sw = sim.scenario, sim.swarm
+        routers = sw.kind == Kind.ROUTER
+        deployed_routers = int(np.count_nonzero(sw.deployed & routers))
+        summary = {
+            "algorithm": sc.algorithm.name,
+            "map": sim.world.omap.name,
+            "seed": sim.seed,
+            "r_c": sc.radio.r_c,
+            "sim_time_s": round(sim.t, 9),
+            "steps": sim.steps,
+            "terminated": sim.terminated,
+            "truncated": not sim.terminated,
+            "stop_reason": sim.stop_reason,
+            "routers_total": int(np.count_nonzero(routers)),
+            "routers_deployed": deployed_routers,
+            "nodes_total": deployed_routers + len(sim.bases),
+            "coverage": final.coverage,
+            "connected_coverage": final.connected_coverage,
+            "coverage_method": sc.sim.coverage_method,
+            "components": final.components,
+            "agents_connected_fraction": None,
+            "reachable_area_m2": sim.world.coverage.area_m2,
+            "mean_distance_per_router_m": float(sw.distance[routers].mean()) if routers.any() else 0.0,
+            "states": sim.state_counts(),
+            "wall_time_s": wall_time_s,
+            "amronet_version": __version__,
+            "scenario": sc.to_dict(),
+        }
+        rows = np.array(sim.rows, dtype=float).reshape(-1, len(TIMESERIES_COLUMNS))
+        timeseries = {name: rows[:, k] for k, name in enumerate(TIMESERIES_COLUMNS)}
+        for name in ("routers_deployed", "components"):
+            timeseries[name] = timeseries[name].astype(np.int64)
+        nodes = [
+            {
+                "id": i,
+                "kind": KIND_NAMES[sw.kind[i]],
+                "state": STATE_NAMES[sw.state[i]],
+                "status": int(sw.status[i]),
+                "x": float(sw.xy[i, 0]),
+                "y": float(sw.xy[i, 1]),
+            }
+            for i in range(len(sw))
+        ]
+        network = {"r_c": sc.radio.r_c, "map": sim.world.omap.name, "nodes": nodes}
+        return cls(summary=summary, timeseries=timeseries, network=network, simulation=sim)
+
+    # -- rendering -------------------------------------------------------------------------------------------
+    def timeseries_csv(self) -> str:
+        """The time series as CSV text."""
+        lines = [",".join(TIMESERIES_COLUMNS)]
+        ts = self.timeseries
+        for k in range(len(ts["t"])):
+            lines.append(
+                f"{ts['t'][k]:.6g},{ts['coverage'][k]:.6f},{ts['connected_coverage'][k]:.6f},"
+                f"{int(ts['routers_deployed'][k])},{int(ts['components'][k])}"
+            )
+        return "\n".join(lines) + "\n"
+
+    def snapshot_png(self, dpi: int = 120) -> bytes:
+        """The deployment picture as PNG bytes."""
+        from amronet.viz import snapshot_figure
+
+        sim = self.simulation
+        sw = sim.swarm
+        r_c = sim.scenario.radio.r_c
+        covered = sim.world.coverage.covered_mask(sw.xy[sw.kind != Kind.AGENT], r_c)
+        s = self.summary
+        title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
+                 f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")
+        fig = snapshot_figure(
+            sim.world.omap,
+            xy=sw.xy,
+            kind=np.array(KIND_NAMES)[sw.kind],
+            state=np.array(STATE_NAMES)[sw.state],
+            status=sw.status,
+            r_c=r_c,
+            links=sim.table.pairs,
+            covered=covered,
+            reachable=sim.world.reachable,
+            title=title,
+            dpi=dpi,
+        )
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi)
+        return buf.getvalue()
+
+    def files(self, snapshot: bool = True) -> dict[str, bytes]:
+        """Name → content of every output file."""
+        out = {
+            "summary.json": (json.dumps(self.summary, indent=2) + "\n").encode(),
+            "timeseries.csv": self.timeseries_csv().encode(),
+            "network.json": (json.dumps(self.network, indent=1) + "\n").encode(),
+        }
+        if snapshot:
+            out["snapshot.png"] = self.snapshot_png()
+        return out
+
+    def save(self, out_dir: str | Path, snapshot: bool = True) -> Path:
+        """Write the output files into ``out_dir`` atomically (see the module docstring)."""
+        return write_files_atomically(Path(out_dir), self.files(snapshot=snapshot))
+
+
+def write_files_atomically(out_dir: Path, files: dict[str, bytes]) -> Path:
+    """Write ``files`` as the complete content of ``out_dir``, all at once.
+
+    An existing ``out_dir`` is replaced only after the new content is complete on disk.
+
+    Raises:
+        AmronetError: ``out_dir`` exists and is not a folder, or cannot be written.
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise AmronetError(f"--out: {str(out_dir)!r} exists and is not a folder; choose another path")
+    parent = out_dir.parent if str(out_dir.parent) else Path(".")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=parent))
+    except OSError as exc:
+        raise AmronetError(f"--out: cannot write to {str(parent)!r}: {exc.strerror}") from None
+    try:
+        for name, content in files.items():
+            with open(staging / name, "wb") as fh:
+                fh.write(content)
+                fh.flush()
+                os.fsync(fh.fileno())
+        old = None
+        if out_dir.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=parent))
+            os.replace(out_dir, old / "previous")
+        os.replace(staging, out_dir)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return out_dir
+
+
+def write_file_atomically(path: Path, write) -> Path:  # noqa: ANN001 - write is callable(tmp_path)
+    """Create ``path`` by calling ``write(tmp_path)`` on a temporary sibling and renaming it into place."""
+    path = Path(path)
+    if path.exists() and path.is_dir():
+        raise AmronetError(f"--out: {str(path)!r} is a folder; give a file name")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.tmp-", suffix=path.suffix, dir=path.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise AmronetError(f"--out: cannot write {str(path)!r}: {exc.strerror}") from None
+    try:
+        write(Path(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path

@@ -1,0 +1,175 @@
+"""Robot kinds and the swarm state arrays.
+
+Every robot of a run, whatever its role, is one row of the arrays in :class:`Swarm`. Kinds (base-station
+reference node, router, agent) and states are small integer codes so that a simulation step is a handful of
+vectorized operations; :data:`STATE_NAMES` and :data:`KIND_NAMES` turn them into the strings written to files.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+
+__all__ = [
+    "AMIGOBOT",
+    "BEBOT",
+    "DEPLOYED_STATES",
+    "KIND_NAMES",
+    "MOBILE_STATES",
+    "PIONEER",
+    "ROBOT_KINDS",
+    "STATE_NAMES",
+    "Kind",
+    "RobotKind",
+    "State",
+    "Swarm",
+]
+
+
+class Kind(IntEnum):
+    """Role of a robot in the two-tier network."""
+
+    BASE = 0
+    """Immobile reference node of a base station."""
+    ROUTER = 1
+    """Small, slow robot that forms the AMRoNet."""
+    AGENT = 2
+    """Fast explorer (human or robot) that uses the AMRoNet."""
+
+
+class State(IntEnum):
+    """Behavioural state of a robot (paper sections 4.1-4.2)."""
+
+    BASE = 0
+    """A base station's reference node."""
+    EXPLORE = 1
+    """Router random-walking in search of the point where it would lose its last reference."""
+    REFERENCE = 2
+    """Router that stopped (greedy deployment) and now serves as a reference for others."""
+    TRIANGLE = 3
+    """Router on its way to a triangular-deployment goal point."""
+    TRIANGLE_SETTLED = 4
+    """Router that finished its triangular deployment; serves as a reference."""
+    AGENT = 5
+    """An agent."""
+
+
+STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent")
+KIND_NAMES: tuple[str, ...] = ("base", "router", "agent")
+
+DEPLOYED_STATES: tuple[int, ...] = (State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED)
+"""States of nodes that stay put and act as references for routers and agents."""
+MOBILE_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE, State.AGENT)
+"""States of robots that move in a step."""
+
+
+@dataclass(frozen=True)
+class RobotKind:
+    """Physical model of a robot: a disc with a ring of range sensors.
+
+    Attributes:
+        name: Model name.
+        radius: Footprint radius in metres.
+        max_speed: Maximum speed in metres per second (0 for immobile robots).
+        sensor_beams: Number of equally spaced range sensors around the body (beam 0 points forward).
+        sensor_range: Maximum range of each sensor in metres.
+    """
+
+    name: str
+    radius: float
+    max_speed: float
+    sensor_beams: int
+    sensor_range: float
+
+
+PIONEER = RobotKind("pioneer", radius=0.22, max_speed=0.5, sensor_beams=16, sensor_range=2.0)
+"""Agent, after the Pioneer 2-DX of the paper's experiments: 16 sonars with 2 m range."""
+BEBOT = RobotKind("bebot", radius=0.045, max_speed=0.2, sensor_beams=12, sensor_range=0.14)
+"""Router, after the Bebot mini-robot: 12 infrared sensors with 0.14 m range."""
+AMIGOBOT = RobotKind("amigobot", radius=0.165, max_speed=0.0, sensor_beams=8, sensor_range=1.0)
+"""Base-station reference node, after the AmigoBot; immobile."""
+
+ROBOT_KINDS: dict[str, RobotKind] = {k.name: k for k in (PIONEER, BEBOT, AMIGOBOT)}
+
+
+@dataclass
+class Swarm:
+    """State of every robot of a run, one row per robot.
+
+    Attributes:
+        xy: Positions in metres, ``(N, 2)`` float.
+        heading: Headings in radians, ``(N,)`` float.
+        kind: :class:`Kind` codes, ``(N,)`` int8.
+        state: :class:`State` codes, ``(N,)`` int8.
+        status: Base-station id a node belongs to, -1 for none yet, ``(N,)`` int32.
+        radius: Footprint radius per robot, ``(N,)`` float.
+        max_speed: Maximum speed per robot, ``(N,)`` float.
+        model: Index into :attr:`models` per robot, ``(N,)`` int8 (selects the sensor ring).
+        models: The distinct robot kinds present.
+        distance: Distance travelled so far per robot in metres, ``(N,)`` float.
+    """
+
+    xy: np.ndarray
+    heading: np.ndarray
+    kind: np.ndarray
+    state: np.ndarray
+    status: np.ndarray
+    radius: np.ndarray
+    max_speed: np.ndarray
+    model: np.ndarray
+    models: tuple[RobotKind, ...]
+    distance: np.ndarray
+
+    @classmethod
+    def build(cls, groups: list[tuple[RobotKind, Kind, State, np.ndarray, np.ndarray]]) -> Swarm:
+        """Assemble a swarm from groups of robots.
+
+        Args:
+            groups: ``(robot_kind, kind, state, xy, status)`` per group; ``xy`` is ``(n, 2)`` and ``status``
+                ``(n,)``. Robots get ids in the order of the groups.
+
+        Returns:
+            The swarm, headings all zero.
+        """
+        models: list[RobotKind] = []
+        parts: dict[str, list[np.ndarray]] = {k: [] for k in ("xy", "kind", "state", "status", "model")}
+        for robot_kind, kind, state, xy, status in groups:
+            if robot_kind not in models:
+                models.append(robot_kind)
+            n = len(xy)
+            parts["xy"].append(np.asarray(xy, dtype=float).reshape(n, 2))
+            parts["kind"].append(np.full(n, kind, dtype=np.int8))
+            parts["state"].append(np.full(n, state, dtype=np.int8))
+            parts["status"].append(np.asarray(status, dtype=np.int32).reshape(n))
+            parts["model"].append(np.full(n, models.index(robot_kind), dtype=np.int8))
+        arrays = {k: np.concatenate(v) if v else np.zeros(0) for k, v in parts.items()}
+        n_total = len(arrays["xy"]) if len(arrays["xy"]) else 0
+        model_idx = arrays["model"].astype(np.int8)
+        radius = np.array([m.radius for m in models])[model_idx] if n_total else np.zeros(0)
+        speed = np.array([m.max_speed for m in models])[model_idx] if n_total else np.zeros(0)
+        return cls(
+            xy=arrays["xy"].reshape(-1, 2),
+            heading=np.zeros(n_total),
+            kind=arrays["kind"].astype(np.int8),
+            state=arrays["state"].astype(np.int8),
+            status=arrays["status"].astype(np.int32),
+            radius=radius,
+            max_speed=speed,
+            model=model_idx,
+            models=tuple(models),
+            distance=np.zeros(n_total),
+        )
+
+    def __len__(self) -> int:
+        return len(self.xy)
+
+    def in_states(self, states: tuple[int, ...]) -> np.ndarray:
+        """Boolean mask of robots whose state is one of ``states``."""
+        return np.isin(self.state, states)
+
+    @property
+    def deployed(self) -> np.ndarray:
+        """Boolean mask of nodes that serve as references (base nodes and deployed routers)."""
+        return self.in_states(DEPLOYED_STATES)

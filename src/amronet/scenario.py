@@ -1,0 +1,315 @@
+"""Scenarios: one YAML file (or dict, or built-in preset) describes a whole run, validated on load.
+
+Unknown keys, wrong types, NaN or negative radii and speeds are rejected with one line that names the field.
+Example::
+
+    name: my-run
+    map: obstacles-6x6              # a built-in map name or a path to a ROS map_server YAML
+    algorithm: {name: self-spreading, params: {triangular: local}}
+    radio: {model: unit-disk, r_c: 1.0}
+    base_stations: [{x: 0.0, y: 0.0, region: [1.0, 1.0]}]
+    routers: {count: 30, robot: bebot}
+    sim: {dt: 0.1, time_limit: 300}
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt, ValidationError, model_validator
+
+from amronet.errors import ScenarioError
+
+__all__ = [
+    "BaseStationSpec",
+    "RadioSpec",
+    "RobotSpec",
+    "RoutersSpec",
+    "Scenario",
+    "SimSpec",
+    "apply_overrides",
+    "list_presets",
+    "load_scenario",
+    "parse_override",
+]
+
+PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegativeFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class RobotSpec(_Strict):
+    """A robot model given field by field instead of by name."""
+
+    radius: PositiveFloat
+    max_speed: NonNegativeFloat
+    sensor_beams: Annotated[StrictInt, Field(ge=1, le=360)]
+    sensor_range: PositiveFloat
+
+
+RobotRef = str | RobotSpec
+
+
+class RadioSpec(_Strict):
+    """The radio medium."""
+
+    model: str = "unit-disk"
+    r_c: PositiveFloat = 1.0
+
+
+class BaseStationSpec(_Strict):
+    """A base station: its immobile reference node and the region its routers start in."""
+
+    x: FiniteFloat
+    y: FiniteFloat
+    region: tuple[PositiveFloat, PositiveFloat] = (1.0, 1.0)
+    robot: RobotRef = "amigobot"
+
+
+class RoutersSpec(_Strict):
+    """The routers of the AMRoNet."""
+
+    count: Annotated[StrictInt, Field(ge=0)] = 30
+    robot: RobotRef = "bebot"
+    start: Literal["base", "uniform"] = "base"
+    """``base``: in the base stations' regions (the paper); ``uniform``: scattered over the reachable free space
+    (dropped from the air; used by the benchmark)."""
+
+
+class SimSpec(_Strict):
+    """The simulation loop."""
+
+    dt: PositiveFloat = 0.1
+    time_limit: PositiveFloat = 300.0
+    record_every: Annotated[StrictInt, Field(ge=1)] = 10
+    coverage_target: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] | None = None
+    coverage_method: Literal["raster", "exact"] = "raster"
+    stop_when_settled: StrictBool = True
+    robot_collisions: StrictBool = True
+
+
+class AlgorithmSpec(_Strict):
+    """Which deployment algorithm runs, with its own parameters (validated by the algorithm)."""
+
+    name: str = "self-spreading"
+    params: dict[str, Any] = Field(default_factory=dict)
+
+
+class Scenario(_Strict):
+    """A whole run, validated.
+
+    Attributes:
+        base_dir: Folder that relative paths (the map) are resolved against; not part of the YAML.
+    """
+
+    name: str = "unnamed"
+    description: str = ""
+    map: str
+    algorithm: AlgorithmSpec = Field(default_factory=AlgorithmSpec)
+    radio: RadioSpec = Field(default_factory=RadioSpec)
+    base_stations: Annotated[list[BaseStationSpec], Field(min_length=1)]
+    routers: RoutersSpec = Field(default_factory=RoutersSpec)
+    sim: SimSpec = Field(default_factory=SimSpec)
+    base_dir: str | None = Field(default=None, exclude=True)
+
+    @model_validator(mode="after")
+    def _check_algorithm(self) -> Scenario:
+        from amronet.algorithms import ALGORITHMS
+
+        if self.algorithm.name not in ALGORITHMS:
+            raise ValueError(
+                f"@algorithm.name@unknown algorithm {self.algorithm.name!r}; choose one of: "
+                + ", ".join(sorted(ALGORITHMS))
+            )
+        from amronet.radio import MEDIA
+
+        if self.radio.model not in MEDIA:
+            raise ValueError(f"@radio.model@unknown radio model {self.radio.model!r}; choose one of: "
+                             + ", ".join(sorted(MEDIA)))
+        return self
+
+    def algorithm_params(self) -> BaseModel:
+        """The algorithm's parameters, validated by the algorithm's own parameter model."""
+        from amronet.algorithms import ALGORITHMS
+
+        model = ALGORITHMS[self.algorithm.name].Params
+        try:
+            return model.model_validate(self.algorithm.params)
+        except ValidationError as exc:
+            raise _to_scenario_error(exc, prefix="algorithm.params", model=model) from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scenario as plain data (what a YAML file would hold)."""
+        return self.model_dump(mode="json", exclude={"base_dir"})
+
+    def with_overrides(self, overrides: dict[str, Any]) -> Scenario:
+        """A copy with dotted-path fields replaced, e.g. ``{"radio.r_c": 1.5, "routers.count": 60}``."""
+        data = apply_overrides(self.to_dict(), overrides)
+        return _validate(data, base_dir=self.base_dir)
+
+
+def _field_path(loc: tuple[Any, ...], prefix: str = "") -> str:
+    path = prefix
+    for part in loc:
+        if isinstance(part, int):
+            path += f"[{part}]"
+        else:
+            path += ("." if path else "") + str(part)
+    return path
+
+
+def _allowed_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
+    current: Any = model
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue
+        field = getattr(current, "model_fields", {}).get(part)
+        if field is None:
+            return []
+        annotation = field.annotation
+        for candidate in (annotation, *getattr(annotation, "__args__", ())):
+            for inner in (candidate, *getattr(candidate, "__args__", ())):
+                if isinstance(inner, type) and issubclass(inner, BaseModel):
+                    current = inner
+                    break
+    return [k for k in getattr(current, "model_fields", {}) if k != "base_dir"]
+
+
+def _to_scenario_error(exc: ValidationError, prefix: str = "", model: type[BaseModel] = Scenario) -> ScenarioError:
+    err = exc.errors()[0]
+    msg = str(err.get("msg", "invalid"))
+    if msg.startswith("Value error, @"):
+        _, field, text = msg.split("@", 2)
+        return ScenarioError(field, text)
+    loc = tuple(err.get("loc", ()))
+    field = _field_path(loc, prefix)
+    if err.get("type") == "extra_forbidden":
+        allowed = _allowed_keys(model, loc)
+        return ScenarioError(field, "unknown key; allowed keys here: " + ", ".join(allowed))
+    if err.get("type") == "missing":
+        return ScenarioError(field, "required field is missing; add it")
+    got = err.get("input")
+    shown = repr(got) if not isinstance(got, dict | list) else type(got).__name__
+    if isinstance(got, float) and math.isnan(got):
+        shown = "nan"
+    return ScenarioError(field, f"{msg[0].lower()}{msg[1:]} (got {shown})")
+
+
+def _validate(data: Any, base_dir: str | None) -> Scenario:
+    if not isinstance(data, dict):
+        raise ScenarioError("scenario", f"must be a mapping of fields, got {type(data).__name__}")
+    try:
+        scenario = Scenario.model_validate({**data, "base_dir": base_dir})
+    except ValidationError as exc:
+        raise _to_scenario_error(exc) from None
+    scenario.algorithm_params()
+    return scenario
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """Parse one ``--set key=value`` item; the value is read as YAML (``1.5``, ``true``, ``[1, 2]``)."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise ScenarioError("--set", f"expected KEY=VALUE such as radio.r_c=1.5, got {text!r}")
+    try:
+        parsed = yaml.safe_load(value)
+    except yaml.YAMLError:
+        raise ScenarioError(key.strip(), f"value {value!r} is not valid YAML") from None
+    return key.strip(), parsed
+
+
+def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    """Return a copy of ``data`` with dotted paths set (list items by index: ``base_stations.0.x``)."""
+    out = copy.deepcopy(data)
+    for dotted, value in overrides.items():
+        parts = dotted.split(".")
+        node: Any = out
+        for i, part in enumerate(parts):
+            last = i == len(parts) - 1
+            if isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    raise ScenarioError(".".join(parts[: i + 1]), f"no list item {part}; the list has {len(node)}")
+                key: Any = int(part)
+            elif isinstance(node, dict):
+                key = part
+            else:
+                raise ScenarioError(".".join(parts[:i]), "is not a mapping; cannot set a field inside it")
+            if last:
+                node[key] = value
+            else:
+                if isinstance(node, dict) and key not in node:
+                    node[key] = {}
+                node = node[key]
+    return out
+
+
+def _preset_dir() -> Any:
+    return resources.files("amronet") / "data" / "presets"
+
+
+def list_presets() -> dict[str, str]:
+    """Built-in scenarios: name → one-line description."""
+    out = {}
+    for entry in sorted(_preset_dir().iterdir(), key=lambda e: e.name):
+        if entry.name.endswith(".yaml"):
+            data = yaml.safe_load(entry.read_text())
+            out[entry.name[:-5]] = str(data.get("description", ""))
+    return out
+
+
+def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dict[str, Any] | None = None) -> Scenario:
+    """Load and validate a scenario.
+
+    Args:
+        source: A :class:`Scenario`, a dict, a path to a YAML file, or the name of a built-in preset
+            (see :func:`list_presets`).
+        overrides: Dotted-path fields to replace before validation, e.g. ``{"radio.r_c": 1.5}``.
+
+    Returns:
+        The validated scenario.
+
+    Raises:
+        ScenarioError: The source cannot be read or is invalid; the message names the field.
+    """
+    base_dir: str | None = None
+    if isinstance(source, Scenario):
+        data, base_dir = source.to_dict(), source.base_dir
+    elif isinstance(source, dict):
+        data = source
+    elif not isinstance(source, str | Path):
+        raise ScenarioError("scenario", f"must be a mapping of fields, a YAML path or a preset name, got "
+                                        f"{type(source).__name__}")
+    else:
+        path = Path(source)
+        preset = _preset_dir() / f"{source}.yaml"
+        if not path.suffix and preset.is_file():
+            text = preset.read_text()
+        elif path.is_file():
+            try:
+                text = path.read_text()
+            except (OSError, UnicodeDecodeError) as exc:
+                raise ScenarioError("scenario", f"cannot read {str(path)!r}: {exc}") from None
+            base_dir = str(path.resolve().parent)
+        else:
+            raise ScenarioError(
+                "scenario", f"no file {str(source)!r} and no preset of that name; presets: "
+                + ", ".join(list_presets())
+            )
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            line = getattr(getattr(exc, "problem_mark", None), "line", None)
+            where = f" at line {line + 1}" if line is not None else ""
+            raise ScenarioError("scenario", f"not valid YAML{where}; fix the syntax") from None
+    if overrides:
+        data = apply_overrides(data if isinstance(data, dict) else {}, overrides)
+    return _validate(data, base_dir)

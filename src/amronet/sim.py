@@ -1,0 +1,185 @@
+"""The simulation loop: one step order, seeded randomness, stop conditions, recording.
+
+The life of a step, in this order and nowhere else:
+
+1. **sense**  — the range rings of every moving robot are ray-cast against the map and the other robots;
+2. **decide** — the algorithm's controller reads those readings and the radio medium's neighbour table, and
+   updates states, statuses and headings;
+3. **move**   — robots drive along their headings; every move is checked along its whole path;
+4. **radio**  — the medium rebuilds the neighbour table once, for everybody, from the new positions;
+5. **metrics** — every ``record_every`` steps: coverage, connected coverage, deployed routers, components; then
+   the stop conditions: all routers settled or the coverage target reached (*terminated*), or the time limit
+   (*truncated*).
+
+All randomness comes from one ``numpy.random.Generator`` seeded by the run's seed: the same scenario and seed
+give the same positions, bit for bit.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from amronet.algorithms import ALGORITHMS, Readings, StepInput
+from amronet.motion import integrate
+from amronet.network import components, connected_to
+from amronet.radio import NeighbourTable, make_medium
+from amronet.robots import MOBILE_STATES, Kind, State, Swarm
+from amronet.scenario import Scenario
+from amronet.sensing import range_scan
+from amronet.assemble import World, build_swarm, build_world
+from amronet.world.occupancy import OccupancyMap
+
+__all__ = ["Metrics", "Simulation"]
+
+@dataclass
+class Metrics:
+    """Network metrics at one instant."""
+
+    coverage: float
+    connected_coverage: float
+    routers_deployed: int
+    components: int
+
+
+@dataclass
+class Simulation:
+    """One seeded run of a scenario, stepped by :meth:`step` or run to its end by :meth:`run`.
+
+    Args:
+        scenario: The validated scenario.
+        seed: Seed of the run's random generator.
+        omap: Use this map instead of loading the scenario's (for generated or scaled maps).
+    """
+
+    scenario: Scenario
+    seed: int
+    omap: OccupancyMap | None = None
+    world: World = field(init=False)
+    swarm: Swarm = field(init=False)
+    table: NeighbourTable = field(init=False)
+    rng: np.random.Generator = field(init=False)
+
+    def __post_init__(self) -> None:
+        sc = self.scenario
+        self.rng = np.random.default_rng(self.seed)
+        self.dt = sc.sim.dt
+        params = sc.algorithm_params()
+        self.world = build_world(sc, self.omap)
+        self.medium = make_medium(sc.radio.model, sc.radio.r_c)
+        margin = getattr(params, "loss_margin", 0.05)
+        self.swarm = build_swarm(sc, self.world, self.rng, r_start=(1.0 - margin) * sc.radio.r_c)
+        controller_cls = ALGORITHMS[sc.algorithm.name]
+        self.controller = controller_cls(params, self.swarm, self.world.omap, sc.radio.r_c, self.dt, self.rng)
+        self.table = self.medium.update(self.swarm.xy)
+        self.steps = 0
+        self.rows: list[tuple[float, float, float, int, int]] = []
+        self.stop_reason: str | None = None
+        self.bases = np.flatnonzero(self.swarm.kind == Kind.BASE)
+        self.phase_seconds = {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0}
+
+    @property
+    def t(self) -> float:
+        """Simulated time in seconds."""
+        return self.steps * self.dt
+
+    # -- the step --------------------------------------------------------------------------------------------
+    def step(self) -> None:
+        """Advance the simulation by one step (sense → decide → move → radio; metrics are up to the caller)."""
+        sw = self.swarm
+        clock = time.perf_counter
+        t0 = clock()
+        readings = self._sense()
+        t1 = clock()
+        command = self.controller.decide(StepInput(self.steps, self.t, self.dt, self.table, readings))
+        t2 = clock()
+        movers = command.movers
+        disp = (command.speed * self.dt)[:, None] * np.stack([np.cos(sw.heading[movers]),
+                                                              np.sin(sw.heading[movers])], axis=1)
+        before = sw.xy[movers].copy()
+        refused = integrate(self.world.omap, sw.xy, movers, disp, sw.radius,
+                            bodies=self.scenario.sim.robot_collisions)
+        sw.distance[movers] += np.linalg.norm(sw.xy[movers] - before, axis=1)
+        self.controller.after_move(movers, refused)
+        t3 = clock()
+        self.table = self.medium.update(sw.xy)
+        t4 = clock()
+        self.steps += 1
+        for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
+            self.phase_seconds[name] += dt
+
+    def _sense(self) -> Readings:
+        sw = self.swarm
+        mobile = np.isin(sw.state, MOBILE_STATES)
+        groups = {}
+        for m, kind in enumerate(sw.models):
+            who = np.flatnonzero(mobile & (sw.model == m))
+            if len(who):
+                scans = range_scan(self.world.omap, sw.xy, sw.heading, who, kind.sensor_beams, kind.sensor_range,
+                                   radius=sw.radius, tree=self.table.tree)
+                groups[m] = (who, scans)
+        return Readings(groups)
+
+    # -- metrics ---------------------------------------------------------------------------------------------
+    def metrics(self, method: str | None = None) -> Metrics:
+        """Coverage (Eq. 1) over all routers and base nodes, coverage of those connected to a base, deployed
+        routers, and the number of components of the deployed network (base nodes and deployed routers)."""
+        sw = self.swarm
+        method = method or self.scenario.sim.coverage_method
+        r_c = self.scenario.radio.r_c
+        network = sw.kind != Kind.AGENT
+        linked = connected_to(self.table.adjacency, self.bases, network)
+        deployed = sw.deployed
+        n_comp, _ = components(self.table.adjacency, deployed)
+        return Metrics(
+            coverage=self.world.coverage.fraction(sw.xy[network], r_c, method=method),
+            connected_coverage=self.world.coverage.fraction(sw.xy[linked], r_c, method=method),
+            routers_deployed=int(np.count_nonzero(deployed & (sw.kind == Kind.ROUTER))),
+            components=n_comp,
+        )
+
+    def _record(self) -> Metrics:
+        m = self.metrics()
+        self.rows.append((round(self.t, 9), m.coverage, m.connected_coverage, m.routers_deployed, m.components))
+        return m
+
+    # -- the run ---------------------------------------------------------------------------------------------
+    def run(self, progress=None):  # noqa: ANN001, ANN201 - progress is any callable(t, time_limit)
+        """Run until a stop condition holds and return a :class:`~amronet.results.RunResult`."""
+        from amronet.results import RunResult
+
+        sim = self.scenario.sim
+        start = time.perf_counter()
+        last = self._record()
+        max_steps = int(round(sim.time_limit / self.dt))
+        while self.stop_reason is None:
+            self.step()
+            settled = sim.stop_when_settled and self.controller.settled
+            at_limit = self.steps >= max_steps
+            if self.steps % sim.record_every == 0 or settled or at_limit:
+                last = self._record()
+                if progress is not None:
+                    progress(self.t, sim.time_limit)
+            if sim.coverage_target is not None and self.rows[-1][0] == round(self.t, 9) \
+                    and last.coverage >= sim.coverage_target:
+                self.stop_reason = "coverage_target"
+            elif settled:
+                self.stop_reason = "settled"
+            elif at_limit:
+                self.stop_reason = "time_limit"
+        final = self.metrics(method=sim.coverage_method)
+        return RunResult.from_simulation(self, final, wall_time_s=time.perf_counter() - start)
+
+    @property
+    def terminated(self) -> bool:
+        """``True`` when the run ended because the task ended (settled or target reached), not by time."""
+        return self.stop_reason in ("settled", "coverage_target")
+
+    def state_counts(self) -> dict[str, int]:
+        """How many robots are in each state."""
+        from amronet.robots import STATE_NAMES
+
+        counts = np.bincount(self.swarm.state, minlength=len(State))
+        return {STATE_NAMES[s]: int(c) for s, c in enumerate(counts) if c}

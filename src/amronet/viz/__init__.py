@@ -1,0 +1,21 @@
+"""Pictures: maps to scale and deployment snapshots (Agg backend, no pyplot state)."""
+
+from amronet.viz.snapshot import (
+    KINDS,
+    MAP_COLOURS,
+    STATES,
+    draw_map,
+    save_map_picture,
+    save_snapshot,
+    snapshot_figure,
+)
+
+__all__ = [
+    "KINDS",
+    "MAP_COLOURS",
+    "STATES",
+    "draw_map",
+    "save_map_picture",
+    "save_snapshot",
+    "snapshot_figure",
+]

@@ -1,0 +1,488 @@
+"""Pictures of maps and deployments: the occupancy grid to scale, routers, their disks and links.
+
+Everything is drawn on a ``matplotlib.figure.Figure`` with an Agg canvas, never through ``pyplot``, so the
+functions work headless and from several threads at once. The figure layout is fixed in inches (it depends
+only on the map's size, not on what is drawn), so successive snapshots of one run line up pixel for pixel.
+
+Example:
+    >>> save_snapshot("snap.png", omap, xy=xy, kind=kind, state=state, status=status,
+    ...               r_c=1.0, links=links)  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib as mpl
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import EllipseCollection, LineCollection
+from matplotlib.figure import Figure
+from matplotlib.image import AxesImage
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+
+__all__ = [
+    "KINDS",
+    "MAP_COLOURS",
+    "STATES",
+    "draw_map",
+    "save_map_picture",
+    "save_snapshot",
+    "snapshot_figure",
+]
+
+KINDS: tuple[str, ...] = ("base", "router", "agent")
+"""Allowed values of the ``kind`` array."""
+
+STATES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent")
+"""Allowed values of the ``state`` array."""
+
+MAP_COLOURS: dict[str, tuple[int, int, int]] = {
+    "free": (255, 255, 255),
+    "occupied": (30, 30, 30),
+    "unknown": (150, 150, 150),
+    "unreachable": (240, 230, 205),
+    "uncovered": (250, 185, 185),
+}
+"""RGB colours (0-255) of the map's cell categories."""
+
+_LABELS = {
+    "free": "free",
+    "occupied": "occupied",
+    "unknown": "unknown",
+    "unreachable": "free, unreachable",
+    "uncovered": "reachable, uncovered",
+}
+_CATEGORIES = ("free", "occupied", "unknown", "unreachable", "uncovered")
+_LUT = np.array([MAP_COLOURS[c] for c in _CATEGORIES], dtype=np.uint8)
+
+# marker, base size (pt^2), filled, z-order, legend label; drawn in this order.
+_STYLE: dict[str, tuple[str, float, bool, float, str]] = {
+    "explore": ("o", 14.0, False, 3.0, "explore"),
+    "reference": ("o", 30.0, True, 4.0, "reference"),
+    "triangle-settled": ("^", 42.0, True, 4.0, "triangle (settled)"),
+    "triangle": ("^", 42.0, False, 5.0, "triangle (moving)"),
+    "base": ("s", 110.0, True, 6.0, "base station"),
+    "agent": ("*", 150.0, True, 7.0, "agent"),
+}
+_DEPLOYED = ("base", "reference", "triangle-settled")
+_NO_STATUS = (0.55, 0.55, 0.55, 1.0)
+# tab10 without red and grey: red fills would mimic the "uncovered" tint, grey means "no status".
+_PALETTE = np.asarray(mpl.colormaps["tab10"].colors, dtype=float)[[0, 1, 2, 4, 5, 8, 9, 6]]
+_LINK_COLOUR = (0.45, 0.45, 0.45, 0.8)
+_DISK_FACE_ALPHA = 0.05
+_DISK_EDGE_ALPHA = 0.4
+
+# Fixed layout, in inches.
+_AX_LONG_SIDE = 6.0
+_AX_MIN_SIDE = 1.5
+_MARGIN_LEFT, _MARGIN_BOTTOM, _MARGIN_TOP, _GAP = 0.8, 0.6, 0.45, 0.15
+_MIN_FIG_HEIGHT = 4.6
+
+
+def _map_image(omap: OccupancyMap, reachable: np.ndarray | None, covered: np.ndarray | None) -> np.ndarray:
+    """Return the ``uint8`` RGB image ``(rows, cols, 3)`` of the map with the optional shadings."""
+    cells = omap.cells
+    cat = np.zeros(cells.shape, dtype=np.uint8)
+    cat[cells == OCCUPIED] = 1
+    cat[cells == UNKNOWN] = 2
+    free = cells == FREE
+    counted = free
+    if reachable is not None:
+        cat[free & ~reachable] = 3
+        counted = free & reachable
+    if covered is not None:
+        cat[counted & ~covered] = 4
+    return _LUT[cat]
+
+
+def _check_mask(name: str, mask: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
+    """Return ``mask`` as a boolean array of ``shape``, or raise ``ValueError`` naming it."""
+    if mask is None:
+        return None
+    mask = np.asarray(mask)
+    if mask.shape != tuple(shape):
+        raise ValueError(f"{name} must have the map's shape {tuple(shape)}, got {mask.shape}")
+    if mask.dtype != np.bool_:
+        raise ValueError(f"{name} must be a boolean mask, got dtype {mask.dtype}")
+    return mask
+
+
+def draw_map(
+    ax: Axes,
+    omap: OccupancyMap,
+    *,
+    reachable: np.ndarray | None = None,
+    covered: np.ndarray | None = None,
+) -> AxesImage:
+    """Draw an occupancy map to scale in metres on ``ax``.
+
+    Free cells are white, occupied near-black, unknown mid-grey. The image uses ``omap.extent`` with
+    ``origin='lower'``, so data coordinates are world metres.
+
+    Args:
+        ax: The axes to draw on.
+        omap: The map.
+        reachable: Optional boolean mask ``omap.shape``; free cells outside it are tinted pale beige, so the
+            reader sees which free space does not count.
+        covered: Optional boolean mask ``omap.shape``; counted free cells (reachable ones, or all free cells
+            when ``reachable`` is None) that are not covered are tinted light red, so holes stand out.
+
+    Returns:
+        The image artist.
+
+    Raises:
+        ValueError: If a mask has the wrong shape or is not boolean.
+    """
+    reachable = _check_mask("reachable", reachable, omap.shape)
+    covered = _check_mask("covered", covered, omap.shape)
+    im = ax.imshow(
+        _map_image(omap, reachable, covered),
+        extent=omap.extent,
+        origin="lower",
+        interpolation="nearest",
+        zorder=0,
+    )
+    ax.set_aspect("equal")
+    ax.set_xlim(omap.extent[0], omap.extent[1])
+    ax.set_ylim(omap.extent[2], omap.extent[3])
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return im
+
+
+def _new_figure(omap: OccupancyMap, right: float, dpi: float) -> tuple[Figure, Axes]:
+    """Create an Agg figure whose axes hold the map to scale, with ``right`` inches free for a legend."""
+    w, h = omap.size_m
+    scale = _AX_LONG_SIDE / max(w, h)
+    ax_w, ax_h = max(w * scale, _AX_MIN_SIDE), max(h * scale, _AX_MIN_SIDE)
+    fig_w = _MARGIN_LEFT + ax_w + right
+    fig_h = max(_MARGIN_BOTTOM + ax_h + _MARGIN_TOP, _MIN_FIG_HEIGHT)
+    bottom = (fig_h - ax_h - _MARGIN_TOP + _MARGIN_BOTTOM) / 2  # centre the axes vertically
+    fig = Figure(figsize=(fig_w, fig_h), dpi=dpi, facecolor="white")
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((_MARGIN_LEFT / fig_w, bottom / fig_h, ax_w / fig_w, ax_h / fig_h))
+    return fig, ax
+
+
+def _add_legend(fig: Figure, ax: Axes, handles: Sequence[Patch | Line2D]) -> None:
+    """Place a legend of ``handles`` outside the axes, to the right of its top edge."""
+    _, _, x1, y1 = ax.get_position().extents
+    fig_w = fig.get_figwidth()
+    fig.legend(
+        handles=list(handles),
+        loc="upper left",
+        bbox_to_anchor=(x1 + _GAP / fig_w, y1),
+        fontsize=8,
+        frameon=False,
+        borderaxespad=0.0,
+        handlelength=1.6,
+    )
+
+
+def _map_patch(category: str) -> Patch:
+    """Legend patch of one map cell category."""
+    return _legend_patch(tuple(c / 255 for c in MAP_COLOURS[category]), _LABELS[category])
+
+
+def _format_of(path: str | Path) -> str:
+    """Return ``"png"`` or ``"svg"`` from the suffix of ``path``, or raise ``ValueError``."""
+    fmt = Path(path).suffix.lower().lstrip(".")
+    if fmt not in ("png", "svg"):
+        raise ValueError(f"path must end in .png or .svg, got {Path(path).name!r}")
+    return fmt
+
+
+def _save(fig: Figure, path: str | Path, dpi: float) -> Path:
+    """Write ``fig`` as PNG or SVG according to the suffix of ``path``."""
+    path = Path(path)
+    fig.savefig(path, format=_format_of(path), dpi=dpi, bbox_inches=None, facecolor="white")
+    return path
+
+
+def save_map_picture(omap: OccupancyMap, path: str | Path, *, dpi: float = 150) -> Path:
+    """Write a picture of the map alone, to scale, with a title and a legend of cell types.
+
+    The title reads ``"{name}: {w:.1f} m x {h:.1f} m, {res} m/cell"``.
+
+    Args:
+        omap: The map.
+        path: Output file; ``.png`` or ``.svg``.
+        dpi: Resolution of the PNG (and of the map raster inside an SVG).
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: If the suffix of ``path`` is neither ``.png`` nor ``.svg``.
+    """
+    _format_of(path)
+    fig, ax = _new_figure(omap, right=1.3, dpi=dpi)
+    draw_map(ax, omap)
+    w, h = omap.size_m
+    ax.set_title(f"{omap.name}: {w:.1f} m x {h:.1f} m, {omap.resolution:g} m/cell", fontsize=10)
+    _add_legend(fig, ax, [_map_patch(c) for c in ("free", "occupied", "unknown")])
+    return _save(fig, path, dpi)
+
+
+def _nice_length(width: float) -> float:
+    """A round length (1, 2 or 5 times a power of ten) close to a fifth of ``width``."""
+    target = width / 5
+    exp = math.floor(math.log10(target))
+    candidates = [m * 10.0**e for e in (exp, exp + 1) for m in (1, 2, 5)]
+    return min(candidates, key=lambda c: abs(math.log(c / target)))
+
+
+def _status_colours(status: np.ndarray) -> np.ndarray:
+    """RGBA colours ``(N, 4)``: tab10 (less red and grey) by ``status``, grey where it is negative."""
+    out = np.empty((status.size, 4))
+    out[:, :3] = _PALETTE[np.mod(status, len(_PALETTE))]
+    out[:, 3] = 1.0
+    out[status < 0] = _NO_STATUS
+    return out
+
+
+def _validate_nodes(
+    xy: np.ndarray, kind: np.ndarray, state: np.ndarray, status: np.ndarray, links: np.ndarray, r_c: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Check the node arrays' shapes and values; return them as NumPy arrays."""
+    xy = np.asarray(xy, dtype=float)
+    if xy.size == 0:
+        xy = xy.reshape(0, 2)
+    if xy.ndim != 2 or xy.shape[1] != 2:
+        raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
+    if not np.all(np.isfinite(xy)):
+        raise ValueError("xy must be finite")
+    n = xy.shape[0]
+    kind = np.asarray(kind, dtype=str)
+    state = np.asarray(state, dtype=str)
+    status = np.asarray(status)
+    for name, arr in (("kind", kind), ("state", state), ("status", status)):
+        if arr.shape != (n,):
+            raise ValueError(f"{name} must have shape ({n},) like xy, got {arr.shape}")
+    for name, arr, allowed in (("kind", kind, KINDS), ("state", state, STATES)):
+        bad = sorted(set(arr.tolist()) - set(allowed))
+        if bad:
+            raise ValueError(f"{name} has unknown values {bad}; allowed: {list(allowed)}")
+    if n and not np.issubdtype(status.dtype, np.integer):
+        raise ValueError(f"status must be integer, got dtype {status.dtype}")
+    status = status.astype(np.int64)
+    links = np.asarray(links)
+    if links.size == 0:
+        links = links.reshape(0, 2).astype(np.int64)
+    if links.ndim != 2 or links.shape[1] != 2:
+        raise ValueError(f"links must have shape (M, 2), got {links.shape}")
+    if not np.issubdtype(links.dtype, np.integer):
+        raise ValueError(f"links must be integer indices, got dtype {links.dtype}")
+    if links.size and (links.min() < 0 or links.max() >= n):
+        raise ValueError(f"links must index xy's {n} rows, got values in [{links.min()}, {links.max()}]")
+    if not (math.isfinite(r_c) and r_c > 0):
+        raise ValueError(f"r_c must be a positive finite number, got {r_c}")
+    return xy, kind, state, status, links
+
+
+def _marker_handle(marker: str, size: float, face: object, label: str, edge: object = "0.15") -> Line2D:
+    """Legend handle showing one marker."""
+    return Line2D(
+        [], [], linestyle="none", marker=marker, markersize=size, markerfacecolor=face,
+        markeredgecolor=edge, markeredgewidth=0.8, label=label,
+    )  # fmt: skip
+
+
+def _legend_patch(face: object, label: str, edge: object = "0.3") -> Patch:
+    """Legend handle showing a filled rectangle."""
+    return Patch(facecolor=face, edgecolor=edge, linewidth=0.5, label=label)
+
+
+def _draw_nodes(ax: Axes, xy: np.ndarray, state: np.ndarray, colours: np.ndarray) -> list[Patch | Line2D]:
+    """Scatter the nodes, one call per state present; return legend handles of those states."""
+    shrink = float(np.clip(math.sqrt(300 / max(len(xy), 1)), 0.35, 1.0))
+    handles: list[Patch | Line2D] = []
+    for st, (marker, size, filled, z, label) in _STYLE.items():
+        sel = state == st
+        if not sel.any():
+            continue
+        x, y = xy[sel].T
+        if filled:
+            ec = "black" if st in ("base", "agent") else "0.15"
+            ax.scatter(
+                x, y, s=size * shrink, marker=marker, c=colours[sel], edgecolors=ec, linewidths=0.4, zorder=z
+            )
+        else:
+            ax.scatter(
+                x, y, s=size * shrink, marker=marker, facecolors="none", edgecolors=colours[sel],
+                linewidths=1.0, zorder=z,
+            )  # fmt: skip
+        handles.append(_marker_handle(marker, math.sqrt(size), "0.45" if filled else "none", label))
+    return handles
+
+
+def _add_scale_bar(ax: Axes, omap: OccupancyMap) -> None:
+    """Add a scale bar of a round length, about a fifth of the map's width, in the lower right corner."""
+    w, h = omap.size_m
+    length = _nice_length(w)
+    bar = AnchoredSizeBar(
+        ax.transData, length, f"{length:g} m", loc="lower right", pad=0.4, borderpad=0.6, sep=3,
+        frameon=True, size_vertical=h / 200, fontproperties={"size": 8},
+    )  # fmt: skip
+    bar.patch.set_alpha(0.75)
+    bar.patch.set_edgecolor("0.6")
+    bar.set_zorder(8)
+    ax.add_artist(bar)
+
+
+def snapshot_figure(
+    omap: OccupancyMap,
+    *,
+    xy: np.ndarray,
+    kind: np.ndarray,
+    state: np.ndarray,
+    status: np.ndarray,
+    r_c: float,
+    links: np.ndarray,
+    covered: np.ndarray | None = None,
+    reachable: np.ndarray | None = None,
+    title: str = "",
+    dpi: float = 150,
+) -> Figure:
+    """Build the deployment picture as an Agg figure (see `save_snapshot` for the arguments).
+
+    Returns:
+        The figure; its first axes holds the map in world metres.
+
+    Raises:
+        ValueError: If an argument has the wrong shape or an unknown value.
+    """
+    xy, kind, state, status, links = _validate_nodes(xy, kind, state, status, links, float(r_c))
+    reachable = _check_mask("reachable", reachable, omap.shape)
+    covered = _check_mask("covered", covered, omap.shape)
+    fig, ax = _new_figure(omap, right=2.2, dpi=dpi)
+    draw_map(ax, omap, reachable=reachable, covered=covered)
+    colours = _status_colours(status)
+
+    deployed = np.isin(state, _DEPLOYED) | (kind == "base")
+    if deployed.any():
+        face = colours[deployed].copy()
+        face[:, 3] = _DISK_FACE_ALPHA
+        edge = colours[deployed].copy()
+        edge[:, 3] = _DISK_EDGE_ALPHA
+        d = 2.0 * r_c
+        disks = EllipseCollection(
+            d,
+            d,
+            0.0,
+            units="xy",
+            offsets=xy[deployed],
+            offset_transform=ax.transData,
+            facecolors=face,
+            edgecolors=edge,
+            linewidths=0.5,
+            zorder=1.5,
+        )
+        ax.add_collection(disks)
+    if len(links):
+        ax.add_collection(LineCollection(xy[links], colors=[_LINK_COLOUR], linewidths=0.6, zorder=2))
+
+    handles = _draw_nodes(ax, xy, state, colours)
+    if deployed.any():
+        handles.append(_legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {r_c:g} m", edge="0.4"))
+    if len(links):
+        handles.append(Line2D([], [], color=_LINK_COLOUR, linewidth=1.0, label="link"))
+    cells = omap.cells
+    free = cells == FREE
+    counted = free if reachable is None else free & reachable
+    for category, shown in (
+        ("occupied", (cells == OCCUPIED).any()),
+        ("unknown", (cells == UNKNOWN).any()),
+        ("unreachable", reachable is not None and (free & ~reachable).any()),
+        ("uncovered", covered is not None and (counted & ~covered).any()),
+    ):
+        if shown:
+            handles.append(_map_patch(category))
+    groups = np.unique(status)
+    for s in groups[: len(_PALETTE)]:
+        label = f"BS {s}" if s >= 0 else "no BS yet"
+        handles.append(_marker_handle("o", 7.0, _status_colours(np.array([s]))[0], label, edge="none"))
+    if len(groups) > len(_PALETTE):
+        handles.append(Line2D([], [], linestyle="none", label=f"... {len(groups) - len(_PALETTE)} more BS"))
+    _add_legend(fig, ax, handles)
+    _add_scale_bar(ax, omap)
+
+    if not title:
+        n_routers = int(np.sum(kind == "router"))
+        n_agents = int(np.sum(kind == "agent"))
+        title = (
+            f"{omap.name}: {n_routers} router{'s' * (n_routers != 1)}, "
+            f"{n_agents} agent{'s' * (n_agents != 1)}"
+        )
+    ax.set_title(title, fontsize=10)
+    return fig
+
+
+def save_snapshot(
+    path: str | Path,
+    omap: OccupancyMap,
+    *,
+    xy: np.ndarray,
+    kind: np.ndarray,
+    state: np.ndarray,
+    status: np.ndarray,
+    r_c: float,
+    links: np.ndarray,
+    covered: np.ndarray | None = None,
+    reachable: np.ndarray | None = None,
+    title: str = "",
+    dpi: float = 150,
+) -> Path:
+    """Write the deployment picture: map, communication disks, links and nodes.
+
+    Base stations and deployed routers (``reference``, ``triangle-settled``) get a translucent disk of radius
+    ``r_c``; links are thin grey lines; nodes are markers by state (base: large square, reference: filled
+    circle, triangle-settled: filled triangle, triangle: hollow triangle, explore: small hollow circle,
+    agent: star), coloured by ``status`` (tab10 without its red and grey, which would mimic the uncovered
+    tint and "no status"; grey for -1). A legend sits right of the map, a scale bar in its lower right corner.
+    Disks, links and each state's markers are one collection each, so thousands of nodes draw quickly.
+
+    Args:
+        path: Output file; ``.png`` or ``.svg``.
+        omap: The map.
+        xy: Node positions ``(N, 2)`` in metres.
+        kind: ``(N,)`` strings in `KINDS`.
+        state: ``(N,)`` strings in `STATES`.
+        status: ``(N,)`` integers: the base station a node belongs to, -1 for none yet.
+        r_c: Communication radius in metres.
+        links: ``(M, 2)`` integer index pairs into ``xy``.
+        covered: Optional boolean mask ``omap.shape`` of covered cells; reachable (or, without
+            ``reachable``, free) cells not covered are tinted light red.
+        reachable: Optional boolean mask ``omap.shape``; free cells outside it are tinted pale beige.
+        title: Figure title; by default the map's name and the numbers of routers and agents.
+        dpi: Resolution of the PNG (and of the map raster inside an SVG).
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: If an argument has the wrong shape or an unknown value, or the suffix is not .png/.svg.
+    """
+    _format_of(path)
+    fig = snapshot_figure(
+        omap,
+        xy=xy,
+        kind=kind,
+        state=state,
+        status=status,
+        r_c=r_c,
+        links=links,
+        covered=covered,
+        reachable=reachable,
+        title=title,
+        dpi=dpi,
+    )
+    return _save(fig, path, dpi)

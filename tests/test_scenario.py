@@ -1,0 +1,82 @@
+import math
+
+import pytest
+
+from amronet.errors import ScenarioError
+from amronet.scenario import apply_overrides, list_presets, load_scenario, parse_override
+
+BASE = {
+    "map": "open-6x6",
+    "base_stations": [{"x": 0.0, "y": 0.0}],
+}
+
+
+def err(data, **kw) -> ScenarioError:
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(data, **kw)
+    text = str(info.value)
+    assert "\n" not in text
+    return info.value
+
+
+def test_defaults_fill_in():
+    sc = load_scenario(BASE)
+    assert sc.radio.r_c == 1.0 and sc.routers.count == 30 and sc.algorithm.name == "self-spreading"
+    assert sc.algorithm_params().triangular == "local"
+
+
+def test_presets_load():
+    presets = list_presets()
+    assert "self-spreading-6x6" in presets
+    for name in presets:
+        assert load_scenario(name).name == name
+
+
+@pytest.mark.parametrize(
+    ("data", "field", "words"),
+    [
+        ({**BASE, "colour": "red"}, "colour", "unknown key"),
+        ({**BASE, "radio": {"r_c": -1}}, "radio.r_c", "greater than 0"),
+        ({**BASE, "radio": {"r_c": math.nan}}, "radio.r_c", "finite"),
+        ({**BASE, "radio": {"r_c": "far"}}, "radio.r_c", "number"),
+        ({**BASE, "routers": {"count": 2.5}}, "routers.count", "integer"),
+        ({**BASE, "routers": {"count": True}}, "routers.count", "integer"),
+        ({**BASE, "routers": {"robot": {"radius": 0.1, "max_speed": -1, "sensor_beams": 8, "sensor_range": 1}}},
+         "routers.robot", ""),
+        ({**BASE, "base_stations": []}, "base_stations", "at least 1"),
+        ({**BASE, "base_stations": [{"x": 0, "y": 0, "zz": 1}]}, "base_stations[0].zz", "allowed keys here: x, y"),
+        ({**BASE, "algorithm": {"name": "magic"}}, "algorithm.name", "self-spreading"),
+        ({**BASE, "algorithm": {"params": {"triangular": "maybe"}}}, "algorithm.params.triangular", "local"),
+        ({**BASE, "algorithm": {"params": {"bogus": 1}}}, "algorithm.params.bogus", "loss_margin"),
+        ({**BASE, "sim": {"dt": 0}}, "sim.dt", "greater than 0"),
+        ({"base_stations": [{"x": 0, "y": 0}]}, "map", "missing"),
+        ([1, 2], "scenario", "mapping"),
+    ],
+)
+def test_bad_fields_name_the_field(data, field, words):
+    e = err(data)
+    assert str(e).startswith(field), str(e)
+    assert words in str(e)
+
+
+def test_yaml_file_and_syntax_error(tmp_path):
+    good = tmp_path / "s.yaml"
+    good.write_text("map: open-6x6\nbase_stations: [{x: 0, y: 0}]\n")
+    assert load_scenario(good).base_dir == str(tmp_path)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("map: [open\n")
+    assert "not valid YAML" in str(err(bad))
+    assert "no file" in str(err(tmp_path / "missing.yaml"))
+
+
+def test_overrides():
+    sc = load_scenario(BASE, overrides={"radio.r_c": 1.5, "routers.count": 60, "base_stations.0.x": 0.5})
+    assert sc.radio.r_c == 1.5 and sc.routers.count == 60 and sc.base_stations[0].x == 0.5
+    assert sc.with_overrides({"sim.dt": 0.05}).sim.dt == 0.05
+    assert parse_override("radio.r_c=1.5") == ("radio.r_c", 1.5)
+    assert parse_override("sim.stop_when_settled=false") == ("sim.stop_when_settled", False)
+    with pytest.raises(ScenarioError):
+        parse_override("nothing")
+    with pytest.raises(ScenarioError, match="no list item 3"):
+        apply_overrides({"base_stations": [{}]}, {"base_stations.3.x": 1})
+    assert str(err(BASE, overrides={"radio.rc": 2})).startswith("radio.rc: unknown key")

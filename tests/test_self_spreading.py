@@ -1,0 +1,140 @@
+"""Behavioural tests of self-spreading: the invariants the paper's algorithm promises."""
+
+import numpy as np
+import pytest
+
+from amronet.algorithms.triangular import select_triangles, triangle_goal
+from amronet.errors import ScenarioError
+from amronet.network import connected_to
+from amronet.robots import Kind, State
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.world.space import clearance
+
+
+def check_invariants(sim: Simulation) -> None:
+    sw = sim.swarm
+    # every deployed router has a path to a base station through deployed nodes
+    deployed = sw.deployed
+    linked = connected_to(sim.table.adjacency, sim.bases, deployed)
+    assert linked[deployed].all(), "a deployed router lost its path to the base stations"
+    # nobody inside an obstacle (body clear of obstacle cells at cell granularity)
+    rows, cols = sim.world.omap.world_to_cell(sw.xy)
+    assert sim.world.omap.inside(sw.xy).all()
+    clear = clearance(sim.world.omap)[rows, cols]
+    assert (clear >= sw.radius - 1e-12).all(), "a robot overlaps an obstacle"
+    m = sim.metrics()
+    assert 0.0 <= m.connected_coverage <= m.coverage <= 1.0
+
+
+def run_checked(scenario, seed, steps, every=25) -> Simulation:
+    sim = Simulation(scenario, seed)
+    check_invariants(sim)
+    for k in range(steps):
+        sim.step()
+        if k % every == 0:
+            check_invariants(sim)
+    check_invariants(sim)
+    return sim
+
+
+@pytest.mark.parametrize("preset", ["self-spreading-6x6", "self-spreading-obstacles-6x6"])
+def test_single_base_spreads_and_stays_connected(preset):
+    sc = load_scenario(preset)
+    sim = run_checked(sc, seed=1, steps=600)
+    sw = sim.swarm
+    refs = sw.state == State.REFERENCE
+    assert refs.sum() >= 5, "routers did not deploy"
+    # with one base station nobody goes into the triangle state
+    assert not np.isin(sw.state, (State.TRIANGLE, State.TRIANGLE_SETTLED)).any()
+    assert (sw.status[refs] == 0).all()
+    # references keep their distance: each is at least (1 - margin) r_c from the nearest earlier reference
+    assert sim.metrics().coverage > 0.3
+
+
+def test_real_map_cave_keeps_invariants():
+    sc = load_scenario({
+        "map": "cave", "radio": {"r_c": 1.5},
+        "base_stations": [{"x": -5.0, "y": -5.0, "region": [1.0, 1.0]}],
+        "routers": {"count": 40, "robot": {"radius": 0.045, "max_speed": 0.5, "sensor_beams": 12,
+                                             "sensor_range": 0.3}},
+    })
+    sim = run_checked(sc, seed=2, steps=400, every=40)
+    assert (sim.swarm.state == State.REFERENCE).sum() >= 3
+
+
+@pytest.mark.parametrize("mode", ["none", "global", "local"])
+def test_two_bases_join_by_triangles(mode):
+    sc = load_scenario({
+        "map": "open-6x6", "radio": {"r_c": 1.0},
+        "algorithm": {"params": {"triangular": mode}},
+        "base_stations": [{"x": -2.0, "y": 0.0, "region": [0.8, 0.8]}, {"x": 2.0, "y": 0.0, "region": [0.8, 0.8]}],
+        "routers": {"count": 40, "robot": {"radius": 0.045, "max_speed": 0.4, "sensor_beams": 12,
+                                             "sensor_range": 0.14}},
+    })
+    sim = run_checked(sc, seed=4, steps=900, every=50)
+    sw = sim.swarm
+    assert set(np.unique(sw.status[sw.deployed]).tolist()) == {0, 1}
+    tri = np.isin(sw.state, (State.TRIANGLE, State.TRIANGLE_SETTLED))
+    assert tri.any(), "the two networks never met"
+    assert sim.metrics().components < 2 + sw.deployed.sum()
+
+
+def test_same_seed_same_positions_different_seed_differs():
+    sc = load_scenario("self-spreading-obstacles-6x6", overrides={"sim.time_limit": 20.0})
+    a = Simulation(sc, 7).run()
+    b = Simulation(sc, 7).run()
+    c = Simulation(sc, 8).run()
+    assert a.files(snapshot=False)["network.json"] == b.files(snapshot=False)["network.json"]
+    assert a.timeseries_csv() == b.timeseries_csv()
+    assert a.files(snapshot=False)["network.json"] != c.files(snapshot=False)["network.json"]
+
+
+def test_band_narrower_than_a_step_is_rejected():
+    sc = load_scenario("self-spreading-6x6", overrides={"algorithm.params.loss_margin": 0.01})
+    with pytest.raises(ScenarioError, match="loss_margin"):
+        Simulation(sc, 0)
+
+
+def test_triangle_goal_geometry():
+    p_i = np.array([[0.0, 0.0]])
+    p_j = np.array([[1.6, 0.0]])
+    goal = triangle_goal(p_i, p_j, np.array([[0.8, -0.3]]), 1.0)
+    assert goal[0] == pytest.approx([0.8, -0.6])
+    assert np.linalg.norm(goal[0] - p_i[0]) == pytest.approx(1.0)
+    assert np.linalg.norm(goal[0] - p_j[0]) == pytest.approx(1.0)
+    far = triangle_goal(p_i, np.array([[3.0, 0.0]]), np.array([[1.0, 1.0]]), 1.0)
+    assert far[0] == pytest.approx([1.5, 0.0])
+
+
+def test_select_triangles_rules():
+    from amronet.radio import UnitDisk
+
+    xy = np.array([[0, 0], [1.6, 0], [0.8, 0.5], [0.8, -0.5], [5, 5], [5.5, 5]], dtype=float)
+    table = UnitDisk(1.0).update(xy)
+    disabled = np.zeros(6, dtype=bool)
+    committed = np.array([True, True, False, False, True, True])
+    deciders, ri, rj = np.array([2, 3]), np.array([0, 0]), np.array([1, 1])
+    # two robots meet the same pair in the same step: only one (the lower id) deploys
+    assert select_triangles("none", deciders, ri, rj, xy, 1.0, disabled, table.adjacency, committed).tolist() == [
+        True, False]
+    disabled[[0, 1]] = True
+    assert not select_triangles("local", deciders, ri, rj, xy, 1.0, disabled, table.adjacency, committed).any()
+    # references within r_c of each other are linked already: never a triangle
+    assert not select_triangles("none", np.array([2]), np.array([4]), np.array([5]), xy, 1.0, disabled,
+                                table.adjacency, committed).any()
+    # global: 0 and 1 are not connected through committed nodes -> deploy; once joined -> skip
+    assert select_triangles("global", deciders[:1], ri[:1], rj[:1], xy, 1.0, disabled, table.adjacency,
+                            committed).tolist() == [True]
+    committed[2] = True
+    assert not select_triangles("global", deciders[:1], ri[:1], rj[:1], xy, 1.0, disabled, table.adjacency,
+                                committed).any()
+
+
+def test_routers_start_near_their_base_with_status_minus_one():
+    sim = Simulation(load_scenario("self-spreading-6x6"), 0)
+    sw = sim.swarm
+    routers = sw.kind == Kind.ROUTER
+    assert (sw.status[routers] == -1).all() and (sw.state[routers] == State.EXPLORE).all()
+    assert (np.abs(sw.xy[routers]) <= 0.5 + 1e-9).all()
+    assert (np.linalg.norm(sw.xy[routers], axis=1) <= 0.95).all()

@@ -1,0 +1,171 @@
+"""Tests of amronet.viz.snapshot: files are written, to size, and really show what was asked."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+from PIL import Image
+
+from amronet.viz import MAP_COLOURS, draw_map, save_map_picture, save_snapshot, snapshot_figure
+from amronet.world import OCCUPIED, UNKNOWN, OccupancyMap
+
+DPI = 60
+
+
+@pytest.fixture
+def omap() -> OccupancyMap:
+    cells = np.zeros((100, 100), dtype=np.int8)  # 5 m x 5 m at 0.05 m/cell
+    cells[50:53, :60] = OCCUPIED  # a wall
+    cells[90:, 90:] = UNKNOWN
+    return OccupancyMap("tiny", 0.05, (0.0, 0.0), cells)
+
+
+@pytest.fixture
+def nodes() -> dict:
+    xy = np.array([[0.5, 0.5], [1.5, 0.8], [2.5, 1.0], [3.5, 3.5], [1.0, 4.0], [2.0, 1.8]])
+    return {
+        "xy": xy,
+        "kind": np.array(["base", "router", "router", "router", "agent", "router"]),
+        "state": np.array(["base", "reference", "triangle-settled", "triangle", "agent", "explore"]),
+        "status": np.array([0, 0, 1, 1, 0, -1]),
+        "links": np.array([[0, 1], [1, 2], [2, 5]]),
+        "r_c": 0.8,
+    }
+
+
+def _empty_nodes(r_c: float) -> dict:
+    s = np.array([], dtype=str)
+    return {
+        "xy": np.zeros((0, 2)),
+        "kind": s,
+        "state": s,
+        "status": np.zeros(0, int),
+        "links": [],
+        "r_c": r_c,
+    }
+
+
+def _read(path: Path) -> np.ndarray:
+    return np.asarray(Image.open(path).convert("RGB"), dtype=np.int16)
+
+
+def _pixel(fig: Figure, xy: np.ndarray) -> tuple[int, int]:
+    """Image (row, col) of world point xy in the saved PNG of ``fig``."""
+    fig.canvas.draw()
+    px, py = fig.axes[0].transData.transform(xy)
+    height = fig.get_figheight() * fig.dpi
+    return int(np.rint(height - py)), int(np.rint(px))
+
+
+def _light_red(img: np.ndarray) -> np.ndarray:
+    target = np.array(MAP_COLOURS["uncovered"])
+    return np.all(np.abs(img - target) <= 6, axis=-1)
+
+
+def test_png_written_to_size_and_not_blank(tmp_path, omap, nodes):
+    a = save_snapshot(tmp_path / "a.png", omap, dpi=DPI, **nodes)
+    b = save_snapshot(tmp_path / "b.png", omap, dpi=2 * DPI, **nodes)
+    img_a, img_b = _read(a), _read(b)
+    fig = snapshot_figure(omap, dpi=DPI, **nodes)
+    w_in, h_in = fig.get_size_inches()
+    assert img_a.shape[:2] == (round(h_in * DPI), round(w_in * DPI))
+    assert abs(img_b.shape[0] - 2 * img_a.shape[0]) <= 1 and abs(img_b.shape[1] - 2 * img_a.shape[1]) <= 1
+    assert img_a.std() > 0
+
+
+def test_layout_does_not_depend_on_content(omap, nodes):
+    with_nodes = snapshot_figure(omap, dpi=DPI, **nodes)
+    without = snapshot_figure(omap, dpi=DPI, **_empty_nodes(nodes["r_c"]))
+    assert np.allclose(with_nodes.axes[0].get_position().extents, without.axes[0].get_position().extents)
+
+
+def test_nodes_are_drawn_where_they_are(tmp_path, omap, nodes):
+    with_nodes = save_snapshot(tmp_path / "n.png", omap, dpi=DPI, **nodes)
+    without = save_snapshot(tmp_path / "e.png", omap, dpi=DPI, **_empty_nodes(nodes["r_c"]))
+    img_n, img_e = _read(with_nodes), _read(without)
+    assert img_n.shape == img_e.shape
+    fig = snapshot_figure(omap, dpi=DPI, **nodes)
+    for i in (0, 1, 3, 4):  # base, reference, triangle, agent
+        r, c = _pixel(fig, nodes["xy"][i])
+        win = (slice(r - 3, r + 4), slice(c - 3, c + 4))
+        assert np.abs(img_n[win] - img_e[win]).max() > 60, f"node {i} not visible"
+    # far from every node and disk (top-left free area) the two pictures agree
+    r, c = _pixel(fig, np.array([3.0, 4.6]))
+    win = (slice(r - 2, r + 3), slice(c - 2, c + 3))
+    assert np.abs(img_n[win] - img_e[win]).max() <= 2
+
+
+def test_uncovered_shading(tmp_path, omap, nodes):
+    reachable = omap.free.copy()
+    none_covered = save_snapshot(
+        tmp_path / "u.png", omap, dpi=DPI, covered=np.zeros(omap.shape, bool), reachable=reachable, **nodes
+    )
+    all_covered = save_snapshot(
+        tmp_path / "c.png", omap, dpi=DPI, covered=np.ones(omap.shape, bool), reachable=reachable, **nodes
+    )
+    assert _light_red(_read(none_covered)).sum() > 100
+    assert _light_red(_read(all_covered)).sum() == 0
+
+
+def test_unreachable_shading_and_draw_map(omap):
+    reachable = omap.free.copy()
+    reachable[:50, :] = False  # below the wall does not count
+    fig = Figure(figsize=(3, 3), dpi=DPI)
+    ax = fig.add_subplot()
+    im = draw_map(ax, omap, reachable=reachable)
+    rgb = im.get_array()
+    assert tuple(rgb[10, 10]) == MAP_COLOURS["unreachable"]  # row 10 is near the bottom
+    assert tuple(rgb[70, 10]) == MAP_COLOURS["free"]
+    assert tuple(rgb[51, 10]) == MAP_COLOURS["occupied"]
+    assert tuple(rgb[95, 95]) == MAP_COLOURS["unknown"]
+    assert ax.get_xlabel() == "x [m]" and ax.get_ylabel() == "y [m]"
+    assert ax.get_xlim() == (0.0, 5.0) and ax.get_ylim() == (0.0, 5.0)
+
+
+def test_svg_output(tmp_path, omap, nodes):
+    path = save_snapshot(tmp_path / "s.svg", omap, dpi=DPI, title="hello svg", **nodes)
+    text = path.read_text()
+    assert text.lstrip().startswith("<?xml") and "<svg" in text
+    map_svg = save_map_picture(omap, tmp_path / "m.svg", dpi=DPI)
+    assert "<svg" in map_svg.read_text()
+
+
+def test_map_picture(tmp_path, omap):
+    path = save_map_picture(omap, tmp_path / "m.png", dpi=DPI)
+    img = _read(path)
+    assert img.std() > 0
+    assert (np.abs(img - np.array(MAP_COLOURS["occupied"])).max(axis=-1) == 0).sum() > 50
+
+
+@pytest.mark.parametrize(
+    ("change", "name"),
+    [
+        ({"xy": np.zeros((6, 3))}, "xy"),
+        ({"kind": np.array(["base"] * 5)}, "kind"),
+        ({"kind": np.array(["base", "router", "router", "router", "agent", "robot"])}, "kind"),
+        ({"state": np.array(["base"] * 7)}, "state"),
+        ({"state": np.array(["base", "reference", "triangle", "triangle", "agent", "wander"])}, "state"),
+        ({"status": np.zeros((6, 1), int)}, "status"),
+        ({"status": np.zeros(6)}, "status"),
+        ({"links": np.array([0, 1, 2])}, "links"),
+        ({"links": np.array([[0, 6]])}, "links"),
+        ({"links": np.array([[0.0, 1.0]])}, "links"),
+        ({"covered": np.zeros((10, 10), bool)}, "covered"),
+        ({"reachable": np.zeros((100, 100), int)}, "reachable"),
+        ({"r_c": 0.0}, "r_c"),
+    ],
+)
+def test_bad_arguments_raise(tmp_path, omap, nodes, change, name):
+    with pytest.raises(ValueError, match=f"^{name} "):
+        save_snapshot(tmp_path / "x.png", omap, dpi=DPI, **{**nodes, **change})
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_bad_suffix_raises(tmp_path, omap, nodes):
+    with pytest.raises(ValueError, match=r"^path "):
+        save_snapshot(tmp_path / "x.jpg", omap, **nodes)
+    with pytest.raises(ValueError, match=r"^path "):
+        save_map_picture(omap, tmp_path / "x.pdf")
