@@ -10,7 +10,8 @@ def test_unit_disk_links_exactly_within_r_c():
     table = UnitDisk(1.0).update(xy)
     links = {tuple(p) for p in table.pairs.tolist()}
     assert links == {(0, 1), (0, 3)}  # (1, 3) is 1.118 m apart
-    assert np.allclose(table.length, [np.linalg.norm(xy[i] - xy[j]) for i, j in table.pairs])
+    rows = np.repeat(np.arange(len(xy)), table.degree)
+    assert np.allclose(table.dist, np.linalg.norm(xy[rows] - xy[table.indices], axis=1))
     assert table.degree.tolist() == [2, 1, 0, 1]
     assert (table.adjacency != table.adjacency.T).nnz == 0
 

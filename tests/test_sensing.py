@@ -29,8 +29,13 @@ def test_other_robots_stop_beams():
     omap = box_map()
     xy = np.array([[2.5, 2.5], [2.6, 2.5]])
     radius = np.array([0.045, 0.045])
-    tree = UnitDisk(1.0).update(xy).tree
-    scans = range_scan(omap, xy, np.zeros(2), np.array([0, 1]), 4, 0.14, radius=radius, tree=tree)
+    for r_c in (1.0, 0.1):  # neighbours from the table, or from the k-d tree when the sensor reaches farther
+        table = UnitDisk(r_c).update(xy)
+        scans = range_scan(omap, xy, np.zeros(2), np.array([0, 1]), 4, 0.14, radius=radius, table=table)
+        check_bodies(scans)
+
+
+def check_bodies(scans):
     assert scans[0, 0] == pytest.approx(0.1 - 0.045, abs=1e-9)  # robot 0 sees robot 1 ahead
     assert scans[1, 2] == pytest.approx(0.1 - 0.045, abs=1e-9)  # robot 1 sees robot 0 behind
     assert scans[0, 2] == pytest.approx(0.14)

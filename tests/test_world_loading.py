@@ -92,9 +92,9 @@ def test_rows_are_flipped_so_the_picture_top_is_the_highest_row(tmp_path: Path) 
     assert omap.shape == (3, 4)
     assert (omap.cells[-1] == OCCUPIED).all()
     assert (omap.cells[:-1] == FREE).all()
-    # the marked row is at the top of the world too
-    assert omap.is_free(np.array([[1.05, -2.0 + 0.25]]))[0]
-    assert not omap.is_free(np.array([[1.05, -2.0 + 0.25 + 0.05]]))[0]
+    # ... of the world too: rows are 0.1 m from y = -2, so the top row spans y -1.8..-1.7
+    assert omap.is_free(np.array([[1.05, -1.85]]))[0]
+    assert not omap.is_free(np.array([[1.05, -1.75]]))[0]
 
 
 def test_metadata(tmp_path: Path) -> None:
@@ -149,7 +149,11 @@ def test_negate_swaps_black_and_white(tmp_path: Path) -> None:
     negated = load_map_yaml(write_map(tmp_path, img, negate="1"))
     assert plain.cells[0].tolist() == [OCCUPIED, UNKNOWN, FREE]
     assert negated.cells[0].tolist() == [FREE, UNKNOWN, OCCUPIED]
-    assert load_map_yaml(write_map(tmp_path, img, negate="true")).cells[0].tolist() == [FREE, UNKNOWN, OCCUPIED]
+    assert load_map_yaml(write_map(tmp_path, img, negate="true")).cells[0].tolist() == [
+        FREE,
+        UNKNOWN,
+        OCCUPIED,
+    ]
 
 
 def test_scale_mode_matches_trinary_for_opaque_images(tmp_path: Path) -> None:
@@ -202,7 +206,9 @@ def test_rgb_uses_channel_average(tmp_path: Path) -> None:
 
 
 def test_rgba_fully_transparent_is_unknown(tmp_path: Path) -> None:
-    rgba = np.array([[[255, 255, 255, 255], [255, 255, 255, 0], [0, 0, 0, 0], [0, 0, 0, 128]]], dtype=np.uint8)
+    rgba = np.array(
+        [[[255, 255, 255, 255], [255, 255, 255, 0], [0, 0, 0, 0], [0, 0, 0, 128]]], dtype=np.uint8
+    )
     omap = load_map_yaml(write_map(tmp_path, Image.fromarray(rgba)))
     assert omap.cells[0].tolist() == [FREE, UNKNOWN, UNKNOWN, OCCUPIED]
 

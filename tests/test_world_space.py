@@ -12,8 +12,12 @@ from amronet.errors import MapError
 from amronet.world import FREE, OCCUPIED, UNKNOWN, OccupancyMap, clearance, reachable_free
 
 
-def make_map(cells: np.ndarray, resolution: float = 0.1, origin: tuple[float, float] = (0.0, 0.0)) -> OccupancyMap:
-    return OccupancyMap(name="test", resolution=resolution, origin=origin, cells=np.asarray(cells, dtype=np.int8))
+def make_map(
+    cells: np.ndarray, resolution: float = 0.1, origin: tuple[float, float] = (0.0, 0.0)
+) -> OccupancyMap:
+    return OccupancyMap(
+        name="test", resolution=resolution, origin=origin, cells=np.asarray(cells, dtype=np.int8)
+    )
 
 
 def ring_map() -> OccupancyMap:
@@ -145,7 +149,11 @@ def brute_force_clearance(cells: np.ndarray, res: float) -> tuple[np.ndarray, np
 
 
 @settings(max_examples=30, deadline=None)
-@given(arrays(np.int8, st.tuples(st.integers(1, 9), st.integers(1, 9)), elements=st.sampled_from([0, 0, 0, 1, -1])))
+@given(
+    arrays(
+        np.int8, st.tuples(st.integers(1, 9), st.integers(1, 9)), elements=st.sampled_from([0, 0, 0, 1, -1])
+    )
+)
 def test_clearance_matches_brute_force(cells: np.ndarray) -> None:
     res = 0.05
     clear = clearance(make_map(cells, resolution=res))

@@ -15,13 +15,19 @@ Two methods, one class that prepares the mask once:
   Each disk is a regular ``4 * QUAD_SEGS``-gon with the **area-preserving** circumradius
   ``r' = r * sqrt(2 pi / (n sin(2 pi / n)))``, so a lone disk has exactly the area ``pi r**2``.
 
-How far apart are the two? Raster error lives only on the disks' boundaries (a mask cell that a disk's
-boundary crosses counts 0 or 1 instead of its covered fraction), so the difference in cells is of the order
-of the boundary length in cells, with heavy cancellation (the Gauss circle problem). Measured over random
-maps and layouts (see ``tests/test_coverage.py``): for ``rho = r / res >= 10`` cells,
-``|raster - exact| <= 0.5 * N * rho / A`` with ``A`` the number of mask cells and ``N`` the number of nodes,
-which is well under 0.2 percentage points on maps of a few hundred cells a side; in practice the error is
-a few times smaller still.
+How far apart are the two? They differ only in mask cells that some disk's boundary crosses: such a cell
+counts 0 or 1 in ``raster`` but its covered fraction in ``exact``. With ``rho = r / res`` the disk radius in
+cells, ``N`` nodes and ``A`` mask cells:
+
+* always: ``|raster - exact| <= B / A``, where ``B`` is the number of mask cells whose centre lies within
+  ``res / sqrt(2) + 0.0009 r`` of some disk's boundary circle (the second term is the 64-gon's largest radial
+  deviation from the circle), so ``B <= ~9 N rho`` and the bound falls like ``1 / rho`` relative to the
+  disks' area;
+* for layouts not aligned with the grid the per-cell errors cancel (the Gauss circle problem): measured
+  ``|raster - exact| ~ 0.7 sqrt(N rho) / A`` rms, at most ``3.2 sqrt(N rho) / A`` in ~10^4 random layouts.
+  On maps of 200 to 300 cells a side with up to 60 nodes and ``3 <= rho <= 40`` that is at most 0.08
+  percentage points; 0.2 points need ``A >~ 1600 sqrt(N rho)`` cells (e.g. 60 nodes at ``rho = 40``: 280 x 280
+  mask cells). On small maps the agreement in percentage points is worse whatever ``rho`` is.
 
 Example:
     >>> import numpy as np
@@ -49,8 +55,6 @@ METHODS: tuple[str, ...] = ("raster", "exact")
 
 QUAD_SEGS: int = 16
 """Segments per quarter circle of the ``exact`` method's disks (a 64-gon)."""
-
-_INSERTION_MAX = 24  # rows with at most this many intervals are merged after an insertion sort
 
 
 def disk_radius_area_preserving(r: float, n: int) -> float:
@@ -112,8 +116,23 @@ def _scan(xy, r, ox, oy, res, prefix, out, paint):
             order[fill[b]] = k
             fill[b] += 1
 
-    starts = np.empty(order.shape[0], np.int64)
-    ends = np.empty(order.shape[0], np.int64)
+    no = order.shape[0]
+    xs = np.empty(no)
+    ys = np.empty(no)
+    us = np.empty(no)
+    t0 = np.empty(no)
+    inv = 1.0 / res
+    for p in range(no):
+        k = order[p]
+        xs[p] = xy[k, 0]
+        ys[p] = xy[k, 1]
+        us[p] = (xy[k, 0] - ox) * inv - 0.5
+        t0[p] = 1e-9 * (1.0 + (abs(xy[k, 0]) + abs(ox) + r) * inv)
+    # the cell-centre test decides ties; it is only evaluated when an interval end computed in closed form
+    # lies within a generous tolerance (1e6 times the float64 rounding error) of a cell centre
+    t1 = 1e-9 * rc * r
+    starts = np.empty(no, np.int64)
+    ends = np.empty(no, np.int64)
     reach = np.zeros(ncols + 1, np.int64)
     total = 0
     for i in range(nrows):
@@ -124,28 +143,30 @@ def _scan(xy, r, ox, oy, res, prefix, out, paint):
         smin = ncols
         emax = 0
         for p in range(lo, hi):
-            k = order[p]
-            x = xy[k, 0]
-            dy = cy - xy[k, 1]
+            dy = cy - ys[p]
             dy2 = dy * dy
             if dy2 > r2:
                 continue
             hw = math.sqrt(r2 - dy2)
-            flo = (x - hw - ox) / res - 0.5
-            fhi = (x + hw - ox) / res - 0.5
+            hwc = hw * inv
+            flo = us[p] - hwc
+            fhi = us[p] + hwc
             if flo > ncols or fhi < -1.0:
                 continue
             jlo = math.ceil(max(flo, 0.0))
             jhi = math.floor(min(fhi, ncols - 1.0))
-            # make the interval agree exactly with the cell-centre test
-            while jlo > 0 and _inside(jlo - 1, x, dy2, r2, ox, res):
-                jlo -= 1
-            while jlo <= jhi and not _inside(jlo, x, dy2, r2, ox, res):
-                jlo += 1
-            while jhi < ncols - 1 and _inside(jhi + 1, x, dy2, r2, ox, res):
-                jhi += 1
-            while jhi >= jlo and not _inside(jhi, x, dy2, r2, ox, res):
-                jhi -= 1
+            tol = t0[p] * hw + t1
+            x = xs[p]
+            if min(jlo - flo, flo - jlo + 1.0) * hw < tol:
+                while jlo > 0 and _inside(jlo - 1, x, dy2, r2, ox, res):
+                    jlo -= 1
+                while jlo <= jhi and not _inside(jlo, x, dy2, r2, ox, res):
+                    jlo += 1
+            if min(fhi - jhi, jhi + 1.0 - fhi) * hw < tol:
+                while jhi < ncols - 1 and _inside(jhi + 1, x, dy2, r2, ox, res):
+                    jhi += 1
+                while jhi >= jlo and not _inside(jhi, x, dy2, r2, ox, res):
+                    jhi -= 1
             if jlo > jhi:
                 continue
             starts[m] = jlo
@@ -156,7 +177,7 @@ def _scan(xy, r, ox, oy, res, prefix, out, paint):
         if m == 0:
             continue
         row = prefix[i]
-        if m <= _INSERTION_MAX:
+        if m * m < 4 * (emax - smin):  # few intervals in a wide span: sort them
             for a in range(1, m):  # insertion sort by start
                 s = starts[a]
                 e = ends[a]
@@ -256,6 +277,14 @@ class CoverageArea:
         np.cumsum(mask, axis=1, out=prefix[:, 1:])
         self._prefix = prefix
         self._no_paint = np.zeros((1, 1), dtype=bool)
+        rows = np.flatnonzero(mask.any(axis=1))
+        cols = np.flatnonzero(mask.any(axis=0))
+        self._bounds = (  # of the mask cells, in metres
+            self._ox + cols[0] * self._res,
+            self._oy + rows[0] * self._res,
+            self._ox + (cols[-1] + 1) * self._res,
+            self._oy + (rows[-1] + 1) * self._res,
+        )
         self._polygon: shapely.Geometry | None = None
         self._prepared = False
 
@@ -266,11 +295,14 @@ class CoverageArea:
             rows, c0, c1 = _row_runs(self.mask)
             res, ox, oy = self._res, self._ox, self._oy
             boxes = shapely.box(ox + c0 * res, oy + rows * res, ox + c1 * res, oy + (rows + 1) * res)
-            self._polygon = shapely.union_all(boxes)
+            # union_all leaves a vertex at every row boundary of a straight wall; simplify(0) drops the
+            # collinear ones (3x fewer vertices on real maps, faster intersections), the area is unchanged
+            self._polygon = shapely.simplify(shapely.union_all(boxes), 0.0)
         return self._polygon
 
     def _check(self, xy: np.ndarray, r: float) -> np.ndarray:
-        if not (isinstance(r, int | float | np.floating | np.integer) and math.isfinite(r) and r > 0):
+        number = isinstance(r, int | float | np.floating | np.integer) and not isinstance(r, bool)
+        if not (number and math.isfinite(r) and r > 0):
             raise ValueError(f"r must be a finite number > 0, got {r!r}")
         xy = np.ascontiguousarray(xy, dtype=np.float64)
         if xy.ndim != 2 or xy.shape[1] != 2:
@@ -314,9 +346,13 @@ class CoverageArea:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
 
     def _exact_area(self, xy: np.ndarray, r: float) -> float:
-        n = 4 * QUAD_SEGS
-        disks = shapely.buffer(shapely.points(xy), disk_radius_area_preserving(r, n), quad_segs=QUAD_SEGS)
-        union = shapely.union_all(disks)
+        rp = disk_radius_area_preserving(r, 4 * QUAD_SEGS)
+        x, y = xy[:, 0], xy[:, 1]
+        xmin, ymin, xmax, ymax = self._bounds
+        near = (x > xmin - rp) & (x < xmax + rp) & (y > ymin - rp) & (y < ymax + rp)
+        if not near.any():  # no disk reaches the mask's bounding box
+            return 0.0
+        union = shapely.union_all(shapely.buffer(shapely.points(xy[near]), rp, quad_segs=QUAD_SEGS))
         poly = self.polygon
         if not self._prepared:
             shapely.prepare(poly)

@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.spatial import cKDTree
 
+from amronet.radio import NeighbourTable
 from amronet.sensing import beam_angles
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
@@ -27,8 +27,35 @@ from amronet.world.space import clearance
 __all__ = ["avoidance_heading", "go_to_goal", "integrate", "path_clear", "random_walk"]
 
 
+@njit(cache=True)
+def _escape(heading, scans, angles, sensor_range, escape, alarmed):  # pragma: no cover - numba
+    for i in range(scans.shape[0]):
+        px = 0.0
+        py = 0.0
+        alarm = False
+        for k in range(scans.shape[1]):
+            w = (sensor_range - scans[i, k]) / sensor_range
+            if w <= 0.0:
+                continue
+            if w > 1.0:
+                w = 1.0
+            if math.cos(angles[k]) > 1e-9:
+                alarm = True
+            a = heading[i] + angles[k]
+            px -= w * math.cos(a)
+            py -= w * math.sin(a)
+        alarmed[i] = alarm
+        if alarm and math.hypot(px, py) < 1e-9:
+            escape[i] = heading[i] + math.pi  # head-on symmetric readings cancel out: turn around
+        else:
+            escape[i] = math.atan2(py, px)
+
+
 def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: float) -> tuple[np.ndarray, np.ndarray]:
     """Direction that points away from what the beams see, weighted by closeness.
+
+    Each beam reading ``d < sensor_range`` pushes with weight ``(sensor_range - d) / sensor_range`` away from
+    its direction; the escape heading is the direction of the summed push.
 
     Args:
         heading: Headings of the sensing robots, ``(M,)``.
@@ -39,18 +66,11 @@ def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: floa
         ``(escape_heading, alarmed)``: the heading away from the obstacles and a mask of robots for which a beam
         in the forward half (within 90 degrees of the heading) sees something.
     """
-    n_beams = scans.shape[1]
-    angles = beam_angles(n_beams)
-    weight = np.clip((sensor_range - scans) / sensor_range, 0.0, 1.0)
-    forward = np.cos(angles) > 1e-9
-    alarmed = (weight[:, forward] > 0).any(axis=1)
-    world = heading[:, None] + angles[None, :]
-    push_x = -(weight * np.cos(world)).sum(axis=1)
-    push_y = -(weight * np.sin(world)).sum(axis=1)
-    escape = np.arctan2(push_y, push_x)
-    # Head-on symmetric readings cancel out: then turn around.
-    cancelled = (np.hypot(push_x, push_y) < 1e-9) & alarmed
-    escape = np.where(cancelled, heading + np.pi, escape)
+    escape = np.empty(len(heading))
+    alarmed = np.empty(len(heading), dtype=np.bool_)
+    if len(heading):
+        _escape(np.ascontiguousarray(heading, dtype=float), np.ascontiguousarray(scans, dtype=float),
+                beam_angles(scans.shape[1]), float(sensor_range), escape, alarmed)
     return escape, alarmed
 
 
@@ -78,7 +98,7 @@ def random_walk(
     noise = rng.normal(0.0, turn_sigma, size=len(heading))
     fresh = rng.uniform(-np.pi, np.pi, size=len(heading))
     escape, alarmed = avoidance_heading(heading, scans, sensor_range)
-    new = np.where(alarmed, escape + noise, heading + noise)
+    new = np.where(alarmed, escape, heading) + noise
     return np.where(was_blocked, fresh, new)
 
 
@@ -185,6 +205,38 @@ def path_clear(omap: OccupancyMap, start: np.ndarray, end: np.ndarray, radius: n
     return out
 
 
+@njit(cache=True)
+def _move_sequentially(movers, end, ok, xy, radius, indptr, indices, refused):  # pragma: no cover - numba
+    """Move robots one after another; refuse a move that brings a body closer to an overlapping neighbour."""
+    for m in range(movers.shape[0]):
+        i = movers[m]
+        if not ok[m]:
+            refused[m] = True
+            continue
+        nx = end[m, 0]
+        ny = end[m, 1]
+        bad = False
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            reach = radius[i] + radius[j]
+            dx = nx - xy[j, 0]
+            dy = ny - xy[j, 1]
+            new2 = dx * dx + dy * dy
+            if new2 >= reach * reach:
+                continue
+            ox = xy[i, 0] - xy[j, 0]
+            oy = xy[i, 1] - xy[j, 1]
+            if new2 < ox * ox + oy * oy - 1e-18:
+                bad = True
+                break
+        if bad:
+            refused[m] = True
+        else:
+            xy[i, 0] = nx
+            xy[i, 1] = ny
+            refused[m] = False
+
+
 def integrate(
     omap: OccupancyMap,
     xy: np.ndarray,
@@ -193,8 +245,12 @@ def integrate(
     radius: np.ndarray,
     *,
     bodies: bool = True,
+    table: NeighbourTable | None = None,
 ) -> np.ndarray:
     """Move robots by the given displacements where the whole path is free; update ``xy`` in place.
+
+    Robots move one after another in the order of ``movers``; a move is refused when its path meets an
+    obstacle, or (with ``bodies``) when it ends overlapping another robot more than before. Refused robots stay.
 
     Args:
         omap: The map.
@@ -203,6 +259,8 @@ def integrate(
         displacement: Their displacements ``(M, 2)``.
         radius: Body radius of all robots ``(N,)``.
         bodies: Also refuse moves that make two bodies overlap more than before.
+        table: The neighbour table of the positions before the move; when its range covers every pair that could
+            touch after the move, bodies are looked up in it instead of a new spatial index.
 
     Returns:
         Boolean mask ``(M,)`` of refused (blocked) moves.
@@ -213,25 +271,22 @@ def integrate(
     start = xy[movers]
     end = start + displacement
     ok = path_clear(omap, start, end, radius[movers])
-    if bodies and len(xy) > 1:
-        old = xy.copy()
+    if not bodies or len(xy) < 2:
         xy[movers[ok]] = end[ok]
-        reach = 2.0 * float(radius.max())
-        for _ in range(3):
-            pairs = cKDTree(xy).query_pairs(reach, output_type="ndarray")
-            if len(pairs) == 0:
-                break
-            i, j = pairs[:, 0], pairs[:, 1]
-            new_gap = np.linalg.norm(xy[i] - xy[j], axis=1)
-            old_gap = np.linalg.norm(old[i] - old[j], axis=1)
-            bad = (new_gap < radius[i] + radius[j]) & (new_gap < old_gap - 1e-12)
-            if not bad.any():
-                break
-            offenders = np.unique(np.concatenate([i[bad], j[bad]]))
-            xy[offenders] = old[offenders]
-        moved = np.zeros(len(xy), dtype=bool)
-        moved[movers[ok]] = True
-        refused = ~(np.all(xy[movers] == end, axis=1) & moved[movers])
-        return refused
-    xy[movers[ok]] = end[ok]
-    return ~ok
+        return ~ok
+    longest = float(np.sqrt((displacement**2).sum(axis=1)).max())
+    reach = 2.0 * float(radius.max()) + 2.0 * longest
+    if table is not None and reach <= table.r:
+        indptr, indices = table.indptr, table.indices
+    else:
+        indptr, indices = _pairs_csr(xy, reach)
+    refused = np.empty(len(movers), dtype=np.bool_)
+    _move_sequentially(movers, np.ascontiguousarray(end), ok, xy, radius, indptr, indices, refused)
+    return refused
+
+
+def _pairs_csr(xy: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    from amronet.neighbours import neighbour_csr
+
+    indptr, indices, _ = neighbour_csr(xy, reach)
+    return indptr, indices

@@ -1,50 +1,74 @@
 """The radio medium: who can hear whom, computed once per step and shared by every robot.
 
-A medium turns positions into a symmetric neighbour table (a CSR adjacency with link lengths). Controllers read
-only their own row of it: what a real radio would hear. New propagation models register with
-:func:`register_medium` and implement :class:`RadioMedium`; walls blocking links or path loss with shadowing are
-a subclass that filters or adds links.
+A medium turns positions into a symmetric neighbour table in CSR form (row ``i`` lists the nodes ``i`` can hear
+and how far they are). Controllers read only their own row of it: what a real radio would hear. The sensors and
+the collision check reuse the same table for nearby bodies, so the spatial index is built once per step.
+
+New propagation models register with :func:`register_medium` and subclass :class:`RadioMedium`: a model with
+walls blocking links or path loss with shadowing overrides :meth:`RadioMedium.keep` to drop candidate links
+(every candidate is within ``r_c``, the largest range at which any link may exist).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from amronet.neighbours import neighbour_csr, pairs_from_csr
+
 __all__ = ["MEDIA", "NeighbourTable", "RadioMedium", "UnitDisk", "make_medium", "register_medium"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class NeighbourTable:
-    """One step's links.
+    """One step's links, as a symmetric CSR structure.
 
     Attributes:
-        pairs: Undirected links ``(M, 2)`` with ``i < j``.
-        length: Link lengths ``(M,)`` in metres.
-        adjacency: Symmetric CSR matrix ``(N, N)`` whose entries are link lengths.
-        tree: The spatial index over the positions the table was built from (shared with the sensors).
+        xy: The positions the table was built from ``(N, 2)``.
+        r: Range within which candidate links were searched (the medium's ``r_c``).
+        indptr: CSR row pointers ``(N + 1,)``.
+        indices: Neighbour ids, sorted within each row.
+        dist: Link lengths aligned with ``indices``.
     """
 
-    pairs: np.ndarray
-    length: np.ndarray
-    adjacency: sp.csr_matrix
-    tree: cKDTree
+    xy: np.ndarray
+    r: float
+    indptr: np.ndarray
+    indices: np.ndarray
+    dist: np.ndarray
 
     @property
     def degree(self) -> np.ndarray:
         """Number of neighbours of every node."""
-        return np.diff(self.adjacency.indptr)
+        return np.diff(self.indptr)
+
+    @cached_property
+    def adjacency(self) -> sp.csr_matrix:
+        """The table as a SciPy CSR matrix whose entries are link lengths (for ``scipy.sparse.csgraph``)."""
+        n = len(self.xy)
+        return sp.csr_matrix((self.dist, self.indices, self.indptr), shape=(n, n))
+
+    @cached_property
+    def pairs(self) -> np.ndarray:
+        """Undirected links ``(M, 2)`` with ``i < j``."""
+        return pairs_from_csr(self.indptr, self.indices)
+
+    @cached_property
+    def tree(self) -> cKDTree:
+        """A k-d tree over :attr:`xy`, built on first use (for queries beyond ``r``)."""
+        return cKDTree(self.xy)
 
 
 class RadioMedium:
     """Base class of radio propagation models.
 
     Args:
-        r_c: Communication radius in metres (the range within which a link may exist).
+        r_c: Communication radius in metres (the largest range at which a link may exist).
     """
 
     name = "abstract"
@@ -52,34 +76,27 @@ class RadioMedium:
     def __init__(self, r_c: float) -> None:
         self.r_c = float(r_c)
 
-    def links(self, xy: np.ndarray, tree: cKDTree) -> tuple[np.ndarray, np.ndarray]:
-        """Return the undirected links ``(M, 2)`` (``i < j``) and their lengths among positions ``xy``."""
-        raise NotImplementedError
+    def keep(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray) -> np.ndarray | None:
+        """Mask of candidate links (CSR order) that exist; ``None`` keeps them all. Must be symmetric."""
+        return None
 
     def update(self, xy: np.ndarray) -> NeighbourTable:
         """Build this step's neighbour table from all robot positions ``(N, 2)``."""
-        tree = cKDTree(xy)
-        pairs, length = self.links(xy, tree)
-        n = len(xy)
-        rows = np.concatenate([pairs[:, 0], pairs[:, 1]])
-        cols = np.concatenate([pairs[:, 1], pairs[:, 0]])
-        data = np.concatenate([length, length])
-        adjacency = sp.csr_matrix((data, (rows, cols)), shape=(n, n))
-        adjacency.sort_indices()
-        return NeighbourTable(pairs=pairs, length=length, adjacency=adjacency, tree=tree)
+        xy = np.array(xy, dtype=float)
+        indptr, indices, dist = neighbour_csr(xy, self.r_c)
+        mask = self.keep(xy, indptr, indices, dist)
+        if mask is not None:
+            rows = np.repeat(np.arange(len(xy)), np.diff(indptr))[mask]
+            indices, dist = indices[mask], dist[mask]
+            indptr = np.zeros(len(xy) + 1, dtype=np.int64)
+            np.cumsum(np.bincount(rows, minlength=len(xy)), out=indptr[1:])
+        return NeighbourTable(xy=xy, r=self.r_c, indptr=indptr, indices=indices, dist=dist)
 
 
 class UnitDisk(RadioMedium):
     """Unit disk graph: two nodes are linked exactly when their distance is at most ``r_c``."""
 
     name = "unit-disk"
-
-    def links(self, xy: np.ndarray, tree: cKDTree) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
-        pairs = tree.query_pairs(self.r_c, output_type="ndarray").astype(np.int64)
-        if len(pairs) == 0:
-            return np.zeros((0, 2), dtype=np.int64), np.zeros(0)
-        length = np.linalg.norm(xy[pairs[:, 0]] - xy[pairs[:, 1]], axis=1)
-        return pairs, length
 
 
 MEDIA: dict[str, Callable[..., RadioMedium]] = {}

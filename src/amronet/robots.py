@@ -7,6 +7,7 @@ vectorized operations; :data:`STATE_NAMES` and :data:`KIND_NAMES` turn them into
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -20,11 +21,13 @@ __all__ = [
     "MOBILE_STATES",
     "PIONEER",
     "ROBOT_KINDS",
+    "SETTLING_STATES",
     "STATE_NAMES",
     "Kind",
     "RobotKind",
     "State",
     "Swarm",
+    "state_lookup",
 ]
 
 
@@ -63,6 +66,8 @@ DEPLOYED_STATES: tuple[int, ...] = (State.BASE, State.REFERENCE, State.TRIANGLE_
 """States of nodes that stay put and act as references for routers and agents."""
 MOBILE_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE, State.AGENT)
 """States of robots that move in a step."""
+SETTLING_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE)
+"""States of routers that have not settled yet."""
 
 
 @dataclass(frozen=True)
@@ -92,6 +97,15 @@ AMIGOBOT = RobotKind("amigobot", radius=0.165, max_speed=0.0, sensor_beams=8, se
 """Base-station reference node, after the AmigoBot; immobile."""
 
 ROBOT_KINDS: dict[str, RobotKind] = {k.name: k for k in (PIONEER, BEBOT, AMIGOBOT)}
+
+
+@functools.cache
+def state_lookup(states: tuple[int, ...]) -> np.ndarray:
+    """Boolean table indexed by state code: ``state_lookup(states)[state]`` is a fast ``np.isin``."""
+    table = np.zeros(len(State), dtype=bool)
+    table[list(states)] = True
+    table.flags.writeable = False
+    return table
 
 
 @dataclass
@@ -167,7 +181,7 @@ class Swarm:
 
     def in_states(self, states: tuple[int, ...]) -> np.ndarray:
         """Boolean mask of robots whose state is one of ``states``."""
-        return np.isin(self.state, states)
+        return state_lookup(states)[self.state]
 
     @property
     def deployed(self) -> np.ndarray:

@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.spatial import cKDTree
 
+from amronet.radio import NeighbourTable
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
 
@@ -29,6 +29,12 @@ def beam_angles(n_beams: int) -> np.ndarray:
 def _cast_grid(blocked, clear, ox, oy, res, xy, heading, angles, max_range, out):  # pragma: no cover - numba
     rows, cols = blocked.shape
     for i in range(xy.shape[0]):
+        c0 = int(math.floor((xy[i, 0] - ox) / res))
+        r0 = int(math.floor((xy[i, 1] - oy) / res))
+        if 0 <= r0 < rows and 0 <= c0 < cols and not blocked[r0, c0] and clear[r0, c0] - res >= max_range:
+            for k in range(angles.shape[0]):
+                out[i, k] = max_range  # nothing within reach in any direction
+            continue
         for k in range(angles.shape[0]):
             a = heading[i] + angles[k]
             dx = math.cos(a)
@@ -82,6 +88,35 @@ def _cast_bodies(pairs, xy, heading, angles, max_range, other_radius, slot, out)
                     out[s, k] = t
 
 
+@njit(cache=True)
+def _cast_bodies_csr(who, indptr, indices, xy, heading, angles, max_range, other_radius, out):  # pragma: no cover
+    for s in range(who.shape[0]):
+        i = who[s]
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            vx = xy[j, 0] - xy[i, 0]
+            vy = xy[j, 1] - xy[i, 1]
+            rj = other_radius[j]
+            dist2 = vx * vx + vy * vy
+            if dist2 > (max_range + rj) ** 2:
+                continue
+            for k in range(angles.shape[0]):
+                a = heading[i] + angles[k]
+                ux = math.cos(a)
+                uy = math.sin(a)
+                tca = vx * ux + vy * uy
+                if tca <= 0.0:
+                    continue
+                d2 = dist2 - tca * tca
+                if d2 > rj * rj:
+                    continue
+                t = tca - math.sqrt(rj * rj - d2)
+                if t < 0.0:
+                    t = 0.0
+                if t < out[s, k]:
+                    out[s, k] = t
+
+
 def range_scan(
     omap: OccupancyMap,
     xy: np.ndarray,
@@ -91,7 +126,7 @@ def range_scan(
     max_range: float,
     *,
     radius: np.ndarray | None = None,
-    tree: cKDTree | None = None,
+    table: NeighbourTable | None = None,
 ) -> np.ndarray:
     """Read the sensor rings of some robots.
 
@@ -102,8 +137,9 @@ def range_scan(
         who: Indices of the robots whose sensors are read, ``(M,)``.
         n_beams: Beams per ring.
         max_range: Maximum range of a beam in metres.
-        radius: Body radius of all robots, ``(N,)``; when given (with ``tree``) other robots stop beams too.
-        tree: A ``cKDTree`` over ``xy`` (the radio medium's, shared), needed with ``radius``.
+        radius: Body radius of all robots, ``(N,)``; when given (with ``table``) other robots stop beams too.
+        table: The radio medium's neighbour table for ``xy``: bodies within its range are found from it; a
+            sensor reaching farther falls back to the table's k-d tree.
 
     Returns:
         Distances ``(M, n_beams)`` in metres, each in ``[0, max_range]``; row ``m`` belongs to robot ``who[m]``.
@@ -118,14 +154,17 @@ def range_scan(
         blocked, clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution),
         np.ascontiguousarray(xy[who]), np.ascontiguousarray(heading[who]), angles, float(max_range), out,
     )
-    if radius is not None and tree is not None and len(xy) > 1:
+    if radius is not None and table is not None and len(xy) > 1:
         reach = float(max_range + radius.max())
-        pairs = tree.query_pairs(reach, output_type="ndarray")
-        if len(pairs):
-            slot = np.full(len(xy), -1, dtype=np.int64)
-            slot[who] = np.arange(len(who))
-            keep = (slot[pairs[:, 0]] >= 0) | (slot[pairs[:, 1]] >= 0)
-            _cast_bodies(
-                np.ascontiguousarray(pairs[keep]), xy, heading, angles, float(max_range), radius, slot, out
-            )
+        if reach <= table.r:
+            _cast_bodies_csr(who, table.indptr, table.indices, xy, heading, angles, float(max_range), radius, out)
+        else:
+            pairs = table.tree.query_pairs(reach, output_type="ndarray")
+            if len(pairs):
+                slot = np.full(len(xy), -1, dtype=np.int64)
+                slot[who] = np.arange(len(who))
+                keep = (slot[pairs[:, 0]] >= 0) | (slot[pairs[:, 1]] >= 0)
+                _cast_bodies(
+                    np.ascontiguousarray(pairs[keep]), xy, heading, angles, float(max_range), radius, slot, out
+                )
     return out

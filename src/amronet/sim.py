@@ -100,7 +100,7 @@ class Simulation:
                                                               np.sin(sw.heading[movers])], axis=1)
         before = sw.xy[movers].copy()
         refused = integrate(self.world.omap, sw.xy, movers, disp, sw.radius,
-                            bodies=self.scenario.sim.robot_collisions)
+                            bodies=self.scenario.sim.robot_collisions, table=self.table)
         sw.distance[movers] += np.linalg.norm(sw.xy[movers] - before, axis=1)
         self.controller.after_move(movers, refused)
         t3 = clock()
@@ -112,13 +112,13 @@ class Simulation:
 
     def _sense(self) -> Readings:
         sw = self.swarm
-        mobile = np.isin(sw.state, MOBILE_STATES)
+        mobile = sw.in_states(MOBILE_STATES)
         groups = {}
         for m, kind in enumerate(sw.models):
             who = np.flatnonzero(mobile & (sw.model == m))
             if len(who):
                 scans = range_scan(self.world.omap, sw.xy, sw.heading, who, kind.sensor_beams, kind.sensor_range,
-                                   radius=sw.radius, tree=self.table.tree)
+                                   radius=sw.radius, table=self.table)
                 groups[m] = (who, scans)
         return Readings(groups)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from amronet.radio import NeighbourTable
 
@@ -39,19 +40,36 @@ class ReferenceView:
         return self.current >= 0
 
 
-def _first_per_row(rows: np.ndarray, values: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Index (into the entry arrays) of the smallest value per row, and that value; -1 / inf for empty rows."""
-    best_idx = np.full(n, -1, dtype=np.int64)
-    best_val = np.full(n, np.inf)
-    if len(rows) == 0:
-        return best_idx, best_val
-    order = np.lexsort((values, rows))
-    sorted_rows = rows[order]
-    first = np.ones(len(order), dtype=bool)
-    first[1:] = sorted_rows[1:] != sorted_rows[:-1]
-    best_idx[sorted_rows[first]] = order[first]
-    best_val[sorted_rows[first]] = values[order[first]]
-    return best_idx, best_val
+@njit(cache=True)
+def _track(who, current, is_reference, status, indptr, indices, dist, new_current, nearest_d, other, other_d):  # pragma: no cover
+    for m in range(who.shape[0]):
+        i = who[m]
+        cur = current[m]
+        still = False
+        best = -1
+        best_d = np.inf
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            if not is_reference[j]:
+                continue
+            if j == cur:
+                still = True
+            if dist[e] < best_d:
+                best_d = dist[e]
+                best = j
+        chosen = cur if still else best
+        new_current[m] = chosen
+        nearest_d[m] = best_d
+        other[m] = -1
+        other_d[m] = np.inf
+        if chosen < 0 or status[chosen] < 0:
+            continue
+        s_cur = status[chosen]
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            if is_reference[j] and status[j] >= 0 and status[j] != s_cur and dist[e] < other_d[m]:
+                other_d[m] = dist[e]
+                other[m] = j
 
 
 def track_references(
@@ -71,29 +89,13 @@ def track_references(
         status: Status of all nodes.
 
     Returns:
-        The updated view; ``current`` is a new array.
+        The updated view; ``current`` is a new array. Ties in distance go to the lower node id.
     """
     m = len(who)
-    sub = table.adjacency[who].tocoo()
-    rows, cols, dist = sub.row.astype(np.int64), sub.col.astype(np.int64), sub.data
-    keep = is_reference[cols]
-    rows, cols, dist = rows[keep], cols[keep], dist[keep]
-    nearest_entry, nearest_distance = _first_per_row(rows, dist, m)
-    nearest = np.where(nearest_entry >= 0, cols[np.maximum(nearest_entry, 0)] if len(cols) else -1, -1)
-
-    current = np.asarray(current, dtype=np.int64)
-    still = np.zeros(m, dtype=bool)
-    if len(rows):
-        still[rows[cols == current[rows]]] = True
-    new_current = np.where(still, current, nearest)
-
-    other = np.full(m, -1, dtype=np.int64)
-    other_distance = np.full(m, np.inf)
-    if len(rows):
-        cur_status = np.where(new_current >= 0, status[np.maximum(new_current, 0)], -1)
-        differs = (status[cols] != cur_status[rows]) & (status[cols] >= 0) & (cur_status[rows] >= 0)
-        o_entry, o_dist = _first_per_row(rows[differs], dist[differs], m)
-        found = o_entry >= 0
-        other[found] = cols[differs][o_entry[found]]
-        other_distance[found] = o_dist[found]
-    return ReferenceView(new_current, nearest_distance, other, other_distance)
+    new_current = np.empty(m, dtype=np.int64)
+    nearest_d = np.empty(m)
+    other = np.empty(m, dtype=np.int64)
+    other_d = np.empty(m)
+    _track(np.asarray(who, dtype=np.int64), np.asarray(current, dtype=np.int64), is_reference,
+           status, table.indptr, table.indices, table.dist, new_current, nearest_d, other, other_d)
+    return ReferenceView(new_current, nearest_d, other, other_d)

@@ -32,7 +32,7 @@ from amronet.algorithms.references import track_references
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.errors import ScenarioError
 from amronet.motion import go_to_goal, random_walk
-from amronet.robots import Kind, State
+from amronet.robots import SETTLING_STATES, Kind, State
 
 __all__ = ["SelfSpreading", "SelfSpreadingParams"]
 
@@ -87,14 +87,14 @@ class SelfSpreading(Controller):
 
     @property
     def settled(self) -> bool:  # noqa: D102
-        return not np.isin(self.swarm.state, (State.EXPLORE, State.TRIANGLE)).any()
+        return not self.swarm.in_states(SETTLING_STATES).any()
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm
         explorers = np.flatnonzero(sw.state == State.EXPLORE)
         if len(explorers):
             self._decide_explorers(step, explorers)
-        movers = np.flatnonzero(np.isin(sw.state, (State.EXPLORE, State.TRIANGLE)))
+        movers = np.flatnonzero(sw.in_states(SETTLING_STATES))
         speed = sw.max_speed[movers].copy()
         if len(movers) == 0:
             return Command(movers, speed)
