@@ -9,10 +9,10 @@ Example:
 
 __version__ = "0.1.0"
 
-from amronet.api import run  # noqa: E402
-from amronet.errors import AmronetError, MapError, ScenarioError  # noqa: E402
-from amronet.scenario import Scenario, list_presets, load_scenario  # noqa: E402
-from amronet.sim import Simulation  # noqa: E402
+from amronet.api import run
+from amronet.errors import AmronetError, MapError, ScenarioError
+from amronet.scenario import Scenario, list_presets, load_scenario
+from amronet.sim import Simulation
 
 __all__ = [
     "AmronetError",

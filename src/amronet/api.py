@@ -16,7 +16,7 @@ def run(
     scenario: Scenario | dict[str, Any] | str | Path,
     seed: int = 0,
     overrides: dict[str, Any] | None = None,
-    progress=None,  # noqa: ANN001 - any callable(t, time_limit)
+    progress=None,
 ) -> RunResult:
     """Run a scenario once.
 

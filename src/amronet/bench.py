@@ -29,7 +29,7 @@ from amronet.world.builtin import resolve_map
 __all__ = ["run_bench"]
 
 
-def _largest_free_region(omap) -> np.ndarray:  # noqa: ANN001
+def _largest_free_region(omap) -> np.ndarray:
     """Mask of the largest 4-connected free region of the map (where the benchmark's robots live)."""
     labels, count = ndimage.label(omap.free)
     if count == 0:

@@ -187,7 +187,7 @@ def write_files_atomically(out_dir: Path, files: dict[str, bytes]) -> Path:
     return out_dir
 
 
-def write_file_atomically(path: Path, write) -> Path:  # noqa: ANN001 - write is callable(tmp_path)
+def write_file_atomically(path: Path, write) -> Path:
     """Create ``path`` by calling ``write(tmp_path)`` on a temporary sibling and renaming it into place."""
     path = Path(path)
     if path.exists() and path.is_dir():

@@ -23,13 +23,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from amronet.algorithms import ALGORITHMS, Readings, StepInput
+from amronet.assemble import World, build_swarm, build_world
 from amronet.motion import integrate
 from amronet.network import components, connected_to
 from amronet.radio import NeighbourTable, make_medium
 from amronet.robots import MOBILE_STATES, Kind, State, Swarm
 from amronet.scenario import Scenario
 from amronet.sensing import range_scan
-from amronet.assemble import World, build_swarm, build_world
 from amronet.world.occupancy import OccupancyMap
 
 __all__ = ["Metrics", "Simulation"]
@@ -124,8 +124,11 @@ class Simulation:
 
     # -- metrics ---------------------------------------------------------------------------------------------
     def metrics(self, method: str | None = None) -> Metrics:
-        """Coverage (Eq. 1) over all routers and base nodes, coverage of those connected to a base, deployed
-        routers, and the number of components of the deployed network (base nodes and deployed routers)."""
+        """Network metrics now.
+
+        Coverage (Eq. 1) over all routers and base nodes, coverage of those connected to a base, deployed
+        routers, and the number of components of the deployed network (base nodes and deployed routers).
+        """
         sw = self.swarm
         method = method or self.scenario.sim.coverage_method
         r_c = self.scenario.radio.r_c
@@ -146,7 +149,7 @@ class Simulation:
         return m
 
     # -- the run ---------------------------------------------------------------------------------------------
-    def run(self, progress=None):  # noqa: ANN001, ANN201 - progress is any callable(t, time_limit)
+    def run(self, progress=None):
         """Run until a stop condition holds and return a :class:`~amronet.results.RunResult`."""
         from amronet.results import RunResult
 

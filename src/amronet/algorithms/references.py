@@ -41,7 +41,7 @@ class ReferenceView:
 
 
 @njit(cache=True)
-def _track(who, current, is_reference, status, indptr, indices, dist, new_current, nearest_d, other, other_d):  # pragma: no cover
+def _track(who, current, is_reference, status, indptr, indices, dist, new_current, nearest_d, other, other_d):
     for m in range(who.shape[0]):
         i = who[m]
         cur = current[m]

@@ -63,7 +63,7 @@ class SelfSpreading(Controller):
     Params = SelfSpreadingParams
     params: SelfSpreadingParams
 
-    def __init__(self, *args, **kwargs) -> None:  # noqa: D107
+    def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         sw = self.swarm
         n = len(sw)

@@ -1,0 +1,36 @@
+"""Robot-steps per second of the full self-spreading step for N = 30, 3 000 and 100 000 (README table).
+
+Run: ``.venv/bin/python benchmarks/bench_step.py`` (or ``make bench``). Targets on the project's 2-core machine:
+N = 3 000 at >= 1 000 steps/s and N = 100 000 at >= 10 steps/s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from amronet.bench import run_bench
+
+CASES = ((30, 5000), (3000, 1000), (100_000, 30))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--map", default="hospital_section")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    rows = [run_bench(robots=n, steps=steps, map_name=args.map) for n, steps in CASES]
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return
+    print("| N | map scale | mean degree | steps/s | robot-steps/s | sense | decide | move | radio |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        p = r["phase_share"]
+        print(f"| {r['robots']:,} | {r['map_scale']:.2f} | {r['mean_degree']:.1f} | {r['steps_per_s']:,.1f} | "
+              f"{r['robot_steps_per_s']:,} | {p['sense']:.0%} | {p['decide']:.0%} | {p['move']:.0%} | "
+              f"{p['radio']:.0%} |")
+
+
+if __name__ == "__main__":
+    main()
