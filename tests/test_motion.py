@@ -2,7 +2,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.motion import avoidance_heading, go_to_goal, integrate, path_clear, random_walk
+from amronet.motion import avoidance_heading, integrate, path_clear, random_walk
 from amronet.world.space import clearance
 from helpers import box_map, diagonal_wall_map
 
@@ -55,14 +55,31 @@ def test_avoidance_turns_away_from_what_is_ahead():
 
 def test_random_walk_reproducible_and_bounces_when_blocked():
     scans = np.full((3, 8), 0.14)
-    h = np.zeros(3)
-    a = random_walk(h, scans, 0.14, np.array([False, True, False]), np.random.default_rng(1), 0.1)
-    b = random_walk(h, scans, 0.14, np.array([False, True, False]), np.random.default_rng(1), 0.1)
+    scans[2, 0] = 0.02  # robot 2 sees a wall straight ahead
+    who = np.array([0, 1, 3])
+    a, b = np.zeros(4), np.zeros(4)
+    random_walk(a, who, scans, 0.14, np.array([False, True, False]), np.random.default_rng(1), 0.1)
+    random_walk(b, who, scans, 0.14, np.array([False, True, False]), np.random.default_rng(1), 0.1)
     assert np.array_equal(a, b)
-    assert abs(a[0]) < 0.5 and abs(a[2]) < 0.5
+    assert abs(a[0]) < 0.5  # keeps going, with a little noise
+    assert a[2] == 0.0  # not walking: untouched
+    assert abs(abs(a[3]) - np.pi) < 0.5  # turned around
 
 
-def test_go_to_goal_heads_for_goal_when_clear():
-    xy = np.array([[0.0, 0.0]])
-    heading = go_to_goal(xy, np.zeros(1), np.array([[0.0, 1.0]]), np.full((1, 8), 0.14), 0.14)
-    assert heading[0] == np.pi / 2
+def test_goal_steering_heads_for_goal_keeps_anchors_and_gives_up():
+    from amronet.algorithms.goto import GoalSteering
+
+    xy = np.array([[0.0, 0.0], [0.0, 0.9], [5.0, 5.0]])
+    heading = np.zeros(3)
+    steering = GoalSteering(3, n_anchors=1, give_up_steps=3)
+    steering.start(np.array([0]), np.array([[0.0, 1.0]]), np.array([[-1]]))
+    length, done = steering.steer(np.array([0]), xy, heading, np.full((1, 8), 0.14), 0.14, np.array([0.1]), 1.0)
+    assert heading[0] == np.pi / 2 and length[0] == 0.1 and not done[0]
+    # an anchor the move would leave behind: the robot refuses the move, and gives up after 3 blocked steps
+    steering.start(np.array([0]), np.array([[0.0, 3.0]]), np.array([[2]]))
+    xy[0] = [5.0, 4.0]
+    steering.goal[0] = [5.0, 3.0]
+    results = [steering.steer(np.array([0]), xy, heading, np.full((1, 8), 0.14), 0.14, np.array([0.1]), 1.0)
+               for _ in range(5)]
+    assert all(r[0][0] == 0.0 for r in results)
+    assert [bool(r[1][0]) for r in results] == [False, False, False, True, True]  # first step sets the baseline

@@ -116,18 +116,18 @@ def test_select_triangles_rules():
     committed = np.array([True, True, False, False, True, True])
     deciders, ri, rj = np.array([2, 3]), np.array([0, 0]), np.array([1, 1])
     # two robots meet the same pair in the same step: only one (the lower id) deploys
-    assert select_triangles("none", deciders, ri, rj, xy, 1.0, disabled, table.adjacency, committed).tolist() == [
+    assert select_triangles("none", deciders, ri, rj, xy, 1.0, disabled, table, committed).tolist() == [
         True, False]
     disabled[[0, 1]] = True
-    assert not select_triangles("local", deciders, ri, rj, xy, 1.0, disabled, table.adjacency, committed).any()
+    assert not select_triangles("local", deciders, ri, rj, xy, 1.0, disabled, table, committed).any()
     # references within r_c of each other are linked already: never a triangle
     assert not select_triangles("none", np.array([2]), np.array([4]), np.array([5]), xy, 1.0, disabled,
-                                table.adjacency, committed).any()
+                                table, committed).any()
     # global: 0 and 1 are not connected through committed nodes -> deploy; once joined -> skip
-    assert select_triangles("global", deciders[:1], ri[:1], rj[:1], xy, 1.0, disabled, table.adjacency,
+    assert select_triangles("global", deciders[:1], ri[:1], rj[:1], xy, 1.0, disabled, table,
                             committed).tolist() == [True]
     committed[2] = True
-    assert not select_triangles("global", deciders[:1], ri[:1], rj[:1], xy, 1.0, disabled, table.adjacency,
+    assert not select_triangles("global", deciders[:1], ri[:1], rj[:1], xy, 1.0, disabled, table,
                                 committed).any()
 
 

@@ -5,7 +5,8 @@ Behaviours turn sensor readings into headings:
 
 * :func:`random_walk`: keep going, with a little heading noise; when a beam sees something close, turn away
   from it (Braitenberg-style avoidance); after a blocked move, pick a new random heading.
-* :func:`go_to_goal`: head for the goal, and blend in the same avoidance when something is close.
+* go-to-goal (:mod:`amronet.algorithms.goto`): head for the goal, and blend in the same avoidance when
+  something is close.
 
 :func:`integrate` moves robots along their headings and checks every move along its whole path: a move is
 refused if any cell the path touches is closer to an obstacle than the robot's radius, so no robot ever ends
@@ -24,31 +25,46 @@ from amronet.sensing import beam_angles
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
 
-__all__ = ["avoidance_heading", "go_to_goal", "integrate", "path_clear", "random_walk"]
+__all__ = ["avoidance_heading", "drive", "integrate", "path_clear", "random_walk"]
+
+
+@njit(cache=True, inline="always")
+def _escape_one(heading, scans, angles, sensor_range):  # pragma: no cover - numba
+    """Escape heading of one robot and whether a forward beam sees something."""
+    px = 0.0
+    py = 0.0
+    alarm = False
+    for k in range(scans.shape[0]):
+        w = (sensor_range - scans[k]) / sensor_range
+        if w <= 0.0:
+            continue
+        if w > 1.0:
+            w = 1.0
+        if math.cos(angles[k]) > 1e-9:
+            alarm = True
+        a = heading + angles[k]
+        px -= w * math.cos(a)
+        py -= w * math.sin(a)
+    if alarm and math.hypot(px, py) < 1e-9:
+        return heading + math.pi, alarm  # head-on symmetric readings cancel out: turn around
+    return math.atan2(py, px), alarm
 
 
 @njit(cache=True)
 def _escape(heading, scans, angles, sensor_range, escape, alarmed):  # pragma: no cover - numba
     for i in range(scans.shape[0]):
-        px = 0.0
-        py = 0.0
-        alarm = False
-        for k in range(scans.shape[1]):
-            w = (sensor_range - scans[i, k]) / sensor_range
-            if w <= 0.0:
-                continue
-            if w > 1.0:
-                w = 1.0
-            if math.cos(angles[k]) > 1e-9:
-                alarm = True
-            a = heading[i] + angles[k]
-            px -= w * math.cos(a)
-            py -= w * math.sin(a)
-        alarmed[i] = alarm
-        if alarm and math.hypot(px, py) < 1e-9:
-            escape[i] = heading[i] + math.pi  # head-on symmetric readings cancel out: turn around
-        else:
-            escape[i] = math.atan2(py, px)
+        escape[i], alarmed[i] = _escape_one(heading[i], scans[i], angles, sensor_range)
+
+
+@njit(cache=True)
+def _random_walk(heading, who, scans, angles, sensor_range, refused, noise, fresh):  # pragma: no cover - numba
+    for m in range(who.shape[0]):
+        i = who[m]
+        if refused[m]:
+            heading[i] = fresh[m]
+            continue
+        escape, alarm = _escape_one(heading[i], scans[m], angles, sensor_range)
+        heading[i] = (escape if alarm else heading[i]) + noise[m]
 
 
 def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: float) -> tuple[np.ndarray, np.ndarray]:
@@ -76,58 +92,35 @@ def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: floa
 
 def random_walk(
     heading: np.ndarray,
+    who: np.ndarray,
     scans: np.ndarray,
     sensor_range: float,
     was_blocked: np.ndarray,
     rng: np.random.Generator,
     turn_sigma: float,
-) -> np.ndarray:
-    """New headings for robots doing a random walk with obstacle avoidance.
+) -> None:
+    """Update the headings of robots doing a random walk with obstacle avoidance, in place.
+
+    A robot whose last move was refused picks a fresh uniform heading; one whose forward beams see something
+    turns to the escape heading of :func:`avoidance_heading`; every other keeps its heading. All but the
+    fresh ones then add Gaussian heading noise.
 
     Args:
-        heading: Current headings ``(M,)``.
-        scans: Range readings ``(M, n_beams)``.
+        heading: Headings of all robots ``(N,)``; entries ``who`` are updated.
+        who: The walking robots ``(M,)``.
+        scans: Their range readings ``(M, n_beams)``.
         sensor_range: Maximum range of the beams.
-        was_blocked: Robots whose last move was refused ``(M,)``; they pick a fresh uniform heading.
+        was_blocked: Which of them had their last move refused ``(M,)``.
         rng: The run's random generator.
         turn_sigma: Standard deviation of the heading noise per step, radians.
-
-    Returns:
-        New headings ``(M,)``.
     """
-    noise = rng.normal(0.0, turn_sigma, size=len(heading))
-    fresh = rng.uniform(-np.pi, np.pi, size=len(heading))
-    escape, alarmed = avoidance_heading(heading, scans, sensor_range)
-    new = np.where(alarmed, escape, heading) + noise
-    return np.where(was_blocked, fresh, new)
-
-
-def go_to_goal(
-    xy: np.ndarray,
-    heading: np.ndarray,
-    goal: np.ndarray,
-    scans: np.ndarray,
-    sensor_range: float,
-) -> np.ndarray:
-    """New headings for robots driving to goals with obstacle avoidance.
-
-    With nothing close ahead the robot heads straight for the goal; otherwise it takes the bisector of the
-    goal direction and the escape direction, which slides it along walls and around other robots.
-
-    Args:
-        xy: Positions ``(M, 2)``.
-        heading: Current headings ``(M,)``.
-        goal: Goal points ``(M, 2)``.
-        scans: Range readings ``(M, n_beams)``.
-        sensor_range: Maximum range of the beams.
-
-    Returns:
-        New headings ``(M,)``.
-    """
-    to_goal = np.arctan2(goal[:, 1] - xy[:, 1], goal[:, 0] - xy[:, 0])
-    escape, alarmed = avoidance_heading(heading, scans, sensor_range)
-    blend = np.arctan2(np.sin(to_goal) + np.sin(escape), np.cos(to_goal) + np.cos(escape))
-    return np.where(alarmed, blend, to_goal)
+    m = len(who)
+    noise = rng.normal(0.0, turn_sigma, size=m)
+    fresh = rng.uniform(-np.pi, np.pi, size=m)
+    if m:
+        _random_walk(heading, np.asarray(who, dtype=np.int64), np.ascontiguousarray(scans, dtype=float),
+                     beam_angles(scans.shape[1]), float(sensor_range), np.asarray(was_blocked, dtype=np.bool_),
+                     noise, fresh)
 
 
 @njit(cache=True)
@@ -206,35 +199,42 @@ def path_clear(omap: OccupancyMap, start: np.ndarray, end: np.ndarray, radius: n
 
 
 @njit(cache=True)
-def _move_sequentially(movers, end, ok, xy, radius, indptr, indices, refused):  # pragma: no cover - numba
-    """Move robots one after another; refuse a move that brings a body closer to an overlapping neighbour."""
+def _drive(clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indptr, indices, refused, travelled):  # pragma: no cover
+    """Move robots one after another.
+
+    A move is refused when its path meets an obstacle, or (with ``bodies``) when it brings the body closer to a
+    neighbour it overlaps at the end.
+    """
     for m in range(movers.shape[0]):
         i = movers[m]
-        if not ok[m]:
-            refused[m] = True
+        x0 = xy[i, 0]
+        y0 = xy[i, 1]
+        nx = x0 + length[m] * math.cos(heading[m])
+        ny = y0 + length[m] * math.sin(heading[m])
+        refused[m] = True
+        travelled[m] = 0.0
+        if not _segment_ok(clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
             continue
-        nx = end[m, 0]
-        ny = end[m, 1]
         bad = False
-        for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
-            reach = radius[i] + radius[j]
-            dx = nx - xy[j, 0]
-            dy = ny - xy[j, 1]
-            new2 = dx * dx + dy * dy
-            if new2 >= reach * reach:
-                continue
-            ox = xy[i, 0] - xy[j, 0]
-            oy = xy[i, 1] - xy[j, 1]
-            if new2 < ox * ox + oy * oy - 1e-18:
-                bad = True
-                break
-        if bad:
-            refused[m] = True
-        else:
+        if bodies:
+            for e in range(indptr[i], indptr[i + 1]):
+                j = indices[e]
+                reach = radius[i] + radius[j]
+                ex = nx - xy[j, 0]
+                ey = ny - xy[j, 1]
+                new2 = ex * ex + ey * ey
+                if new2 >= reach * reach:
+                    continue
+                ox_ = x0 - xy[j, 0]
+                oy_ = y0 - xy[j, 1]
+                if new2 < ox_ * ox_ + oy_ * oy_ - 1e-18:
+                    bad = True
+                    break
+        if not bad:
             xy[i, 0] = nx
             xy[i, 1] = ny
             refused[m] = False
+            travelled[m] = math.hypot(nx - x0, ny - y0)
 
 
 def integrate(
@@ -265,24 +265,58 @@ def integrate(
     Returns:
         Boolean mask ``(M,)`` of refused (blocked) moves.
     """
-    movers = np.asarray(movers, dtype=np.int64)
-    if len(movers) == 0:
-        return np.zeros(0, dtype=bool)
-    start = xy[movers]
-    end = start + displacement
-    ok = path_clear(omap, start, end, radius[movers])
-    if not bodies or len(xy) < 2:
-        xy[movers[ok]] = end[ok]
-        return ~ok
-    longest = float(np.sqrt((displacement**2).sum(axis=1)).max())
-    reach = 2.0 * float(radius.max()) + 2.0 * longest
-    if table is not None and reach <= table.r:
-        indptr, indices = table.indptr, table.indices
-    else:
-        indptr, indices = _pairs_csr(xy, reach)
-    refused = np.empty(len(movers), dtype=np.bool_)
-    _move_sequentially(movers, np.ascontiguousarray(end), ok, xy, radius, indptr, indices, refused)
+    displacement = np.asarray(displacement, dtype=float).reshape(-1, 2)
+    heading = np.arctan2(displacement[:, 1], displacement[:, 0])
+    length = np.hypot(displacement[:, 0], displacement[:, 1])
+    refused, _ = drive(omap, xy, movers, heading, length, radius, bodies=bodies, table=table)
     return refused
+
+
+def drive(
+    omap: OccupancyMap,
+    xy: np.ndarray,
+    movers: np.ndarray,
+    heading: np.ndarray,
+    length: np.ndarray,
+    radius: np.ndarray,
+    *,
+    bodies: bool = True,
+    table: NeighbourTable | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Drive robots straight along their headings; the fused form of :func:`integrate` used by the step.
+
+    Args:
+        omap: The map.
+        xy: Positions of all robots ``(N, 2)``; changed in place.
+        movers: Indices of the robots that try to move ``(M,)``.
+        heading: Their headings ``(M,)``.
+        length: How far each tries to go ``(M,)`` (speed times step length).
+        radius: Body radius of all robots ``(N,)``.
+        bodies: Also refuse moves that make two bodies overlap more than before.
+        table: Neighbour table of the positions before the move (see :func:`integrate`).
+
+    Returns:
+        ``(refused, travelled)``: refused moves ``(M,)`` and the distance each mover travelled (0 if refused).
+    """
+    movers = np.asarray(movers, dtype=np.int64)
+    m = len(movers)
+    refused = np.ones(m, dtype=np.bool_)
+    travelled = np.zeros(m)
+    if m == 0:
+        return refused, travelled
+    heading = np.ascontiguousarray(heading, dtype=float)
+    length = np.ascontiguousarray(length, dtype=float)
+    indptr = np.zeros(len(xy) + 1, dtype=np.int64)
+    indices = np.zeros(0, dtype=np.int32)
+    if bodies and len(xy) > 1:
+        reach = 2.0 * float(radius.max()) + 2.0 * float(length.max())
+        if table is not None and reach <= table.r:
+            indptr, indices = table.indptr, table.indices
+        else:
+            indptr, indices = _pairs_csr(xy, reach)
+    _drive(clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), movers, heading,
+           length, xy, radius, bodies, indptr, indices, refused, travelled)
+    return refused, travelled
 
 
 def _pairs_csr(xy: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:

@@ -26,14 +26,15 @@ def beam_angles(n_beams: int) -> np.ndarray:
 
 
 @njit(cache=True)
-def _cast_grid(blocked, clear, ox, oy, res, xy, heading, angles, max_range, out):  # pragma: no cover - numba
+def _cast_grid(blocked, clear, ox, oy, res, who, xy, heading, angles, max_range, out):  # pragma: no cover - numba
     rows, cols = blocked.shape
-    for i in range(xy.shape[0]):
+    for s in range(who.shape[0]):
+        i = who[s]
         c0 = int(math.floor((xy[i, 0] - ox) / res))
         r0 = int(math.floor((xy[i, 1] - oy) / res))
         if 0 <= r0 < rows and 0 <= c0 < cols and not blocked[r0, c0] and clear[r0, c0] - res >= max_range:
             for k in range(angles.shape[0]):
-                out[i, k] = max_range  # nothing within reach in any direction
+                out[s, k] = max_range  # nothing within reach in any direction
             continue
         for k in range(angles.shape[0]):
             a = heading[i] + angles[k]
@@ -53,7 +54,7 @@ def _cast_grid(blocked, clear, ox, oy, res, xy, heading, angles, max_range, out)
                 if step < 0.5 * res:
                     step = 0.5 * res
                 t += step
-            out[i, k] = min(hit, max_range)
+            out[s, k] = min(hit, max_range)
 
 
 @njit(cache=True)
@@ -152,7 +153,7 @@ def range_scan(
     blocked = omap.blocked.view(np.uint8)
     _cast_grid(
         blocked, clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution),
-        np.ascontiguousarray(xy[who]), np.ascontiguousarray(heading[who]), angles, float(max_range), out,
+        who, xy, heading, angles, float(max_range), out,
     )
     if radius is not None and table is not None and len(xy) > 1:
         reach = float(max_range + radius.max())

@@ -24,7 +24,7 @@ import numpy as np
 
 from amronet.algorithms import ALGORITHMS, Readings, StepInput
 from amronet.assemble import World, build_swarm, build_world
-from amronet.motion import integrate
+from amronet.motion import drive
 from amronet.network import components, connected_to
 from amronet.radio import NeighbourTable, make_medium
 from amronet.robots import MOBILE_STATES, Kind, State, Swarm
@@ -96,12 +96,9 @@ class Simulation:
         command = self.controller.decide(StepInput(self.steps, self.t, self.dt, self.table, readings))
         t2 = clock()
         movers = command.movers
-        disp = (command.speed * self.dt)[:, None] * np.stack([np.cos(sw.heading[movers]),
-                                                              np.sin(sw.heading[movers])], axis=1)
-        before = sw.xy[movers].copy()
-        refused = integrate(self.world.omap, sw.xy, movers, disp, sw.radius,
-                            bodies=self.scenario.sim.robot_collisions, table=self.table)
-        sw.distance[movers] += np.linalg.norm(sw.xy[movers] - before, axis=1)
+        refused, travelled = drive(self.world.omap, sw.xy, movers, sw.heading[movers], command.speed * self.dt,
+                                   sw.radius, bodies=self.scenario.sim.robot_collisions, table=self.table)
+        sw.distance[movers] += travelled
         self.controller.after_move(movers, refused)
         t3 = clock()
         self.table = self.medium.update(sw.xy)

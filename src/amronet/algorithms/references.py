@@ -41,35 +41,58 @@ class ReferenceView:
 
 
 @njit(cache=True)
-def _track(who, current, is_reference, status, indptr, indices, dist, new_current, nearest_d, other, other_d):
+def _nearest_other(lo, hi, s_cur, is_reference, status, indices, dist):  # pragma: no cover - numba
+    o = -1
+    od = np.inf
+    for e in range(lo, hi):
+        j = indices[e]
+        sj = status[j]
+        if is_reference[j] and sj >= 0 and sj != s_cur and dist[e] < od:
+            od = dist[e]
+            o = j
+    return o, od
+
+
+@njit(cache=True)
+def _track(who, current, is_reference, status, indptr, indices, dist, want_other,
+           new_current, nearest_d, other, other_d):  # pragma: no cover - numba
+    """One pass over each row; a second only when the current reference changed (rare in steady state)."""
     for m in range(who.shape[0]):
         i = who[m]
+        lo = indptr[i]
+        hi = indptr[i + 1]
         cur = current[m]
+        s_cur = status[cur] if cur >= 0 else -1
         still = False
         best = -1
         best_d = np.inf
-        for e in range(indptr[i], indptr[i + 1]):
+        o = -1
+        od = np.inf
+        for e in range(lo, hi):
             j = indices[e]
             if not is_reference[j]:
                 continue
+            de = dist[e]
             if j == cur:
                 still = True
-            if dist[e] < best_d:
-                best_d = dist[e]
+            if de < best_d:
+                best_d = de
                 best = j
+            if want_other:
+                sj = status[j]
+                if sj >= 0 and s_cur >= 0 and sj != s_cur and de < od:
+                    od = de
+                    o = j
         chosen = cur if still else best
+        if want_other and chosen != cur:
+            o = -1
+            od = np.inf
+            if chosen >= 0 and status[chosen] >= 0:
+                o, od = _nearest_other(lo, hi, status[chosen], is_reference, status, indices, dist)
         new_current[m] = chosen
         nearest_d[m] = best_d
-        other[m] = -1
-        other_d[m] = np.inf
-        if chosen < 0 or status[chosen] < 0:
-            continue
-        s_cur = status[chosen]
-        for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
-            if is_reference[j] and status[j] >= 0 and status[j] != s_cur and dist[e] < other_d[m]:
-                other_d[m] = dist[e]
-                other[m] = j
+        other[m] = o
+        other_d[m] = od
 
 
 def track_references(
@@ -78,6 +101,7 @@ def track_references(
     current: np.ndarray,
     is_reference: np.ndarray,
     status: np.ndarray,
+    want_other: bool = True,
 ) -> ReferenceView:
     """Update the current references of the robots ``who`` from their rows of the neighbour table.
 
@@ -87,6 +111,7 @@ def track_references(
         current: Their current references before this step ``(M,)`` (-1: none).
         is_reference: Boolean mask over all nodes: which ones serve as references.
         status: Status of all nodes.
+        want_other: Look for references of another status (skip when only one status exists).
 
     Returns:
         The updated view; ``current`` is a new array. Ties in distance go to the lower node id.
@@ -97,5 +122,5 @@ def track_references(
     other = np.empty(m, dtype=np.int64)
     other_d = np.empty(m)
     _track(np.asarray(who, dtype=np.int64), np.asarray(current, dtype=np.int64), is_reference,
-           status, table.indptr, table.indices, table.dist, new_current, nearest_d, other, other_d)
+           status, table.indptr, table.indices, table.dist, want_other, new_current, nearest_d, other, other_d)
     return ReferenceView(new_current, nearest_d, other, other_d)

@@ -28,10 +28,11 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
 from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.references import track_references
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.errors import ScenarioError
-from amronet.motion import go_to_goal, random_walk
+from amronet.motion import random_walk
 from amronet.robots import SETTLING_STATES, Kind, State
 
 __all__ = ["SelfSpreading", "SelfSpreadingParams"]
@@ -78,12 +79,11 @@ class SelfSpreading(Controller):
                 "raise loss_margin or lower sim.dt",
             )
         self.current = np.full(n, -1, dtype=np.int64)
-        self.goal = np.zeros((n, 2))
-        self.tri_refs = np.full((n, 2), -1, dtype=np.int64)
-        self.blocked_steps = np.zeros(n, dtype=np.int64)
+        self.steering = GoalSteering(n, n_anchors=2, give_up_steps=self.params.give_up_steps)
         self.disabled = np.zeros(n, dtype=bool)
         self.refused = np.zeros(n, dtype=bool)
         self.router_model = int(sw.model[routers][0]) if routers.any() else 0
+        self.several_statuses = len(np.unique(sw.status[sw.kind == Kind.BASE])) > 1
 
     @property
     def settled(self) -> bool:  # noqa: D102
@@ -104,16 +104,17 @@ class SelfSpreading(Controller):
         walking = sw.state[movers] == State.EXPLORE
         w = movers[walking]
         sigma = self.params.turn_noise * np.sqrt(self.dt)
-        sw.heading[w] = random_walk(sw.heading[w], scans[walking], sensor_range, self.refused[w], self.rng, sigma)
+        random_walk(sw.heading, w, scans[walking], sensor_range, self.refused[w], self.rng, sigma)
         tri = movers[~walking]
         if len(tri):
-            speed[~walking] = self._steer_triangles(tri, scans[~walking], sensor_range, speed[~walking])
+            speed[~walking] = self._steer_triangles(tri, scans[~walking], sensor_range)
         return Command(movers, speed)
 
     def _decide_explorers(self, step: StepInput, explorers: np.ndarray) -> None:
         sw = self.swarm
         is_ref = sw.deployed
-        view = track_references(step.table, explorers, self.current[explorers], is_ref, sw.status)
+        view = track_references(step.table, explorers, self.current[explorers], is_ref, sw.status,
+                                want_other=self.several_statuses and self.params.triangular != "off")
         self.current[explorers] = view.current
 
         triangles = np.zeros(len(explorers), dtype=bool)
@@ -123,7 +124,7 @@ class SelfSpreading(Controller):
                 committed = is_ref | (sw.state == State.TRIANGLE)
                 go = select_triangles(
                     self.params.triangular, explorers[cand], view.current[cand], view.other[cand], sw.xy,
-                    self.r_c, self.disabled, step.table.adjacency, committed,
+                    self.r_c, self.disabled, step.table, committed,
                 )
                 triangles[cand[go]] = True
         if triangles.any():
@@ -131,9 +132,8 @@ class SelfSpreading(Controller):
             ref_i, ref_j = view.current[triangles], view.other[triangles]
             sw.state[who] = State.TRIANGLE
             sw.status[who] = sw.status[ref_i]
-            self.tri_refs[who] = np.stack([ref_i, ref_j], axis=1)
-            self.goal[who] = triangle_goal(sw.xy[ref_i], sw.xy[ref_j], sw.xy[who], self.r_eff)
-            self.blocked_steps[who] = 0
+            goal = triangle_goal(sw.xy[ref_i], sw.xy[ref_j], sw.xy[who], self.r_eff)
+            self.steering.start(who, goal, np.stack([ref_i, ref_j], axis=1))
             if self.params.triangular == "local":
                 self.disabled[np.concatenate([who, ref_i, ref_j])] = True
 
@@ -142,38 +142,16 @@ class SelfSpreading(Controller):
         sw.state[who] = State.REFERENCE
         sw.status[who] = sw.status[view.current[losing]]
 
-    def _steer_triangles(
-        self, tri: np.ndarray, scans: np.ndarray, sensor_range: float, speed: np.ndarray
-    ) -> np.ndarray:
+    def _steer_triangles(self, tri: np.ndarray, scans: np.ndarray, sensor_range: float) -> np.ndarray:
         sw = self.swarm
-        xy = sw.xy[tri]
-        goal = self.goal[tri]
-        to_goal = np.linalg.norm(goal - xy, axis=1)
-        sw.heading[tri] = go_to_goal(xy, sw.heading[tri], goal, scans, sensor_range)
-        speed = np.minimum(speed, to_goal / self.dt)
-        step_vec = (speed * self.dt)[:, None] * np.stack([np.cos(sw.heading[tri]), np.sin(sw.heading[tri])], axis=1)
-        nxt = xy + step_vec
-        refs = self.tri_refs[tri]
-        ok = np.ones(len(tri), dtype=bool)
-        for k in range(2):
-            p_ref = sw.xy[refs[:, k]]
-            now = np.linalg.norm(xy - p_ref, axis=1)
-            after = np.linalg.norm(nxt - p_ref, axis=1)
-            ok &= after <= np.maximum(now, self.r_eff)
-        speed = np.where(ok, speed, 0.0)
-        progress = to_goal - np.linalg.norm(goal - np.where(ok[:, None], nxt, xy), axis=1)
-        min_progress = 0.25 * sw.max_speed[tri] * self.dt
-        blocked = progress < min_progress
-        arrived = to_goal <= 1e-9
-        self.blocked_steps[tri] = np.where(blocked & ~arrived, self.blocked_steps[tri] + 1, 0)
-        give_up = self.blocked_steps[tri] >= self.params.give_up_steps
-        done = arrived | give_up
+        length, done = self.steering.steer(tri, sw.xy, sw.heading, scans, sensor_range,
+                                           sw.max_speed[tri] * self.dt, self.r_eff)
         sw.state[tri[done]] = State.TRIANGLE_SETTLED
-        return np.where(done, 0.0, speed)
+        return length / self.dt
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
         self.refused[:] = False
         self.refused[movers] = refused
         tri = movers[self.swarm.state[movers] == State.TRIANGLE]
-        arrived = np.linalg.norm(self.swarm.xy[tri] - self.goal[tri], axis=1) <= 1e-9
+        arrived = np.linalg.norm(self.swarm.xy[tri] - self.steering.goal[tri], axis=1) <= 1e-9
         self.swarm.state[tri[arrived]] = State.TRIANGLE_SETTLED

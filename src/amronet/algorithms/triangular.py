@@ -23,9 +23,9 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-import scipy.sparse as sp
 
 from amronet.network import components
+from amronet.radio import NeighbourTable
 
 __all__ = ["TriangularMode", "select_triangles", "triangle_goal"]
 
@@ -62,7 +62,7 @@ def select_triangles(
     xy: np.ndarray,
     r_c: float,
     disabled: np.ndarray,
-    adjacency: sp.csr_matrix,
+    table: NeighbourTable,
     committed: np.ndarray,
 ) -> np.ndarray:
     """Decide which candidate triangular deployments go ahead this step.
@@ -75,7 +75,7 @@ def select_triangles(
         xy: All positions.
         r_c: Communication radius.
         disabled: Local-rule flags of all nodes (read only here).
-        adjacency: This step's neighbour table.
+        table: This step's neighbour table (its graph is read by the global rule only).
         committed: Nodes of the deployed network for the global rule (deployed nodes and triangle routers).
 
     Returns:
@@ -88,7 +88,7 @@ def select_triangles(
         go &= ~(disabled[ref_i] & disabled[ref_j])
         key_a, key_b = ref_i, ref_j
     elif mode == "global":
-        _, labels = components(adjacency, committed)
+        _, labels = components(table.adjacency, committed)
         key_a, key_b = labels[ref_i], labels[ref_j]
         go &= key_a != key_b
     else:
