@@ -20,6 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
+from amronet.neighbours import neighbour_csr
 from amronet.radio import NeighbourTable
 from amronet.sensing import beam_angles
 from amronet.world.occupancy import OccupancyMap
@@ -199,7 +200,8 @@ def path_clear(omap: OccupancyMap, start: np.ndarray, end: np.ndarray, radius: n
 
 
 @njit(cache=True)
-def _drive(clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indptr, indices, refused, travelled):  # pragma: no cover
+def _drive(clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indptr, indices, dist, near,
+           refused, travelled):  # pragma: no cover - numba
     """Move robots one after another.
 
     A move is refused when its path meets an obstacle, or (with ``bodies``) when it brings the body closer to a
@@ -213,11 +215,17 @@ def _drive(clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indp
         ny = y0 + length[m] * math.sin(heading[m])
         refused[m] = True
         travelled[m] = 0.0
-        if not _segment_ok(clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
+        c0 = int(math.floor((x0 - ox) / res))
+        r0 = int(math.floor((y0 - oy) / res))
+        rows, cols = clear.shape
+        roomy = 0 <= r0 < rows and 0 <= c0 < cols and clear[r0, c0] >= radius[i] + length[m] + 1.5 * res
+        if not roomy and not _segment_ok(clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
             continue
         bad = False
         if bodies:
             for e in range(indptr[i], indptr[i + 1]):
+                if dist[e] > near:
+                    continue  # too far apart before this step to touch after it
                 j = indices[e]
                 reach = radius[i] + radius[j]
                 ex = nx - xy[j, 0]
@@ -308,19 +316,13 @@ def drive(
     length = np.ascontiguousarray(length, dtype=float)
     indptr = np.zeros(len(xy) + 1, dtype=np.int64)
     indices = np.zeros(0, dtype=np.int32)
+    dist = np.zeros(0)
+    reach = 2.0 * float(radius.max()) + 2.0 * float(length.max())
     if bodies and len(xy) > 1:
-        reach = 2.0 * float(radius.max()) + 2.0 * float(length.max())
         if table is not None and reach <= table.r:
-            indptr, indices = table.indptr, table.indices
+            indptr, indices, dist = table.indptr, table.indices, table.dist
         else:
-            indptr, indices = _pairs_csr(xy, reach)
+            indptr, indices, dist = neighbour_csr(xy, reach)
     _drive(clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), movers, heading,
-           length, xy, radius, bodies, indptr, indices, refused, travelled)
+           length, xy, radius, bodies, indptr, indices, dist, reach, refused, travelled)
     return refused, travelled
-
-
-def _pairs_csr(xy: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
-    from amronet.neighbours import neighbour_csr
-
-    indptr, indices, _ = neighbour_csr(xy, reach)
-    return indptr, indices

@@ -90,10 +90,13 @@ def _cast_bodies(pairs, xy, heading, angles, max_range, other_radius, slot, out)
 
 
 @njit(cache=True)
-def _cast_bodies_csr(who, indptr, indices, xy, heading, angles, max_range, other_radius, out):  # pragma: no cover
+def _cast_bodies_csr(who, indptr, indices, dist, xy, heading, angles, max_range, other_radius, out):  # pragma: no cover
+    big = other_radius.max()
     for s in range(who.shape[0]):
         i = who[s]
         for e in range(indptr[i], indptr[i + 1]):
+            if dist[e] > max_range + big:
+                continue
             j = indices[e]
             vx = xy[j, 0] - xy[i, 0]
             vy = xy[j, 1] - xy[i, 1]
@@ -158,7 +161,8 @@ def range_scan(
     if radius is not None and table is not None and len(xy) > 1:
         reach = float(max_range + radius.max())
         if reach <= table.r:
-            _cast_bodies_csr(who, table.indptr, table.indices, xy, heading, angles, float(max_range), radius, out)
+            _cast_bodies_csr(who, table.indptr, table.indices, table.dist, xy, heading, angles, float(max_range),
+                             radius, out)
         else:
             pairs = table.tree.query_pairs(reach, output_type="ndarray")
             if len(pairs):

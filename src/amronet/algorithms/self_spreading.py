@@ -104,7 +104,9 @@ class SelfSpreading(Controller):
         walking = sw.state[movers] == State.EXPLORE
         w = movers[walking]
         sigma = self.params.turn_noise * np.sqrt(self.dt)
-        random_walk(sw.heading, w, scans[walking], sensor_range, self.refused[w], self.rng, sigma)
+        everyone = len(w) == len(movers)
+        random_walk(sw.heading, w, scans if everyone else scans[walking], sensor_range, self.refused[w], self.rng,
+                    sigma)
         tri = movers[~walking]
         if len(tri):
             speed[~walking] = self._steer_triangles(tri, scans[~walking], sensor_range)
