@@ -17,6 +17,7 @@ demo: $(STAMP)
 	@echo "picture: runs/demo/snapshot.png"
 
 test: $(STAMP)
+	$(BIN)/ruff check src tests benchmarks tools
 	MPLBACKEND=Agg $(BIN)/python -m pytest
 
 lint: $(STAMP)

@@ -63,6 +63,7 @@ def test_run_scenario_file_with_overrides(tmp_path, capsys):
          "sensor_beams: 8, sensor_range: 0.1}}\n", "routers.robot"),
         ("map: open-6x6\nbase_stations: [{x: 40, y: 0}]\n", "base_stations[0]: (40, 0) is outside the map"),
         ("map: open-6x6\nbase_stations: [{x: -2.999, y: 0}]\n", "base_stations[0]: (-2.999, 0) is inside an obstacle"),
+        ("map: open-6x6\nbase_stations: [{x: -2.9, y: 0}]\n", "too close for the reference node's body"),
         ("map: nowhere.yaml\nbase_stations: [{x: 0, y: 0}]\n", "map"),
         ("map: [broken\n", "not valid YAML"),
     ],

@@ -12,7 +12,7 @@ from amronet.sim import Simulation
 from amronet.world.space import clearance
 
 
-def check_invariants(sim: Simulation) -> None:
+def check_invariants(sim: Simulation, with_metrics: bool = True) -> None:
     sw = sim.swarm
     # every deployed router has a path to a base station through deployed nodes
     deployed = sw.deployed
@@ -23,8 +23,9 @@ def check_invariants(sim: Simulation) -> None:
     assert sim.world.omap.inside(sw.xy).all()
     clear = clearance(sim.world.omap)[rows, cols]
     assert (clear >= sw.radius - 1e-12).all(), "a robot overlaps an obstacle"
-    m = sim.metrics()
-    assert 0.0 <= m.connected_coverage <= m.coverage <= 1.0
+    if with_metrics:
+        m = sim.metrics()
+        assert 0.0 <= m.connected_coverage <= m.coverage <= 1.0
 
 
 def run_checked(scenario, seed, steps, every=25) -> Simulation:
@@ -32,8 +33,7 @@ def run_checked(scenario, seed, steps, every=25) -> Simulation:
     check_invariants(sim)
     for k in range(steps):
         sim.step()
-        if k % every == 0:
-            check_invariants(sim)
+        check_invariants(sim, with_metrics=k % every == 0)  # connectivity and obstacles at every step
     check_invariants(sim)
     return sim
 
@@ -138,3 +138,29 @@ def test_routers_start_near_their_base_with_status_minus_one():
     assert (sw.status[routers] == -1).all() and (sw.state[routers] == State.EXPLORE).all()
     assert (np.abs(sw.xy[routers]) <= 0.5 + 1e-9).all()
     assert (np.linalg.norm(sw.xy[routers], axis=1) <= 0.95).all()
+
+
+def test_stop_conditions_terminated_vs_truncated():
+    sc = load_scenario("self-spreading-6x6", overrides={"sim.time_limit": 30.0})
+    r = Simulation(sc, 1).run()
+    assert r.summary["stop_reason"] == "time_limit" and not r.summary["terminated"] and r.summary["truncated"]
+    assert r.summary["sim_time_s"] == 30.0 and r.summary["steps"] == 300
+    r = Simulation(sc.with_overrides({"sim.coverage_target": 0.3}), 1).run()
+    assert r.summary["stop_reason"] == "coverage_target" and r.summary["terminated"]
+    assert r.summary["coverage"] >= 0.3 and r.summary["sim_time_s"] < 30.0
+    few = sc.with_overrides({"routers.count": 3, "sim.time_limit": 600.0})
+    r = Simulation(few, 1).run()
+    assert r.summary["stop_reason"] == "settled" and r.summary["terminated"]
+    assert r.summary["routers_deployed"] == 3
+
+
+def test_shared_floor_plan_from_its_own_folder(shared_maps):
+    sc = load_scenario({
+        "map": str(shared_maps / "hospital_section.yaml"), "radio": {"r_c": 2.0},
+        "base_stations": [{"x": 19.0, "y": 8.0, "region": [1.0, 1.0]}],
+        "routers": {"count": 40, "robot": {"radius": 0.045, "max_speed": 0.5, "sensor_beams": 12,
+                                             "sensor_range": 0.3}},
+    })
+    sim = run_checked(sc, seed=5, steps=400, every=40)
+    assert sim.world.omap.name == "hospital_section"
+    assert (sim.swarm.state == State.REFERENCE).sum() >= 3

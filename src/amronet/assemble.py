@@ -78,6 +78,15 @@ def build_world(scenario: Scenario, omap: OccupancyMap | None = None) -> World:
         if not free[i]:
             raise ScenarioError(f"base_stations[{i}]", f"{where} is inside an obstacle or unknown space; "
                                 "move it to free space")
+    clear = clearance(omap)
+    rows, cols = omap.world_to_cell(bases)
+    for i, spec in enumerate(scenario.base_stations):
+        body = robot_kind(spec.robot, f"base_stations[{i}].robot").radius
+        if clear[rows[i], cols[i]] < body:
+            raise ScenarioError(
+                f"base_stations[{i}]", f"({spec.x:g}, {spec.y:g}) is {clear[rows[i], cols[i]]:.3g} m from an obstacle, "
+                f"too close for the reference node's body (radius {body:g} m); move it farther from the walls",
+            )
     reachable = reachable_free(omap, bases)
     return World(omap=omap, reachable=reachable, coverage=CoverageArea(omap, reachable), bases_xy=bases)
 

@@ -140,30 +140,41 @@ class Simulation:
             components=n_comp,
         )
 
+    def _reached(self, m: Metrics) -> bool:
+        target = self.scenario.sim.coverage_target
+        return target is not None and m.coverage >= target
+
     def _record(self) -> Metrics:
         m = self.metrics()
         self.rows.append((round(self.t, 9), m.coverage, m.connected_coverage, m.routers_deployed, m.components))
         return m
 
     # -- the run ---------------------------------------------------------------------------------------------
-    def run(self, progress=None):
-        """Run until a stop condition holds and return a :class:`~amronet.results.RunResult`."""
+    def run(self, progress=None):  # noqa: ANN001, ANN201 - progress is any callable(t, time_limit)
+        """Run until a stop condition holds and return a :class:`~amronet.results.RunResult`.
+
+        The coverage target is checked at recorded steps (every ``record_every`` steps); settling and the time
+        limit after every step. A run that reaches its target or settles *terminates*; one that hits the time
+        limit first is *truncated*.
+        """
         from amronet.results import RunResult
 
         sim = self.scenario.sim
         start = time.perf_counter()
-        last = self._record()
-        max_steps = int(round(sim.time_limit / self.dt))
+        reached = self._reached(self._record())
+        max_steps = round(sim.time_limit / self.dt)
         while self.stop_reason is None:
+            if reached:
+                self.stop_reason = "coverage_target"
+                break
             self.step()
             settled = sim.stop_when_settled and self.controller.settled
             at_limit = self.steps >= max_steps
             if self.steps % sim.record_every == 0 or settled or at_limit:
-                last = self._record()
+                reached = self._reached(self._record())
                 if progress is not None:
                     progress(self.t, sim.time_limit)
-            if sim.coverage_target is not None and self.rows[-1][0] == round(self.t, 9) \
-                    and last.coverage >= sim.coverage_target:
+            if reached:
                 self.stop_reason = "coverage_target"
             elif settled:
                 self.stop_reason = "settled"
