@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,7 @@ def run(
     scenario: Scenario | dict[str, Any] | str | Path,
     seed: int = 0,
     overrides: dict[str, Any] | None = None,
-    progress=None,
+    progress: Callable[[float, float], None] | None = None,
 ) -> RunResult:
     """Run a scenario once.
 

@@ -18,7 +18,9 @@ give the same positions, bit for bit.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,6 +33,9 @@ from amronet.robots import MOBILE_STATES, Kind, State, Swarm
 from amronet.scenario import Scenario
 from amronet.sensing import range_scan
 from amronet.world.occupancy import OccupancyMap
+
+if TYPE_CHECKING:
+    from amronet.results import RunResult
 
 __all__ = ["Metrics", "Simulation"]
 
@@ -150,7 +155,7 @@ class Simulation:
         return m
 
     # -- the run ---------------------------------------------------------------------------------------------
-    def run(self, progress=None):  # noqa: ANN001, ANN201 - progress is any callable(t, time_limit)
+    def run(self, progress: Callable[[float, float], None] | None = None) -> RunResult:
         """Run until a stop condition holds and return a :class:`~amronet.results.RunResult`.
 
         The coverage target is checked at recorded steps (every ``record_every`` steps); settling and the time
