@@ -160,7 +160,7 @@ def _scatter(
 
 
 def build_swarm(scenario: Scenario, world: World, rng: np.random.Generator, r_start: float) -> Swarm:
-    """Place the base reference nodes and the routers (round-robin over base stations, random in each region).
+    """Place base reference nodes, routers (round-robin over base stations) and agents, random in each region.
 
     Args:
         scenario: The scenario.
@@ -190,6 +190,15 @@ def build_swarm(scenario: Scenario, world: World, rng: np.random.Generator, r_st
         taken = np.vstack([taken, pts])
         taken_r = np.append(taken_r, np.full(len(pts), router.radius))
         groups.append((router, Kind.ROUTER, State.EXPLORE, pts, np.full(count, -1)))
+    per_base = scenario.agents.per_base
+    if per_base:
+        agent = robot_kind(scenario.agents.robot, "agents.robot")
+        for i, spec in enumerate(scenario.base_stations):
+            pts = _sample_start(world, world.bases_xy[i], spec.region, per_base, agent.radius, r_start, taken,
+                                taken_r, rng, f"base_stations[{i}].region")
+            taken = np.vstack([taken, pts])
+            taken_r = np.append(taken_r, np.full(len(pts), agent.radius))
+            groups.append((agent, Kind.AGENT, State.AGENT, pts, np.full(per_base, i)))
     swarm = Swarm.build(groups)
     swarm.heading[:] = rng.uniform(-np.pi, np.pi, size=len(swarm))
     return swarm

@@ -48,3 +48,23 @@ def hop_counts(adjacency: sp.csr_matrix, sources: np.ndarray) -> np.ndarray:
     if len(sources) == 0:
         return np.full(adjacency.shape[0], np.inf)
     return dijkstra(adjacency, directed=False, indices=np.asarray(sources), unweighted=True, min_only=True)
+
+
+def agents_connected(adjacency: sp.csr_matrix, agents: np.ndarray, bases: np.ndarray,
+                     network: np.ndarray) -> np.ndarray:
+    """Which agents have a multi-hop path to a base station through the AMRoNet.
+
+    An agent counts as connected when it hears a router or base node that itself has a path to a base station
+    through routers and base nodes (``network``); agents are endpoints, not relays.
+
+    Args:
+        adjacency: This step's neighbour table.
+        agents: Indices of the agents ``(A,)``.
+        bases: Indices of the base reference nodes.
+        network: Boolean mask of the AMRoNet's nodes (routers and base nodes).
+
+    Returns:
+        Boolean mask ``(A,)``.
+    """
+    linked = connected_to(adjacency, bases, network)
+    return (adjacency[agents] @ linked.astype(float)) > 0

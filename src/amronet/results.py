@@ -69,7 +69,10 @@ class RunResult:
             "connected_coverage": final.connected_coverage,
             "coverage_method": sc.sim.coverage_method,
             "components": final.components,
-            "agents_connected_fraction": None,
+            "agents": int(len(sim.agents)),
+            "agents_connected_fraction": sim.agents_connected_fraction,
+            "agents_connected_min": sim.agents_connected_min if len(sim.agents) else None,
+            "coverage_target": sim.coverage_target,
             "reachable_area_m2": sim.world.coverage.area_m2,
             "mean_distance_per_router_m": float(sw.distance[routers].mean()) if routers.any() else 0.0,
             "states": sim.state_counts(),
@@ -77,8 +80,9 @@ class RunResult:
             "amronet_version": __version__,
             "scenario": sc.to_dict(),
         }
-        rows = np.array(sim.rows, dtype=float).reshape(-1, len(TIMESERIES_COLUMNS))
-        timeseries = {name: rows[:, k] for k, name in enumerate(TIMESERIES_COLUMNS)}
+        columns = TIMESERIES_COLUMNS + (("agents_connected",) if len(sim.agents) else ())
+        rows = np.array(sim.rows, dtype=float).reshape(-1, len(columns))
+        timeseries = {name: rows[:, k] for k, name in enumerate(columns)}
         for name in ("routers_deployed", "components"):
             timeseries[name] = timeseries[name].astype(np.int64)
         nodes = [
@@ -98,13 +102,13 @@ class RunResult:
     # -- rendering -------------------------------------------------------------------------------------------
     def timeseries_csv(self) -> str:
         """The time series as CSV text."""
-        lines = [",".join(TIMESERIES_COLUMNS)]
         ts = self.timeseries
+        agents = "agents_connected" in ts
+        lines = [",".join(TIMESERIES_COLUMNS + (("agents_connected",) if agents else ()))]
         for k in range(len(ts["t"])):
-            lines.append(
-                f"{ts['t'][k]:.6g},{ts['coverage'][k]:.6f},{ts['connected_coverage'][k]:.6f},"
-                f"{int(ts['routers_deployed'][k])},{int(ts['components'][k])}"
-            )
+            line = (f"{ts['t'][k]:.6g},{ts['coverage'][k]:.6f},{ts['connected_coverage'][k]:.6f},"
+                    f"{int(ts['routers_deployed'][k])},{int(ts['components'][k])}")
+            lines.append(line + (f",{ts['agents_connected'][k]:.6f}" if agents else ""))
         return "\n".join(lines) + "\n"
 
     def snapshot_png(self, dpi: int = 120) -> bytes:

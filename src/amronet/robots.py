@@ -179,6 +179,28 @@ class Swarm:
     def __len__(self) -> int:
         return len(self.xy)
 
+    def extend(self, robot_kind: RobotKind, kind: Kind, state: State, xy: np.ndarray, status: np.ndarray,
+               heading: np.ndarray | None = None) -> np.ndarray:
+        """Add robots (e.g. routers an agent releases) and return their new ids.
+
+        Arrays are reallocated; hold no views of them across a call. Cold: a deployment event, not a step.
+        """
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        n_new, n_old = len(xy), len(self.xy)
+        if robot_kind not in self.models:
+            self.models = (*self.models, robot_kind)
+        model = self.models.index(robot_kind)
+        self.xy = np.vstack([self.xy, xy])
+        self.heading = np.concatenate([self.heading, np.zeros(n_new) if heading is None else heading])
+        self.kind = np.concatenate([self.kind, np.full(n_new, kind, dtype=np.int8)])
+        self.state = np.concatenate([self.state, np.full(n_new, state, dtype=np.int8)])
+        self.status = np.concatenate([self.status, np.asarray(status, dtype=np.int32).reshape(n_new)])
+        self.radius = np.concatenate([self.radius, np.full(n_new, robot_kind.radius)])
+        self.max_speed = np.concatenate([self.max_speed, np.full(n_new, robot_kind.max_speed)])
+        self.model = np.concatenate([self.model, np.full(n_new, model, dtype=np.int8)])
+        self.distance = np.concatenate([self.distance, np.zeros(n_new)])
+        return np.arange(n_old, n_old + n_new)
+
     def in_states(self, states: tuple[int, ...]) -> np.ndarray:
         """Boolean mask of robots whose state is one of ``states``."""
         return state_lookup(states)[self.state]

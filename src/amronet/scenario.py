@@ -26,6 +26,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt, Valida
 from amronet.errors import ScenarioError
 
 __all__ = [
+    "AgentsSpec",
     "BaseStationSpec",
     "RadioSpec",
     "RobotSpec",
@@ -85,6 +86,16 @@ class RoutersSpec(_Strict):
     (dropped from the air; used by the benchmark)."""
 
 
+class AgentsSpec(_Strict):
+    """The agents: fast explorers that use (and, in agent-assisted deployment, build) the AMRoNet."""
+
+    per_base: Annotated[StrictInt, Field(ge=0)] = 0
+    """Agents per base station; they start next to its reference node with its status."""
+    robot: RobotRef = "pioneer"
+    routers_carried: Annotated[StrictInt, Field(ge=0)] | None = None
+    """Routers each agent carries; ``null`` for unlimited."""
+
+
 class SimSpec(_Strict):
     """The simulation loop."""
 
@@ -118,6 +129,7 @@ class Scenario(_Strict):
     radio: RadioSpec = Field(default_factory=RadioSpec)
     base_stations: Annotated[list[BaseStationSpec], Field(min_length=1)]
     routers: RoutersSpec = Field(default_factory=RoutersSpec)
+    agents: AgentsSpec = Field(default_factory=AgentsSpec)
     sim: SimSpec = Field(default_factory=SimSpec)
     base_dir: str | None = Field(default=None, exclude=True)
 

@@ -27,7 +27,7 @@ import numpy as np
 from amronet.algorithms import ALGORITHMS, Readings, StepInput
 from amronet.assemble import World, build_swarm, build_world
 from amronet.motion import drive
-from amronet.network import components, connected_to
+from amronet.network import agents_connected, components, connected_to
 from amronet.radio import NeighbourTable, make_medium
 from amronet.robots import MOBILE_STATES, Kind, State, Swarm
 from amronet.scenario import Scenario
@@ -77,12 +77,21 @@ class Simulation:
         margin = getattr(params, "loss_margin", 0.05)
         self.swarm = build_swarm(sc, self.world, self.rng, r_start=(1.0 - margin) * sc.radio.r_c)
         controller_cls = ALGORITHMS[sc.algorithm.name]
-        self.controller = controller_cls(params, self.swarm, self.world.omap, sc.radio.r_c, self.dt, self.rng)
+        self.controller = controller_cls(params, self.swarm, self.world.omap, sc.radio.r_c, self.dt, self.rng,
+                                         scenario=sc)
         self.table = self.medium.update(self.swarm.xy)
         self.steps = 0
         self.rows: list[tuple[float, float, float, int, int]] = []
         self.stop_reason: str | None = None
         self.bases = np.flatnonzero(self.swarm.kind == Kind.BASE)
+        self.agents = np.flatnonzero(self.swarm.kind == Kind.AGENT)
+        self.coverage_target = sc.sim.coverage_target
+        if self.coverage_target is None:
+            self.coverage_target = getattr(self.controller, "default_coverage_target", None)
+        self.agents_connected_steps = 0
+        self.agents_connected_sum = 0.0
+        self.agents_connected_window = self._agents_connected()
+        self.agents_connected_min = self.agents_connected_window
         self.phase_seconds = {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0}
 
     @property
@@ -109,6 +118,12 @@ class Simulation:
         self.table = self.medium.update(sw.xy)
         t4 = clock()
         self.steps += 1
+        if len(self.agents):
+            frac = self._agents_connected()
+            self.agents_connected_steps += 1
+            self.agents_connected_sum += frac
+            self.agents_connected_window = min(self.agents_connected_window, frac)
+            self.agents_connected_min = min(self.agents_connected_min, frac)
         for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
             self.phase_seconds[name] += dt
 
@@ -145,13 +160,33 @@ class Simulation:
             components=n_comp,
         )
 
+    def _agents_connected(self) -> float:
+        """Fraction of agents with a multi-hop path to a base station through the AMRoNet right now."""
+        if len(self.agents) == 0:
+            return 1.0
+        network = self.swarm.kind != Kind.AGENT
+        return float(agents_connected(self.table.adjacency, self.agents, self.bases, network).mean())
+
+    @property
+    def agents_connected_fraction(self) -> float | None:
+        """Mean over all steps of the fraction of agents connected to a base station (``None`` without agents)."""
+        if len(self.agents) == 0:
+            return None
+        if self.agents_connected_steps == 0:
+            return self.agents_connected_window
+        return self.agents_connected_sum / self.agents_connected_steps
+
     def _reached(self, m: Metrics) -> bool:
-        target = self.scenario.sim.coverage_target
-        return target is not None and m.coverage >= target
+        return self.coverage_target is not None and m.coverage >= self.coverage_target
 
     def _record(self) -> Metrics:
         m = self.metrics()
-        self.rows.append((round(self.t, 9), m.coverage, m.connected_coverage, m.routers_deployed, m.components))
+        row = (round(self.t, 9), m.coverage, m.connected_coverage, m.routers_deployed, m.components)
+        if len(self.agents):
+            # the worst fraction seen at any step since the last record, so that no dip is hidden
+            row = (*row, self.agents_connected_window)
+            self.agents_connected_window = 1.0
+        self.rows.append(row)
         return m
 
     # -- the run ---------------------------------------------------------------------------------------------

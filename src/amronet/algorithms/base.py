@@ -10,7 +10,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from pydantic import BaseModel
@@ -18,6 +18,9 @@ from pydantic import BaseModel
 from amronet.radio import NeighbourTable
 from amronet.robots import Swarm
 from amronet.world.occupancy import OccupancyMap
+
+if TYPE_CHECKING:
+    from amronet.scenario import Scenario
 
 __all__ = ["ALGORITHMS", "Command", "Controller", "Readings", "StepInput", "register_algorithm"]
 
@@ -78,14 +81,23 @@ class Controller(ABC):
         r_c: Communication radius.
         dt: Step length.
         rng: The run's random generator.
+        scenario: The whole scenario, for controllers that need more (e.g. the robot kind agents release).
     """
 
     name: ClassVar[str]
     Params: ClassVar[type[BaseModel]]
 
     def __init__(
-        self, params: BaseModel, swarm: Swarm, omap: OccupancyMap, r_c: float, dt: float, rng: np.random.Generator
+        self,
+        params: BaseModel,
+        swarm: Swarm,
+        omap: OccupancyMap,
+        r_c: float,
+        dt: float,
+        rng: np.random.Generator,
+        scenario: Scenario | None = None,
     ) -> None:
+        self.scenario = scenario
         self.params = params
         self.swarm = swarm
         self.omap = omap

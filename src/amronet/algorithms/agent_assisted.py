@@ -1,0 +1,224 @@
+"""Agent-assisted router deployment (paper section 4.1, with the triangular deployment and optimizations of 4.3).
+
+Agents explore from their base stations (a pluggable explorer; the paper's is random exploration with sonar
+obstacle avoidance). Each agent keeps a current reference — a base node or deployed router within ``r_c`` —
+and takes its status. **Greedy deployment**: when every reference the agent hears is at least
+``(1 - loss_margin) r_c`` away (it is about to lose the last one), it releases a router right next to itself,
+on the side of its current reference (so the router is linked to it); the router takes the agent's status and
+becomes a reference for every agent in its range. **Triangular deployment**: an agent whose current reference
+has status ``i`` that hears a router of status ``p != i`` releases a router that drives to the triangle goal
+point (:mod:`amronet.algorithms.triangular`, :mod:`amronet.algorithms.goto`) under the chosen rule.
+
+Choices the paper leaves open, and ours:
+
+* Where exactly the router is released: at ``agent radius + router radius + release_gap`` from the agent's
+  centre toward the current reference; if that spot is blocked or taken, the nearest free direction (in steps
+  of 30 degrees) that keeps the router within ``r_c`` of the reference and is reachable in a straight line;
+  failing all, at the agent's own position (the two bodies then overlap until the agent drives off).
+* An agent that has no router left (``agents.routers_carried``) is tethered: when it is about to lose its last
+  reference it turns back toward its current reference instead of going on, so it never loses its connection.
+* When the two references of a triangle are within ``r_c`` of each other no router is sent: they are linked.
+* The run stops when the reachable free space is covered (``sim.coverage_target``; 0.99 when not set).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, StrictInt
+
+from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.explorers import EXPLORERS
+from amronet.algorithms.goto import GoalSteering
+from amronet.algorithms.references import track_references
+from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
+from amronet.errors import ScenarioError
+from amronet.motion import path_clear
+from amronet.robots import Kind, State
+
+__all__ = ["AgentAssisted", "AgentAssistedParams"]
+
+DEFAULT_COVERAGE_TARGET = 0.99
+
+
+class AgentAssistedParams(BaseModel):
+    """Parameters of agent-assisted router deployment.
+
+    Attributes:
+        triangular: ``off``, ``none``, ``global`` or ``local`` (see :mod:`amronet.algorithms.triangular`).
+        loss_margin: Width of the "about to lose" band as a fraction of ``r_c``.
+        explorer: Exploration strategy of the agents (:data:`amronet.algorithms.explorers.EXPLORERS`).
+        turn_noise: Heading noise of the agents' random exploration, radians per square-root second.
+        avoid_range: Sonar readings nearer than this (metres) make an agent turn away.
+        give_up_steps: Consecutive blocked steps after which a triangle router stops short of its goal.
+        release_gap: Gap in metres between an agent's body and the router it releases.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    triangular: TriangularMode = "local"
+    loss_margin: Annotated[float, Field(gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
+    explorer: str = "random"
+    turn_noise: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.5
+    avoid_range: Annotated[float, Field(gt=0, allow_inf_nan=False)] = 0.6
+    give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
+    release_gap: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.02
+
+
+@register_algorithm("agent-assisted")
+class AgentAssisted(Controller):
+    """Controller of agents that carry and release routers."""
+
+    Params = AgentAssistedParams
+    params: AgentAssistedParams
+    default_coverage_target = DEFAULT_COVERAGE_TARGET
+
+    def __init__(self, *args, **kwargs) -> None:  # noqa: D107
+        super().__init__(*args, **kwargs)
+        from amronet.assemble import robot_kind
+
+        sw, sc = self.swarm, self.scenario
+        assert sc is not None
+        agents = sw.kind == Kind.AGENT
+        if not agents.any():
+            raise ScenarioError("agents.per_base", "agent-assisted deployment needs agents; set agents.per_base >= 1")
+        if (sw.kind == Kind.ROUTER).any():
+            raise ScenarioError("routers.count", "agents release the routers in agent-assisted deployment; "
+                                                 "set routers.count to 0")
+        if self.params.explorer not in EXPLORERS:
+            raise ScenarioError("algorithm.params.explorer", f"unknown explorer {self.params.explorer!r}; choose one "
+                                f"of: {', '.join(sorted(EXPLORERS))}")
+        self.r_eff = (1.0 - self.params.loss_margin) * self.r_c
+        step = float(sw.max_speed[agents].max()) * self.dt
+        band = self.params.loss_margin * self.r_c
+        if step >= band:
+            raise ScenarioError(
+                "algorithm.params.loss_margin",
+                f"the 'about to lose' band ({band:.3g} m) must be wider than one agent step ({step:.3g} m); "
+                "raise loss_margin or lower sim.dt",
+            )
+        self.router_kind = robot_kind(sc.routers.robot, "routers.robot")
+        carried = sc.agents.routers_carried
+        n = len(sw)
+        self.left = np.where(agents, np.inf if carried is None else float(carried), 0.0)
+        self.current = np.full(n, -1, dtype=np.int64)
+        self.disabled = np.zeros(n, dtype=bool)
+        self.refused = np.zeros(n, dtype=bool)
+        self.steering = GoalSteering(n, n_anchors=2, give_up_steps=self.params.give_up_steps)
+        self.explorer = EXPLORERS[self.params.explorer](self.params.turn_noise, self.params.avoid_range, self.dt,
+                                                        self.r_c, self.omap.extent)
+        self.agents = np.flatnonzero(agents)
+        self.agent_model = int(sw.model[self.agents[0]])
+        self.several_statuses = len(np.unique(sw.status[sw.kind == Kind.BASE])) > 1
+        self.released = 0
+
+    @property
+    def settled(self) -> bool:  # noqa: D102 - agents never settle; the coverage target ends the run
+        return False
+
+    # -- growing per-robot state when routers are released --------------------------------------------------
+    def _grow(self, n_new: int) -> None:
+        def pad(a: np.ndarray, fill: float | int | bool) -> np.ndarray:
+            return np.concatenate([a, np.full((n_new, *a.shape[1:]), fill, dtype=a.dtype)])
+
+        self.left = pad(self.left, 0.0)
+        self.current = pad(self.current, -1)
+        self.disabled = pad(self.disabled, False)
+        self.refused = pad(self.refused, False)
+        st = self.steering
+        st.goal, st.anchors = pad(st.goal, 0.0), pad(st.anchors, -1)
+        st.last_to_goal, st.blocked_steps = pad(st.last_to_goal, np.inf), pad(st.blocked_steps, 0)
+
+    # -- the step -------------------------------------------------------------------------------------------
+    def decide(self, step: StepInput) -> Command:  # noqa: D102
+        sw = self.swarm
+        agents = self.agents
+        n_before = len(sw)
+        is_ref = sw.deployed
+        view = track_references(step.table, agents, self.current[agents], is_ref, sw.status,
+                                want_other=self.several_statuses and self.params.triangular != "off")
+        self.current[agents] = view.current
+        has = view.current >= 0
+        sw.status[agents[has]] = sw.status[view.current[has]]
+
+        if self.params.triangular != "off":
+            cand = np.flatnonzero((view.other >= 0) & (self.left[agents] >= 1))
+            if len(cand):
+                committed = is_ref | (sw.state == State.TRIANGLE)
+                go = select_triangles(self.params.triangular, agents[cand], view.current[cand], view.other[cand],
+                                      sw.xy, self.r_c, self.disabled, step.table, committed)
+                for m in cand[go]:
+                    self._release_triangle(int(agents[m]), int(view.current[m]), int(view.other[m]))
+
+        losing = view.has_reference & (view.nearest_distance >= self.r_eff)
+        for m in np.flatnonzero(losing & (self.left[agents] >= 1)):
+            self._release_reference(int(agents[m]), int(view.current[m]))
+
+        # agents: explore, or turn back when tethered (no router left and about to lose the last reference)
+        scans = step.readings.of(agents, self.agent_model)
+        sensor_range = sw.models[self.agent_model].sensor_range
+        self.explorer.steer(sw.heading, agents, scans, sensor_range, self.refused[agents], self.rng, sw.xy,
+                            sw.xy[sw.deployed])
+        tethered = losing & (self.left[agents] < 1)
+        if tethered.any():
+            back = sw.xy[view.current[tethered]] - sw.xy[agents[tethered]]
+            sw.heading[agents[tethered]] = np.arctan2(back[:, 1], back[:, 0])
+        speed = sw.max_speed[agents].copy()
+
+        # triangle routers released before this step drive to their goals
+        tri = np.flatnonzero(sw.state[:n_before] == State.TRIANGLE)
+        if len(tri):
+            model = int(sw.model[tri[0]])
+            tri_scans = step.readings.of(tri, model)
+            length, done = self.steering.steer(tri, sw.xy, sw.heading, tri_scans, sw.models[model].sensor_range,
+                                               sw.max_speed[tri] * self.dt, self.r_eff)
+            sw.state[tri[done]] = State.TRIANGLE_SETTLED
+            return Command(np.concatenate([agents, tri]), np.concatenate([speed, length / self.dt]))
+        return Command(agents, speed)
+
+    def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
+        self.refused[:] = False
+        self.refused[movers] = refused
+
+    # -- releasing routers (cold: a handful of events per run) ---------------------------------------------
+    def _release_spot(self, agent: int, toward: int) -> np.ndarray:
+        sw = self.swarm
+        p = sw.xy[agent]
+        ref = sw.xy[toward]
+        gap = sw.radius[agent] + self.router_kind.radius + self.params.release_gap
+        base = np.arctan2(ref[1] - p[1], ref[0] - p[0])
+        turns = np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6]) * (np.pi / 6)
+        cand = p + gap * np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
+        ok = np.linalg.norm(cand - ref, axis=1) <= self.r_c
+        ok &= path_clear(self.omap, np.repeat(p[None], len(cand), axis=0), cand,
+                         np.full(len(cand), self.router_kind.radius))
+        others = np.delete(np.arange(len(sw)), agent)
+        if len(others):
+            d = np.linalg.norm(cand[:, None, :] - sw.xy[None, others, :], axis=2)
+            ok &= (d >= self.router_kind.radius + sw.radius[others][None, :]).all(axis=1)
+        hit = np.flatnonzero(ok)
+        return cand[hit[0]] if len(hit) else p.copy()
+
+    def _add_router(self, agent: int, toward: int, state: State) -> int:
+        sw = self.swarm
+        spot = self._release_spot(agent, toward)
+        new = sw.extend(self.router_kind, Kind.ROUTER, state, spot[None], np.array([sw.status[agent]]),
+                        heading=np.array([sw.heading[agent]]))
+        self._grow(len(new))
+        self.left[agent] -= 1
+        self.released += 1
+        return int(new[0])
+
+    def _release_reference(self, agent: int, current: int) -> None:
+        self._add_router(agent, current, State.REFERENCE)
+
+    def _release_triangle(self, agent: int, ref_i: int, ref_j: int) -> None:
+        sw = self.swarm
+        new = self._add_router(agent, ref_i, State.TRIANGLE)
+        goal = triangle_goal(sw.xy[[ref_i]], sw.xy[[ref_j]], sw.xy[[agent]], self.r_eff)
+        self.steering.start(np.array([new]), goal, np.array([[ref_i, ref_j]]))
+        if self.params.triangular == "local":
+            self.disabled[[new, ref_i, ref_j]] = True
+
+
