@@ -16,7 +16,7 @@ def check_invariants(sim: Simulation, with_metrics: bool = True) -> None:
     sw = sim.swarm
     # every deployed router has a path to a base station through deployed nodes
     deployed = sw.deployed
-    linked = connected_to(sim.table.adjacency, sim.bases, deployed)
+    linked = connected_to(sim.table, sim.bases, deployed)
     assert linked[deployed].all(), "a deployed router lost its path to the base stations"
     # nobody inside an obstacle (body clear of obstacle cells at cell granularity)
     rows, cols = sim.world.omap.world_to_cell(sw.xy)

@@ -1,64 +1,112 @@
-"""Graph questions about one step's network: components, paths to base stations, hop counts."""
+"""Graph questions about one step's network: components, paths to base stations, hop counts, agents.
+
+Every function takes the graph as anything with CSR ``indptr`` and ``indices`` arrays — a
+:class:`~amronet.radio.NeighbourTable` or a SciPy CSR matrix — and walks it with compiled breadth-first
+searches, so asking every step is cheap.
+"""
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, dijkstra
+from numba import njit
 
-__all__ = ["components", "connected_to", "hop_counts", "subgraph"]
-
-
-def subgraph(adjacency: sp.csr_matrix, nodes: np.ndarray) -> sp.csr_matrix:
-    """Adjacency restricted to the links whose both ends are in the boolean mask ``nodes``."""
-    keep = sp.diags(nodes.astype(float))
-    return (keep @ adjacency @ keep).tocsr()
+__all__ = ["CSRGraph", "agents_connected", "components", "connected_to", "hop_counts"]
 
 
-def components(adjacency: sp.csr_matrix, nodes: np.ndarray | None = None) -> tuple[int, np.ndarray]:
-    """Connected components of the graph (restricted to ``nodes`` when given).
+class CSRGraph(Protocol):
+    """A graph given by CSR arrays (row ``i`` lists the neighbours of node ``i``)."""
+
+    indptr: np.ndarray
+    indices: np.ndarray
+
+
+@njit(cache=True)
+def _bfs_labels(indptr, indices, allowed, sources, labels, hops):  # pragma: no cover - numba
+    """Label the allowed nodes by component (BFS); with ``sources``, search from those only and count hops."""
+    queue = np.empty(labels.shape[0], dtype=np.int64)
+    count = 0
+    starts = sources if sources.shape[0] > 0 else np.arange(labels.shape[0])
+    for s in starts:
+        if not allowed[s] or labels[s] >= 0:
+            continue
+        label = 0 if sources.shape[0] > 0 else count
+        head = 0
+        tail = 0
+        queue[tail] = s
+        tail += 1
+        labels[s] = label
+        hops[s] = 0
+        while head < tail:
+            u = queue[head]
+            head += 1
+            for e in range(indptr[u], indptr[u + 1]):
+                v = indices[e]
+                if allowed[v] and labels[v] < 0:
+                    labels[v] = label
+                    hops[v] = hops[u] + 1
+                    queue[tail] = v
+                    tail += 1
+        count += 1
+    return count
+
+
+def _run(graph: CSRGraph, nodes: np.ndarray | None, sources: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    n = len(graph.indptr) - 1
+    allowed = np.ones(n, dtype=np.bool_) if nodes is None else np.asarray(nodes, dtype=np.bool_)
+    labels = np.full(n, -1, dtype=np.int64)
+    hops = np.full(n, -1, dtype=np.int64)
+    count = _bfs_labels(graph.indptr, graph.indices, allowed, np.asarray(sources, dtype=np.int64), labels, hops)
+    return count, labels, hops
+
+
+def components(graph: CSRGraph, nodes: np.ndarray | None = None) -> tuple[int, np.ndarray]:
+    """Connected components of the graph (restricted to the boolean mask ``nodes`` when given).
 
     Returns:
-        ``(count, labels)``; with ``nodes`` given, ``count`` counts components among those nodes only and the
-        label of every other node is -1.
+        ``(count, labels)``: components are numbered from 0 in order of their lowest node id; nodes outside
+        ``nodes`` get -1 and are not counted.
     """
-    if nodes is None:
-        return connected_components(adjacency, directed=False)
-    _, labels = connected_components(subgraph(adjacency, nodes), directed=False)
-    labels = np.where(nodes, labels, -1)
-    present = np.unique(labels[nodes])
-    remap = np.full(labels.max() + 2 if len(labels) else 1, -1)
-    remap[present] = np.arange(len(present))
-    return len(present), np.where(nodes, remap[labels], -1)
+    count, labels, _ = _run(graph, nodes, np.zeros(0, dtype=np.int64))
+    return count, labels
 
 
-def connected_to(adjacency: sp.csr_matrix, sources: np.ndarray, nodes: np.ndarray | None = None) -> np.ndarray:
+def connected_to(graph: CSRGraph, sources: np.ndarray, nodes: np.ndarray | None = None) -> np.ndarray:
     """Boolean mask of nodes with a multi-hop path to any source (through ``nodes`` only, when given)."""
-    n = adjacency.shape[0]
-    if nodes is None:
-        nodes = np.ones(n, dtype=bool)
-    _, labels = connected_components(subgraph(adjacency, nodes), directed=False)
-    src = np.asarray(sources, dtype=np.int64)
-    src = src[nodes[src]]
-    return np.isin(labels, labels[src]) & nodes
+    if len(sources) == 0:
+        return np.zeros(len(graph.indptr) - 1, dtype=bool)
+    _, labels, _ = _run(graph, nodes, sources)
+    return labels >= 0
 
 
-def hop_counts(adjacency: sp.csr_matrix, sources: np.ndarray) -> np.ndarray:
+def hop_counts(graph: CSRGraph, sources: np.ndarray, nodes: np.ndarray | None = None) -> np.ndarray:
     """Fewest hops from any source to every node (``inf`` where unreachable)."""
     if len(sources) == 0:
-        return np.full(adjacency.shape[0], np.inf)
-    return dijkstra(adjacency, directed=False, indices=np.asarray(sources), unweighted=True, min_only=True)
+        return np.full(len(graph.indptr) - 1, np.inf)
+    _, _, hops = _run(graph, nodes, sources)
+    return np.where(hops >= 0, hops, np.inf).astype(float)
 
 
-def agents_connected(adjacency: sp.csr_matrix, agents: np.ndarray, bases: np.ndarray,
-                     network: np.ndarray) -> np.ndarray:
+@njit(cache=True)
+def _hears_any(indptr, indices, who, mask, out):  # pragma: no cover - numba
+    for m in range(who.shape[0]):
+        i = who[m]
+        out[m] = False
+        for e in range(indptr[i], indptr[i + 1]):
+            if mask[indices[e]]:
+                out[m] = True
+                break
+
+
+def agents_connected(graph: CSRGraph, agents: np.ndarray, bases: np.ndarray, network: np.ndarray) -> np.ndarray:
     """Which agents have a multi-hop path to a base station through the AMRoNet.
 
     An agent counts as connected when it hears a router or base node that itself has a path to a base station
     through routers and base nodes (``network``); agents are endpoints, not relays.
 
     Args:
-        adjacency: This step's neighbour table.
+        graph: This step's neighbour table.
         agents: Indices of the agents ``(A,)``.
         bases: Indices of the base reference nodes.
         network: Boolean mask of the AMRoNet's nodes (routers and base nodes).
@@ -66,5 +114,7 @@ def agents_connected(adjacency: sp.csr_matrix, agents: np.ndarray, bases: np.nda
     Returns:
         Boolean mask ``(A,)``.
     """
-    linked = connected_to(adjacency, bases, network)
-    return (adjacency[agents] @ linked.astype(float)) > 0
+    linked = connected_to(graph, bases, network)
+    out = np.empty(len(agents), dtype=np.bool_)
+    _hears_any(graph.indptr, graph.indices, np.asarray(agents, dtype=np.int64), linked, out)
+    return out

@@ -150,9 +150,9 @@ class Simulation:
         method = method or self.scenario.sim.coverage_method
         r_c = self.scenario.radio.r_c
         network = sw.kind != Kind.AGENT
-        linked = connected_to(self.table.adjacency, self.bases, network)
+        linked = connected_to(self.table, self.bases, network)
         deployed = sw.deployed
-        n_comp, _ = components(self.table.adjacency, deployed)
+        n_comp, _ = components(self.table, deployed)
         return Metrics(
             coverage=self.world.coverage.fraction(sw.xy[network], r_c, method=method),
             connected_coverage=self.world.coverage.fraction(sw.xy[linked], r_c, method=method),
@@ -165,7 +165,7 @@ class Simulation:
         if len(self.agents) == 0:
             return 1.0
         network = self.swarm.kind != Kind.AGENT
-        return float(agents_connected(self.table.adjacency, self.agents, self.bases, network).mean())
+        return float(agents_connected(self.table, self.agents, self.bases, network).mean())
 
     @property
     def agents_connected_fraction(self) -> float | None:

@@ -74,7 +74,7 @@ class AgentAssisted(Controller):
     params: AgentAssistedParams
     default_coverage_target = DEFAULT_COVERAGE_TARGET
 
-    def __init__(self, *args, **kwargs) -> None:  # noqa: D107
+    def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         from amronet.assemble import robot_kind
 

@@ -88,7 +88,7 @@ def select_triangles(
         go &= ~(disabled[ref_i] & disabled[ref_j])
         key_a, key_b = ref_i, ref_j
     elif mode == "global":
-        _, labels = components(table.adjacency, committed)
+        _, labels = components(table, committed)
         key_a, key_b = labels[ref_i], labels[ref_j]
         go &= key_a != key_b
     else:
