@@ -102,6 +102,26 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from amronet.experiments.fig5 import run_fig5
+    from amronet.experiments.fig7 import run_fig7
+
+    out = Path(args.out or f"runs/{args.figure}")
+    common = {"workers": args.workers, "show_progress": not args.quiet, "explorer": args.explorer,
+              "time_limit": args.time_limit}
+    if args.figure == "fig5":
+        kw = {"radii": (6, 10), "agents": (1, 2), "starts": 2} if args.quick else {}
+        report = run_fig5(out, **common, **kw)
+    else:
+        kw = {"bases": (1, 2), "agents": (1, 2), "runs": 2} if args.quick else {}
+        report = run_fig7(out, **common, **kw)
+    if not args.quiet:
+        print(report["markdown"])
+        print(f"wrote {out}/: {args.figure}_runs.csv {args.figure}_table.csv {args.figure}.png "
+              f"{args.figure}_claims.md")
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="amronet", description="Build and evaluate Ad-hoc Mobile Router Networks.")
     p.add_argument("--version", action="version", version=f"amronet {__version__}")
@@ -129,6 +149,16 @@ def _parser() -> argparse.ArgumentParser:
 
     ps = sub.add_parser("presets", help="list built-in scenarios")
     ps.set_defaults(func=_cmd_presets)
+
+    rp = sub.add_parser("reproduce", help="run one of the paper's experiments (figures) end to end")
+    rp.add_argument("figure", choices=["fig5", "fig7"], help="which figure")
+    rp.add_argument("--out", help="output folder (default runs/FIGURE)")
+    rp.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    rp.add_argument("--explorer", default="frontier", help="agents' exploration strategy (default frontier)")
+    rp.add_argument("--time-limit", type=float, default=6000.0, help="simulated seconds per run at most")
+    rp.add_argument("--quick", action="store_true", help="a small subset, for a smoke test")
+    rp.add_argument("-q", "--quiet", action="store_true")
+    rp.set_defaults(func=_cmd_reproduce)
 
     b = sub.add_parser("bench", help="measure robot-steps per second of an algorithm's full step")
     b.add_argument("--algorithm", default="self-spreading")

@@ -26,6 +26,9 @@ class ScenarioError(AmronetError, ValueError):
         self.message = message
         super().__init__(f"{field}: {message}" if field else message)
 
+    def __reduce__(self) -> tuple[type, tuple[str, str]]:
+        return type(self), (self.field, self.message)
+
 
 class MapError(ScenarioError):
     """A map file or image cannot be loaded or makes no sense."""

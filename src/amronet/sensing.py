@@ -13,6 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
+from amronet.neighbours import neighbour_csr
 from amronet.radio import NeighbourTable
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
@@ -58,39 +59,8 @@ def _cast_grid(blocked, clear, ox, oy, res, who, xy, heading, angles, max_range,
 
 
 @njit(cache=True)
-def _cast_bodies(pairs, xy, heading, angles, max_range, other_radius, slot, out):  # pragma: no cover - numba
-    for p in range(pairs.shape[0]):
-        for side in range(2):
-            i = pairs[p, side]
-            j = pairs[p, 1 - side]
-            s = slot[i]
-            if s < 0:
-                continue
-            vx = xy[j, 0] - xy[i, 0]
-            vy = xy[j, 1] - xy[i, 1]
-            rj = other_radius[j]
-            dist2 = vx * vx + vy * vy
-            if dist2 > (max_range + rj) ** 2:
-                continue
-            for k in range(angles.shape[0]):
-                a = heading[i] + angles[k]
-                ux = math.cos(a)
-                uy = math.sin(a)
-                tca = vx * ux + vy * uy
-                if tca <= 0.0:
-                    continue
-                d2 = dist2 - tca * tca
-                if d2 > rj * rj:
-                    continue
-                t = tca - math.sqrt(rj * rj - d2)
-                if t < 0.0:
-                    t = 0.0
-                if t < out[s, k]:
-                    out[s, k] = t
-
-
-@njit(cache=True)
-def _cast_bodies_csr(who, indptr, indices, dist, xy, heading, angles, max_range, other_radius, out):  # pragma: no cover
+def _cast_bodies(who, indptr, indices, dist, xy, heading, angles, max_range, other_radius, out):  # pragma: no cover
+    """Shorten beams that meet another robot's disc (exact ray-disc intersection)."""
     big = other_radius.max()
     for s in range(who.shape[0]):
         i = who[s]
@@ -106,17 +76,13 @@ def _cast_bodies_csr(who, indptr, indices, dist, xy, heading, angles, max_range,
                 continue
             for k in range(angles.shape[0]):
                 a = heading[i] + angles[k]
-                ux = math.cos(a)
-                uy = math.sin(a)
-                tca = vx * ux + vy * uy
+                tca = vx * math.cos(a) + vy * math.sin(a)
                 if tca <= 0.0:
                     continue
                 d2 = dist2 - tca * tca
                 if d2 > rj * rj:
                     continue
-                t = tca - math.sqrt(rj * rj - d2)
-                if t < 0.0:
-                    t = 0.0
+                t = max(tca - math.sqrt(rj * rj - d2), 0.0)
                 if t < out[s, k]:
                     out[s, k] = t
 
@@ -161,15 +127,8 @@ def range_scan(
     if radius is not None and table is not None and len(xy) > 1:
         reach = float(max_range + radius.max())
         if reach <= table.r:
-            _cast_bodies_csr(who, table.indptr, table.indices, table.dist, xy, heading, angles, float(max_range),
-                             radius, out)
-        else:
-            pairs = table.tree.query_pairs(reach, output_type="ndarray")
-            if len(pairs):
-                slot = np.full(len(xy), -1, dtype=np.int64)
-                slot[who] = np.arange(len(who))
-                keep = (slot[pairs[:, 0]] >= 0) | (slot[pairs[:, 1]] >= 0)
-                _cast_bodies(
-                    np.ascontiguousarray(pairs[keep]), xy, heading, angles, float(max_range), radius, slot, out
-                )
+            indptr, indices, dist = table.indptr, table.indices, table.dist
+        else:  # the sensor reaches beyond the radio range: a neighbour search of its own
+            indptr, indices, dist = neighbour_csr(xy, reach)
+        _cast_bodies(who, indptr, indices, dist, xy, heading, angles, float(max_range), radius, out)
     return out

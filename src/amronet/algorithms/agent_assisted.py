@@ -31,7 +31,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictInt
 from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
 from amronet.algorithms.explorers import EXPLORERS
 from amronet.algorithms.goto import GoalSteering
-from amronet.algorithms.references import track_references
+from amronet.algorithms.references import check_loss_band, track_references
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.errors import ScenarioError
 from amronet.motion import path_clear
@@ -89,15 +89,8 @@ class AgentAssisted(Controller):
         if self.params.explorer not in EXPLORERS:
             raise ScenarioError("algorithm.params.explorer", f"unknown explorer {self.params.explorer!r}; choose one "
                                 f"of: {', '.join(sorted(EXPLORERS))}")
-        self.r_eff = (1.0 - self.params.loss_margin) * self.r_c
         step = float(sw.max_speed[agents].max()) * self.dt
-        band = self.params.loss_margin * self.r_c
-        if step >= band:
-            raise ScenarioError(
-                "algorithm.params.loss_margin",
-                f"the 'about to lose' band ({band:.3g} m) must be wider than one agent step ({step:.3g} m); "
-                "raise loss_margin or lower sim.dt",
-            )
+        self.r_eff = check_loss_band(self.params.loss_margin, self.r_c, step, "agent")
         self.router_kind = robot_kind(sc.routers.robot, "routers.robot")
         carried = sc.agents.routers_carried
         n = len(sw)

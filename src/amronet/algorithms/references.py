@@ -13,9 +13,29 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from amronet.errors import ScenarioError
 from amronet.radio import NeighbourTable
 
-__all__ = ["ReferenceView", "track_references"]
+
+def check_loss_band(loss_margin: float, r_c: float, step: float, who: str) -> float:
+    """Check that the "about to lose" band is wider than one step and return ``(1 - loss_margin) r_c``.
+
+    A robot that could cross the band ``[(1 - loss_margin) r_c, r_c]`` in one step might lose its last reference
+    before noticing it is about to.
+
+    Raises:
+        ScenarioError: The band is too narrow (names ``algorithm.params.loss_margin``).
+    """
+    band = loss_margin * r_c
+    if step >= band:
+        raise ScenarioError(
+            "algorithm.params.loss_margin",
+            f"the 'about to lose' band ({band:.3g} m) must be wider than one {who} step ({step:.3g} m); "
+            "raise loss_margin or lower sim.dt",
+        )
+    return r_c - band
+
+__all__ = ["ReferenceView", "check_loss_band", "track_references"]
 
 
 @dataclass(frozen=True)

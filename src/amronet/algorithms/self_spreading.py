@@ -29,9 +29,8 @@ from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
 from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
 from amronet.algorithms.goto import GoalSteering
-from amronet.algorithms.references import track_references
+from amronet.algorithms.references import check_loss_band, track_references
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
-from amronet.errors import ScenarioError
 from amronet.motion import random_walk
 from amronet.robots import SETTLING_STATES, Kind, State
 
@@ -68,16 +67,9 @@ class SelfSpreading(Controller):
         super().__init__(*args, **kwargs)
         sw = self.swarm
         n = len(sw)
-        self.r_eff = (1.0 - self.params.loss_margin) * self.r_c
         routers = sw.kind == Kind.ROUTER
         step = float(sw.max_speed[routers].max(initial=0.0)) * self.dt
-        band = self.params.loss_margin * self.r_c
-        if step >= band:
-            raise ScenarioError(
-                "algorithm.params.loss_margin",
-                f"the 'about to lose' band ({band:.3g} m) must be wider than one router step ({step:.3g} m); "
-                "raise loss_margin or lower sim.dt",
-            )
+        self.r_eff = check_loss_band(self.params.loss_margin, self.r_c, step, "router")
         self.current = np.full(n, -1, dtype=np.int64)
         self.steering = GoalSteering(n, n_anchors=2, give_up_steps=self.params.give_up_steps)
         self.disabled = np.zeros(n, dtype=bool)

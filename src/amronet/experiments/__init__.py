@@ -1,0 +1,1 @@
+"""Experiments: running many seeded runs, statistics, and the paper's figures."""

@@ -1,0 +1,65 @@
+"""Shared pieces of the paper-figure experiments: the agent-assisted scenario, output files, claim tables."""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from amronet.results import write_files_atomically
+
+__all__ = ["Claim", "agent_scenario", "claims_markdown", "csv_text", "write_outputs"]
+
+CORNERS = ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))
+"""Base-station positions at the corners of the 32 m x 32 m floors (paper 5.1: 'located at the corner')."""
+START_LOCATIONS = (*CORNERS, (16.0, 16.0))
+"""Five start locations for Fig. 5: the four corners and the centre (a corridor crossing on office-32x32)."""
+
+
+def agent_scenario(map_name: str, r_c: float, bases: tuple[tuple[float, float], ...], agents_per_base: int,
+                   explorer: str, time_limit: float, dt: float = 0.25) -> dict[str, Any]:
+    """The agent-assisted scenario of paper 5.1 as plain data."""
+    return {
+        "name": f"agent-assisted-{map_name}",
+        "map": map_name,
+        "algorithm": {"name": "agent-assisted", "params": {"triangular": "local", "explorer": explorer}},
+        "radio": {"model": "unit-disk", "r_c": float(r_c)},
+        "base_stations": [{"x": x, "y": y, "region": [1.6, 1.6]} for x, y in bases],
+        "routers": {"count": 0, "robot": "bebot"},
+        "agents": {"per_base": int(agents_per_base), "robot": "pioneer"},
+        "sim": {"dt": dt, "time_limit": float(time_limit), "record_every": 40, "coverage_target": 0.99},
+    }
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One claim of the paper next to our measurement."""
+
+    claim: str
+    paper: str
+    ours: str
+    verdict: str
+
+
+def claims_markdown(title: str, claims: list[Claim]) -> str:
+    """A Markdown table of claims."""
+    lines = [f"## {title}", "", "| claim (paper) | paper | amronet | verdict |", "|---|---|---|---|"]
+    lines += [f"| {c.claim} | {c.paper} | {c.ours} | {c.verdict} |" for c in claims]
+    return "\n".join(lines) + "\n"
+
+
+def csv_text(rows: list[dict[str, Any]]) -> str:
+    """Rows of dicts as CSV text (columns from the first row)."""
+    buf = io.StringIO()
+    if rows:
+        writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+    return buf.getvalue()
+
+
+def write_outputs(out_dir: Path, files: dict[str, bytes | str]) -> Path:
+    """Write an experiment's files atomically as the content of ``out_dir``."""
+    return write_files_atomically(Path(out_dir), {k: v.encode() if isinstance(v, str) else v for k, v in files.items()})

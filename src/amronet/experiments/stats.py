@@ -1,0 +1,28 @@
+"""Summary statistics with confidence intervals."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["mean_ci"]
+
+
+def mean_ci(values: np.ndarray, confidence: float = 0.95) -> tuple[float, float]:
+    """Mean and half-width of its two-sided Student-t confidence interval.
+
+    Args:
+        values: Samples (NaNs are dropped).
+        confidence: Confidence level.
+
+    Returns:
+        ``(mean, half_width)``; the half-width is 0 for a single sample and both are NaN for none.
+    """
+    x = np.asarray(values, dtype=float)
+    x = x[~np.isnan(x)]
+    if len(x) == 0:
+        return float("nan"), float("nan")
+    if len(x) == 1:
+        return float(x[0]), 0.0
+    half = stats.t.ppf(0.5 + confidence / 2, len(x) - 1) * x.std(ddof=1) / np.sqrt(len(x))
+    return float(x.mean()), float(half)
