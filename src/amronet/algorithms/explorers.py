@@ -80,3 +80,6 @@ class RandomExplorer(Explorer):
               refused: np.ndarray, rng: np.random.Generator, xy: np.ndarray, deployed_xy: np.ndarray) -> None:
         reach = min(sensor_range, self.avoid_range)
         random_walk(heading, who, np.minimum(scans, reach), reach, refused, rng, self.turn_noise * np.sqrt(self.dt))
+
+
+from amronet.algorithms import frontier  # noqa: E402,F401  (registers itself)

@@ -1,0 +1,57 @@
+import csv
+
+import numpy as np
+from PIL import Image
+
+from amronet.cli import main
+from amronet.experiments.fig5 import run_fig5
+from amronet.experiments.fig7 import run_fig7
+from amronet.experiments.runner import run_jobs
+from amronet.experiments.stats import mean_ci
+
+
+def test_mean_ci_matches_t_interval():
+    mean, half = mean_ci(np.array([1.0, 2.0, 3.0, 4.0]))
+    assert mean == 2.5 and abs(half - 2.0540) < 1e-3  # t(0.975, 3) * s / sqrt(4)
+    assert mean_ci(np.array([5.0])) == (5.0, 0.0)
+    assert np.isnan(mean_ci(np.array([]))[0])
+
+
+def test_jobs_are_deterministic_and_ordered():
+    sc = {"map": "open-6x6", "base_stations": [{"x": 0, "y": 0}], "routers": {"count": 10},
+          "sim": {"time_limit": 3.0}}
+    jobs = [{"scenario": sc, "seed": s, "labels": {"k": s}} for s in (3, 1, 2)]
+    a = run_jobs(jobs, workers=2, show_progress=False)
+    b = run_jobs(jobs, workers=1, show_progress=False)
+    assert [r["labels"]["k"] for r in a] == [3, 1, 2]
+    assert [r["summary"]["coverage"] for r in a] == [r["summary"]["coverage"] for r in b]
+
+
+def test_fig5_small_writes_runs_table_figure_and_claims(tmp_path):
+    report = run_fig5(tmp_path / "f5", maps=("open-32x32",), radii=(10,), agents=(1, 2), starts=1,
+                      explorer="random", time_limit=2000.0, workers=1, show_progress=False)
+    out = tmp_path / "f5"
+    rows = list(csv.DictReader((out / "fig5_runs.csv").open()))
+    assert len(rows) == 2 and {r["agents"] for r in rows} == {"1", "2"}
+    assert all(float(r["agents_connected_fraction"]) == 1.0 for r in rows)
+    assert Image.open(out / "fig5.png").size[0] > 400
+    text = (out / "fig5_claims.md").read_text()
+    assert "RSTR min/est" in text and "| claim (paper) |" in text
+    entry = report["table"][0]
+    assert entry["r-strip_placed"] >= 1 and entry["hexagonal_estimated"] == 8
+
+
+def test_fig7_small_via_cli(tmp_path, capsys):
+    code = main(["reproduce", "fig7", "--quick", "--explorer", "random", "--time-limit", "300", "--workers", "1",
+                 "--out", str(tmp_path / "f7"), "-q"])
+    assert code == 0
+    rows = list(csv.DictReader((tmp_path / "f7" / "fig7_runs.csv").open()))
+    assert len(rows) == 8 and {r["bases"] for r in rows} == {"1", "2"}
+    assert (tmp_path / "f7" / "fig7.png").stat().st_size > 10_000
+
+
+def test_reproduce_bad_explorer_is_one_line(tmp_path, capsys):
+    code = main(["reproduce", "fig7", "--quick", "--explorer", "telepathy", "--out", str(tmp_path / "x"), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2 and "algorithm.params.explorer" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x").exists()
