@@ -39,8 +39,9 @@ def main() -> None:
         area = as_area((32.0, 32.0), r=float(r))
         cells, total = [], 0.0
         for name in PATTERNS:
-            dt, p = best_of(lambda name=name, area=area, r=r: place(name, area, float(r), steps=args.steps,
-                                                                    tol=args.tol))
+            dt, p = best_of(
+                lambda name=name, area=area, r=r: place(name, area, float(r), steps=args.steps, tol=args.tol)
+            )
             total += dt
             cells.append(f"{p.estimate:>3}/{p.count:<3} {100 * p.coverage:8.3f} {1e3 * dt:7.1f}")
         grand += total

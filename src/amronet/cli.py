@@ -150,6 +150,10 @@ def _parser() -> argparse.ArgumentParser:
     ps = sub.add_parser("presets", help="list built-in scenarios")
     ps.set_defaults(func=_cmd_presets)
 
+    from amronet.cli_patterns import add_parser as add_patterns_parser
+
+    add_patterns_parser(sub)
+
     rp = sub.add_parser("reproduce", help="run one of the paper's experiments (figures) end to end")
     rp.add_argument("figure", choices=["fig5", "fig7"], help="which figure")
     rp.add_argument("--out", help="output folder (default runs/FIGURE)")

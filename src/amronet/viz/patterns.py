@@ -93,9 +93,7 @@ def _panel(ax, area: PatternArea, p: Placement, r: float, name: str) -> None:
             facecolors="none", edgecolors=_HOLE, linewidths=1.2, zorder=5,
         ))  # fmt: skip
     flag = "" if p.connected else ", DISCONNECTED"
-    ax.set_title(
-        f"{name}: {p.count} placed (est. {p.estimate})\ncoverage {100 * p.coverage:.3f} %{flag}", fontsize=10
-    )
+    ax.set_title(f"{name}: {p.count} placed (est. {p.estimate})\ncoverage {100 * p.coverage:.3f} %{flag}", fontsize=10)
 
 
 def patterns_figure(
