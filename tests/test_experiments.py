@@ -5,7 +5,6 @@ from PIL import Image
 
 from amronet.cli import main
 from amronet.experiments.fig5 import run_fig5
-from amronet.experiments.fig7 import run_fig7
 from amronet.experiments.runner import run_jobs
 from amronet.experiments.stats import mean_ci
 
