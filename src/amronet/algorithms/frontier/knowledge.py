@@ -1,0 +1,293 @@
+"""The knowledge grid the agents build together from sonar, and which of its cells are traversable.
+
+See :mod:`amronet.algorithms.frontier` for the model: evidence counts per cell (a hit adds :data:`HIT_GAIN`,
+a pass removes 1, clamped to ``[-FREE_FLOOR, OCCUPIED_CAP]``), readings that end on a known robot mark no
+obstacle, and a traversable cell is a free cell with no occupied cell (nor the grid's edge, nor a deployed
+node) within the clearance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from amronet.sensing import beam_angles
+
+__all__ = ["FREE_FLOOR", "HIT_GAIN", "OCCUPIED_CAP", "KnowledgeGrid"]
+
+HIT_GAIN = 3
+"""Evidence a beam ending in a cell adds to its count."""
+OCCUPIED_CAP = 12
+"""Largest evidence count (a wall needs this many grazing passes to be cleared)."""
+FREE_FLOOR = 4
+"""The smallest evidence count is ``-FREE_FLOOR`` (a free cell turns occupied after two hits at most)."""
+
+
+@njit(cache=True)
+def _trace(ox, oy, res, rows, cols, x0, y0, x1, y1, out_r, out_c):  # pragma: no cover - numba
+    """Cells the segment crosses, in order (Amanatides-Woo); stops at the grid's edge. Returns how many."""
+    c = int(math.floor((x0 - ox) / res))
+    r = int(math.floor((y0 - oy) / res))
+    c_end = int(math.floor((x1 - ox) / res))
+    r_end = int(math.floor((y1 - oy) / res))
+    dx = x1 - x0
+    dy = y1 - y0
+    step_c = 1 if dx > 0 else -1
+    step_r = 1 if dy > 0 else -1
+    inf = 1e300
+    if dx != 0.0:
+        t_max_x = (ox + (c + (1 if dx > 0 else 0)) * res - x0) / dx
+        t_delta_x = res / abs(dx)
+    else:
+        t_max_x = inf
+        t_delta_x = inf
+    if dy != 0.0:
+        t_max_y = (oy + (r + (1 if dy > 0 else 0)) * res - y0) / dy
+        t_delta_y = res / abs(dy)
+    else:
+        t_max_y = inf
+        t_delta_y = inf
+    n = 0
+    while n < out_r.shape[0]:
+        if r < 0 or r >= rows or c < 0 or c >= cols:
+            break
+        out_r[n] = r
+        out_c[n] = c
+        n += 1
+        if r == r_end and c == c_end:
+            break
+        if t_max_x < t_max_y:
+            if t_max_x > 1.0:
+                break
+            c += step_c
+            t_max_x += t_delta_x
+        else:
+            if t_max_y > 1.0:
+                break
+            r += step_r
+            t_max_y += t_delta_y
+    return n
+
+
+@njit(cache=True)
+def _integrate(score, seen, ox, oy, res, pos, heading, scans, angles, max_range, robots, n_own, robot_r,
+               hit_gain, cap, floor, buf_r, buf_c):  # pragma: no cover - numba
+    """Add the evidence of every beam of every sensing robot to the grid.
+
+    ``robots[:n_own]`` are the sensing robots themselves (row ``a`` is ``pos[a]``): a robot's own position
+    never hides its reading.
+    """
+    rows, cols = score.shape
+    rr2 = robot_r * robot_r
+    for a in range(pos.shape[0]):
+        x0 = pos[a, 0]
+        y0 = pos[a, 1]
+        for k in range(angles.shape[0]):
+            d = min(scans[a, k], max_range)
+            ang = heading[a] + angles[k]
+            ux = math.cos(ang)
+            uy = math.sin(ang)
+            hit = d < max_range - 1e-9
+            on_robot = False
+            if hit:
+                hx = x0 + d * ux
+                hy = y0 + d * uy
+                for j in range(robots.shape[0]):
+                    if j == a and j < n_own:
+                        continue
+                    ex = hx - robots[j, 0]
+                    ey = hy - robots[j, 1]
+                    if ex * ex + ey * ey <= rr2:
+                        on_robot = True
+                        break
+                d += 1e-6  # the reading's point lies in the obstacle's cell
+            n = _trace(ox, oy, res, rows, cols, x0, y0, x0 + d * ux, y0 + d * uy, buf_r, buf_c)
+            last = n - 1 if hit else n
+            for q in range(last):
+                r = buf_r[q]
+                c = buf_c[q]
+                seen[r, c] = True
+                if score[r, c] > -floor:
+                    score[r, c] -= 1
+            if hit and n > 0 and not on_robot:
+                r = buf_r[n - 1]
+                c = buf_c[n - 1]
+                seen[r, c] = True
+                score[r, c] = min(score[r, c] + hit_gain, cap)
+
+
+@njit(cache=True)
+def _paint_covered(covered, ox, oy, res, nodes, radius):  # pragma: no cover - numba
+    """``covered[r, c]``: some node lies within ``radius`` of the cell's centre."""
+    rows, cols = covered.shape
+    covered[:, :] = False
+    r2 = radius * radius
+    for j in range(nodes.shape[0]):
+        x = nodes[j, 0]
+        y = nodes[j, 1]
+        c_lo = max(0, int(math.floor((x - radius - ox) / res)))
+        c_hi = min(cols - 1, int(math.floor((x + radius - ox) / res)))
+        r_lo = max(0, int(math.floor((y - radius - oy) / res)))
+        r_hi = min(rows - 1, int(math.floor((y + radius - oy) / res)))
+        for r in range(r_lo, r_hi + 1):
+            dy = oy + (r + 0.5) * res - y
+            for c in range(c_lo, c_hi + 1):
+                dx = ox + (c + 0.5) * res - x
+                if dx * dx + dy * dy <= r2:
+                    covered[r, c] = True
+
+
+@njit(cache=True, inline="always")
+def _free(score, seen, r, c):  # pragma: no cover - numba
+    return seen[r, c] and score[r, c] <= 0
+
+
+@njit(cache=True)
+def _passable(score, seen, rb, r, c, off_r, off_c):  # pragma: no cover - numba
+    """Free, not next to a known robot, and no occupied cell within the clearance (nor the grid's edge)."""
+    rows, cols = score.shape
+    if r < 0 or r >= rows or c < 0 or c >= cols or rb[r, c] or not _free(score, seen, r, c):
+        return False
+    for q in range(off_r.shape[0]):
+        rr = r + off_r[q]
+        cc = c + off_c[q]
+        if rr < 0 or rr >= rows or cc < 0 or cc >= cols or score[rr, cc] > 0:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _passable_mask(score, seen, rb, off_r, off_c, out):  # pragma: no cover - numba
+    """``out``: :func:`_passable` of every cell (free cells, then occupied cells knock out their neighbourhood)."""
+    rows, cols = score.shape
+    for r in range(rows):
+        for c in range(cols):
+            out[r, c] = seen[r, c] and score[r, c] <= 0 and not rb[r, c]
+    for r in range(rows):
+        for c in range(cols):
+            if score[r, c] <= 0:
+                continue
+            for q in range(off_r.shape[0]):
+                rr = r - off_r[q]
+                cc = c - off_c[q]
+                if 0 <= rr < rows and 0 <= cc < cols:
+                    out[rr, cc] = False
+    for q in range(off_r.shape[0]):  # cells whose clearance reaches beyond the grid's edge
+        for r in range(rows):
+            for c in range(cols):
+                rr = r + off_r[q]
+                cc = c + off_c[q]
+                if rr < 0 or rr >= rows or cc < 0 or cc >= cols:
+                    out[r, c] = False
+
+
+class KnowledgeGrid:
+    """What the agents know of the area: a coarse grid of unknown, free and occupied cells built from sonar.
+
+    Args:
+        extent: ``(xmin, xmax, ymin, ymax)`` of the area in metres.
+        resolution: Cell size in metres.
+
+    Attributes:
+        score: Evidence count per cell ``(rows, cols)`` int16; positive: occupied.
+        seen: Whether a beam ever crossed or ended in the cell ``(rows, cols)``.
+        origin: World ``(x, y)`` of the lower-left corner of cell ``(0, 0)``.
+        resolution: Cell size in metres.
+    """
+
+    def __init__(self, extent: tuple[float, float, float, float], resolution: float) -> None:
+        if not resolution > 0:
+            raise ValueError(f"resolution must be positive, not {resolution!r}")
+        xmin, xmax, ymin, ymax = (float(v) for v in extent)
+        self.origin = (xmin, ymin)
+        self.resolution = float(resolution)
+        cols = max(1, math.ceil((xmax - xmin) / resolution - 1e-9))
+        rows = max(1, math.ceil((ymax - ymin) / resolution - 1e-9))
+        self.score = np.zeros((rows, cols), dtype=np.int16)
+        self.seen = np.zeros((rows, cols), dtype=np.bool_)
+        self._buf_r = np.zeros(0, dtype=np.int64)
+        self._buf_c = np.zeros(0, dtype=np.int64)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, cols)``."""
+        return self.score.shape
+
+    @property
+    def unknown(self) -> np.ndarray:
+        """Cells no beam has reached."""
+        return ~self.seen
+
+    @property
+    def occupied(self) -> np.ndarray:
+        """Cells believed occupied."""
+        return self.score > 0
+
+    @property
+    def free(self) -> np.ndarray:
+        """Cells believed free."""
+        return self.seen & (self.score <= 0)
+
+    def cell_of(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(rows, cols)`` of world points ``(M, 2)`` (may lie outside the grid)."""
+        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        cols = np.floor((p[:, 0] - self.origin[0]) / self.resolution).astype(np.int64)
+        rows = np.floor((p[:, 1] - self.origin[1]) / self.resolution).astype(np.int64)
+        return rows, cols
+
+    def centre(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """World centres ``(M, 2)`` of cells."""
+        rows = np.asarray(rows, dtype=float)
+        cols = np.asarray(cols, dtype=float)
+        return np.stack([self.origin[0] + (cols + 0.5) * self.resolution,
+                         self.origin[1] + (rows + 0.5) * self.resolution], axis=-1)
+
+    def buffers(self, max_range: float) -> tuple[np.ndarray, np.ndarray]:
+        """Scratch cell lists long enough for a segment of ``max_range`` metres."""
+        need = int(2 * math.ceil(max_range / self.resolution) + 8)
+        if len(self._buf_r) < need:
+            self._buf_r = np.zeros(need, dtype=np.int64)
+            self._buf_c = np.zeros(need, dtype=np.int64)
+        return self._buf_r, self._buf_c
+
+    def integrate(self, xy: np.ndarray, heading: np.ndarray, scans: np.ndarray, sensor_range: float,
+                  robots_xy: np.ndarray | None = None, robot_radius: float = 0.3) -> None:
+        """Add the evidence of range scans.
+
+        Args:
+            xy: Positions of the sensing robots ``(A, 2)``.
+            heading: Their headings ``(A,)`` (beam ``k`` points at ``heading + 2 pi k / n_beams``).
+            scans: Their readings ``(A, n_beams)``.
+            sensor_range: Maximum range: a reading this long saw nothing.
+            robots_xy: Other known robots ``(R, 2)``: a reading ending within ``robot_radius`` of one marks
+                no obstacle. The sensing robots' own positions are added (each ignores itself).
+            robot_radius: See ``robots_xy``.
+        """
+        xy = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
+        scans = np.ascontiguousarray(scans, dtype=float)
+        if len(xy) == 0:
+            return
+        others = xy if robots_xy is None else np.concatenate([xy, np.asarray(robots_xy, dtype=float).reshape(-1, 2)])
+        buf_r, buf_c = self.buffers(sensor_range)
+        _integrate(self.score, self.seen, self.origin[0], self.origin[1], self.resolution, xy,
+                   np.ascontiguousarray(heading, dtype=float), scans, beam_angles(scans.shape[1]), float(sensor_range),
+                   np.ascontiguousarray(others), len(xy), float(robot_radius), HIT_GAIN, OCCUPIED_CAP, FREE_FLOOR,
+                   buf_r, buf_c)
+
+    def covered_by(self, nodes_xy: np.ndarray, radius: float) -> np.ndarray:
+        """Cells whose centre lies within ``radius`` of one of the nodes ``(D, 2)``."""
+        out = np.zeros(self.shape, dtype=np.bool_)
+        _paint_covered(out, self.origin[0], self.origin[1], self.resolution,
+                       np.ascontiguousarray(nodes_xy, dtype=float).reshape(-1, 2), float(radius))
+        return out
+
+
+def _offsets(clearance: float, resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """Cell offsets whose centre lies within ``clearance`` of a cell's centre (the cell itself excluded)."""
+    k = int(math.floor(clearance / resolution))
+    dr, dc = np.mgrid[-k:k + 1, -k:k + 1]
+    keep = (dr**2 + dc**2) * resolution**2 <= clearance**2 + 1e-12
+    keep &= (dr != 0) | (dc != 0)
+    return dr[keep].astype(np.int64), dc[keep].astype(np.int64)
