@@ -112,6 +112,10 @@ class Controller(ABC):
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: B027 - optional hook
         """Learn which of the requested moves the world refused (default: ignore)."""
 
+    def report(self) -> dict[str, object]:
+        """Algorithm-specific numbers for the run's summary (default: none)."""
+        return {}
+
     @property
     @abstractmethod
     def settled(self) -> bool:

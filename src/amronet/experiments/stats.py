@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-__all__ = ["mean_ci"]
+__all__ = ["mean_ci", "mean_ci_columns"]
 
 
 def mean_ci(values: np.ndarray, confidence: float = 0.95) -> tuple[float, float]:
@@ -26,3 +26,14 @@ def mean_ci(values: np.ndarray, confidence: float = 0.95) -> tuple[float, float]
         return float(x[0]), 0.0
     half = stats.t.ppf(0.5 + confidence / 2, len(x) - 1) * x.std(ddof=1) / np.sqrt(len(x))
     return float(x.mean()), float(half)
+
+
+def mean_ci_columns(samples: np.ndarray, confidence: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    """Column-wise :func:`mean_ci` of ``samples`` ``(runs, points)``: the mean curve and its half-width curve."""
+    x = np.asarray(samples, dtype=float)
+    n = x.shape[0]
+    mean = x.mean(axis=0)
+    if n < 2:
+        return mean, np.zeros_like(mean)
+    half = stats.t.ppf(0.5 + confidence / 2, n - 1) * x.std(axis=0, ddof=1) / np.sqrt(n)
+    return mean, half

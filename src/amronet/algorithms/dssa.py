@@ -1,0 +1,171 @@
+"""DSSA, the distributed self-spreading algorithm of Heo & Varshney (IEEE WCNC 2003), as a baseline (paper 3, 5.2).
+
+Every router repels the nodes it hears, more strongly the more crowded it is compared with the expected
+density, and the push fades to zero at the communication radius::
+
+    f_ij = (D_i / mu^2) (r_c - d_ij) u_ij,        mu = N pi r_s^2 / A
+
+with ``D_i`` the number of nodes router ``i`` hears (its local density), ``u_ij`` the unit vector from ``j`` to
+``i``, ``N`` the number of nodes (routers and base nodes), ``A`` the area of the field and ``r_s`` the sensing
+radius. The AMRoNet paper (5.2.1, 6.2) runs DSSA with a *virtual* sensing radius ``r_s = 0.5 r_c`` so that
+maximizing sensing coverage with ``2 r_s`` is maximizing communication coverage; that is the default here. The
+summed force is the router's displacement for the step, limited to what its maximum speed allows in one step.
+
+Stop rules (Heo & Varshney's oscillation and stability rules):
+
+* **oscillation** — a router whose step reverses its previous step's direction ``oscillation_limit`` times
+  while it stays within ``oscillation_radius r_c`` of where the count started moves to the centre of the
+  positions it took meanwhile and stops;
+* **stability** — a router that moves less than ``stable_fraction`` of its maximum step for ``stable_steps``
+  steps in a row stops.
+
+A stopped router is in state *reference* and never moves again; the run has converged when every router has
+stopped (:attr:`DSSA.settled`).
+
+Obstacles (paper 5.2.1, experiment 2: "forces from the obstacles are also added"): with ``obstacle_forces``, every
+beam of the router's range sensors that sees something within range acts as a virtual neighbour at that
+distance, with the same law times ``obstacle_gain``. The paper does not give the form it used; this is our
+choice, like the defaults of ``oscillation_limit``, ``oscillation_radius``, ``stable_fraction``,
+``stable_steps`` and ``obstacle_gain``, which Heo & Varshney leave open.
+
+``A`` defaults to the free area of the map (what a deployment in a known field assumes); set ``field_area`` to
+override it.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
+
+from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
+from amronet.robots import Kind, State
+
+__all__ = ["DSSA", "DSSAParams"]
+
+_Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+
+class DSSAParams(BaseModel):
+    """Parameters of DSSA (the published law has none; every default here is our documented choice).
+
+    Attributes:
+        sensing_radius_factor: Virtual sensing radius ``r_s`` as a fraction of ``r_c`` (paper 6.2: 0.5).
+        field_area: Area ``A`` of the field in m² for the expected density (default: the map's free area).
+        obstacle_forces: Add forces from obstacle points seen by the range sensors (paper's experiment 2).
+        obstacle_gain: Weight of an obstacle point relative to a neighbour.
+        oscillation_limit: Direction reversals within ``oscillation_radius`` after which a router stops.
+        oscillation_radius: Radius of the oscillation region as a fraction of ``r_c``.
+        stable_fraction: A step shorter than this fraction of the maximum step counts as standing still.
+        stable_steps: Steps of standing still in a row after which a router stops.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    sensing_radius_factor: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.5
+    field_area: _Positive | None = None
+    obstacle_forces: StrictBool = True
+    obstacle_gain: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
+    oscillation_limit: Annotated[StrictInt, Field(ge=1)] = 10
+    oscillation_radius: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.05
+    stable_fraction: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.1
+    stable_steps: Annotated[StrictInt, Field(ge=1)] = 20
+
+
+@register_algorithm("dssa")
+class DSSA(Controller):
+    """Controller of DSSA routers."""
+
+    Params = DSSAParams
+    params: DSSAParams
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        sw, p = self.swarm, self.params
+        n = len(sw)
+        self.routers = np.flatnonzero(sw.kind == Kind.ROUTER)
+        area = p.field_area if p.field_area is not None else float(np.count_nonzero(self.omap.free)) * (
+            self.omap.resolution**2)
+        nodes = int(np.count_nonzero(sw.kind != Kind.AGENT))
+        r_s = p.sensing_radius_factor * self.r_c
+        self.mu = nodes * np.pi * r_s**2 / area
+        self.last_step = np.zeros((n, 2))
+        self.anchor = sw.xy.copy()
+        self.reversals = np.zeros(n, dtype=np.int64)
+        self.visit_sum = sw.xy.copy()
+        self.visit_count = np.ones(n, dtype=np.int64)
+        self.still_steps = np.zeros(n, dtype=np.int64)
+        self.finishing = np.zeros(n, dtype=bool)
+        self.goal = sw.xy.copy()
+        self.before = sw.xy.copy()
+        self.stopped_by = {"oscillation": 0, "stability": 0}
+
+    @property
+    def settled(self) -> bool:  # noqa: D102
+        return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
+
+    def decide(self, step: StepInput) -> Command:  # noqa: D102
+        sw, p = self.swarm, self.params
+        movers = self.routers[sw.state[self.routers] == State.EXPLORE]
+        if len(movers) == 0:
+            return Command(movers, np.zeros(0))
+        n = len(sw)
+        links = links_of(step.table, sw.xy, movers)
+        density = np.diff(step.table.indptr)[links.row].astype(float)
+        magnitude = density / self.mu**2 * (self.r_c - links.dist)
+        force = sum_per_node(links.row, links.away * magnitude[:, None], n)
+        if p.obstacle_forces and p.obstacle_gain > 0:
+            model = int(sw.model[movers[0]])
+            scans = step.readings.of(movers, model)
+            hits = obstacle_hits(scans, sw.heading[movers], sw.models[model].sensor_range)
+            own = movers[hits.row]
+            push = p.obstacle_gain * np.diff(step.table.indptr)[own] / self.mu**2 * (self.r_c - hits.dist)
+            force += sum_per_node(own, hits.away * push[:, None], n)
+        move = force[movers]
+        fin = self.finishing[movers]
+        move[fin] = self.goal[movers[fin]] - sw.xy[movers[fin]]
+        max_step = sw.max_speed[movers] * self.dt
+        move = clamp_norm(move, max_step)
+        length = np.hypot(move[:, 0], move[:, 1])
+        sw.heading[movers] = np.where(length > 0, np.arctan2(move[:, 1], move[:, 0]), sw.heading[movers])
+        reversed_ = np.einsum("ij,ij->i", move, self.last_step[movers]) < 0
+        self.reversals[movers[reversed_ & ~fin]] += 1
+        self.before[movers] = sw.xy[movers]
+        return Command(movers, length / self.dt)
+
+    def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
+        if len(movers) == 0:
+            return
+        sw, p = self.swarm, self.params
+        xy = sw.xy[movers]
+        moved = xy - self.before[movers]
+        self.last_step[movers] = moved
+        fin = self.finishing[movers]
+        arrived = fin & ((np.hypot(*(self.goal[movers] - xy).T) <= 1e-9) | refused)
+        # oscillation bookkeeping: restart the count when the router leaves its oscillation region
+        left = np.hypot(*(xy - self.anchor[movers]).T) > p.oscillation_radius * self.r_c
+        restart = movers[left & ~fin]
+        self.anchor[restart] = sw.xy[restart]
+        self.reversals[restart] = 0
+        self.visit_sum[restart] = sw.xy[restart]
+        self.visit_count[restart] = 1
+        stay = movers[~left & ~fin]
+        self.visit_sum[stay] += sw.xy[stay]
+        self.visit_count[stay] += 1
+        oscillating = movers[~fin & ~left & (self.reversals[movers] >= p.oscillation_limit)]
+        self.finishing[oscillating] = True
+        self.goal[oscillating] = self.visit_sum[oscillating] / self.visit_count[oscillating, None]
+        self.stopped_by["oscillation"] += len(oscillating)
+        # stability: standing still for stable_steps steps in a row
+        still = np.hypot(moved[:, 0], moved[:, 1]) < p.stable_fraction * sw.max_speed[movers] * self.dt
+        self.still_steps[movers] = np.where(still, self.still_steps[movers] + 1, 0)
+        stable = ~fin & (self.still_steps[movers] >= p.stable_steps)
+        self.stopped_by["stability"] += int(np.count_nonzero(stable))
+        sw.state[movers[arrived | stable]] = State.REFERENCE
+
+    def report(self) -> dict[str, object]:
+        """How the routers stopped: by the oscillation rule or the stability rule."""
+        return {"stopped_by_oscillation": self.stopped_by["oscillation"],
+                "stopped_by_stability": self.stopped_by["stability"], "expected_density_mu": self.mu}

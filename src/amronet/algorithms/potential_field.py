@@ -1,0 +1,182 @@
+"""Potential-field spreading: Poduri & Sukhatme's constrained coverage (ICRA 2004) and Howard et al.'s plain field.
+
+The baseline the AMRoNet paper calls "potential field" (3, 5.2.1) is constrained coverage with K-connectivity.
+For the links a router hears (only within ``r_c``), with ``u_ij`` the unit vector from ``j`` to ``i``::
+
+    F_cover(i, j)  =  K_cover / d_ij^2 u_ij                   (repulsive, every link)
+    F_degree(i, j) = -K_degree / (d_ij - Q r_c)^2 u_ij        (attractive, critical links only)
+
+A router's links are *critical* when it hears ``K`` or fewer nodes: losing one would drop its degree below
+``K``. ``Q`` is the safety factor: the pull of a critical link grows without bound as it stretches toward
+``Q r_c``, so it does not break. Motion has viscous friction, integrated semi-implicitly::
+
+    a = (F - nu v) / m;   v += a dt;   |v| <= v_max;   x += v dt
+
+With ``connectivity_k = 0`` no link is ever critical and what remains is Howard, Matarić & Sukhatme's potential
+field (DARS 2002): every node and obstacle point pushes with ``k / r^2``.
+
+Published values (paper 5.2.1, from Poduri & Sukhatme): damping ``nu = 0.25`` and safety factor ``Q = 0.8``; ``K``
+= 1 is the 1-connectivity an AMRoNet needs. Our choices (the published derivation of ``K_cover`` and ``K_degree``
+was not at hand; see ``docs/baselines.md``):
+
+* ``K_cover = nu v_max r_s^2`` — two nodes at the virtual sensing radius ``r_s = 0.5 r_c`` (paper 6.2) repel
+  each other just hard enough to drive at the robot's maximum speed against the friction;
+* ``K_degree`` balances ``K_cover`` at the link length ``d* = balance_fraction Q r_c`` (default 0.75, i.e.
+  0.6 r_c): ``K_cover / d*^2 = K_degree / (Q r_c - d*)^2``;
+* mass ``m`` = 1; a single link's or obstacle point's force magnitude is capped at ``force_cap_factor nu v_max``
+  (default 4: four times the force that holds full speed against the friction) so that the singularities at
+  ``d -> 0`` and ``d -> Q r_c`` stay finite and the motion does not chatter; a critical link longer than
+  ``Q r_c`` pulls with the cap;
+* obstacles: each beam of the range sensors that sees something at distance ``d`` pushes with
+  ``K_obstacle / d^2`` (``K_obstacle = K_cover`` by default), when ``obstacle_forces`` is on (paper's
+  experiment 2).
+
+Convergence ("coming to rest"): a router whose speed stays below ``rest_fraction v_max`` for ``rest_steps`` steps
+in a row rests (state *reference*); a resting router wakes up (state *explore*) when the force on it would drive
+it faster than twice that speed. The run has converged when every router rests (:attr:`PotentialField.settled`).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
+
+from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
+from amronet.robots import Kind, State
+
+__all__ = ["PotentialField", "PotentialFieldParams"]
+
+_Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+
+class PotentialFieldParams(BaseModel):
+    """Parameters of the potential-field algorithm.
+
+    Attributes:
+        connectivity_k: ``K`` of K-connectivity; 0 is Howard et al.'s plain potential field.
+        damping: Viscous friction coefficient ``nu`` (Poduri & Sukhatme: 0.25).
+        safety_factor: ``Q`` (Poduri & Sukhatme: 0.8).
+        mass: Virtual mass ``m`` (our choice: 1).
+        sensing_radius_factor: Virtual sensing radius ``r_s`` as a fraction of ``r_c`` (paper 6.2: 0.5).
+        balance_fraction: Where cover and degree forces balance, as a fraction of ``Q r_c`` (our choice: 0.75).
+        k_cover: Override the derived ``K_cover``.
+        k_degree: Override the derived ``K_degree``.
+        obstacle_forces: Add forces from obstacle points seen by the range sensors.
+        k_obstacle: Override ``K_obstacle`` (default ``K_cover``).
+        rest_fraction: Speed below which a router counts as at rest, as a fraction of its maximum speed.
+        rest_steps: Steps at rest in a row after which a router rests.
+        force_cap_factor: Cap of a single force, in units of ``nu v_max`` (the force that holds full speed).
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    connectivity_k: Annotated[StrictInt, Field(ge=0)] = 1
+    damping: _Positive = 0.25
+    safety_factor: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.8
+    mass: _Positive = 1.0
+    sensing_radius_factor: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.5
+    balance_fraction: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.75
+    k_cover: _Positive | None = None
+    k_degree: _Positive | None = None
+    obstacle_forces: StrictBool = True
+    k_obstacle: _Positive | None = None
+    rest_fraction: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.05
+    rest_steps: Annotated[StrictInt, Field(ge=1)] = 20
+    force_cap_factor: Annotated[float, Field(gt=0, allow_inf_nan=False)] = 4.0
+
+
+@register_algorithm("potential-field")
+class PotentialField(Controller):
+    """Controller of potential-field routers."""
+
+    Params = PotentialFieldParams
+    params: PotentialFieldParams
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        sw, p = self.swarm, self.params
+        n = len(sw)
+        self.routers = np.flatnonzero(sw.kind == Kind.ROUTER)
+        v_max = float(sw.max_speed[self.routers].max(initial=0.0))
+        r_s = p.sensing_radius_factor * self.r_c
+        self.k_cover = p.k_cover if p.k_cover is not None else p.damping * v_max * r_s**2
+        q_rc = p.safety_factor * self.r_c
+        d_star = p.balance_fraction * q_rc
+        self.k_degree = p.k_degree if p.k_degree is not None else self.k_cover * (q_rc - d_star) ** 2 / d_star**2
+        self.k_obstacle = p.k_obstacle if p.k_obstacle is not None else self.k_cover
+        self.q_rc = q_rc
+        self.force_cap = p.force_cap_factor * p.damping * v_max if v_max > 0 else np.inf
+        self.velocity = np.zeros((n, 2))
+        self.obstacle_force = np.zeros((n, 2))
+        self.rest_count = np.zeros(n, dtype=np.int64)
+        self.wakeups = 0
+
+    @property
+    def settled(self) -> bool:  # noqa: D102
+        return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
+
+    def _forces(self, table, who: np.ndarray) -> np.ndarray:
+        """Net force of links (and cached obstacle forces) on robots ``who``, ``(len(who), 2)``."""
+        sw, p = self.swarm, self.params
+        n = len(sw)
+        links = links_of(table, sw.xy, who)
+        cap = self.force_cap
+        magnitude = np.minimum(self.k_cover / links.dist**2, cap)
+        if p.connectivity_k > 0:
+            critical = np.diff(table.indptr)[links.row] <= p.connectivity_k
+            slack = self.q_rc - links.dist[critical]
+            pull = np.where(slack > 0, self.k_degree / np.maximum(slack, 1e-12) ** 2, cap)
+            magnitude[critical] -= np.minimum(pull, cap)
+        force = sum_per_node(links.row, links.away * magnitude[:, None], n)
+        return force[who] + self.obstacle_force[who]
+
+    def decide(self, step: StepInput) -> Command:  # noqa: D102
+        sw, p = self.swarm, self.params
+        state = sw.state[self.routers]
+        sensed = self.routers[state == State.EXPLORE]  # sensed this step; woken routers use their last reading
+        if p.obstacle_forces and len(sensed):
+            model = int(sw.model[sensed[0]])
+            scans = step.readings.of(sensed, model)
+            hits = obstacle_hits(scans, sw.heading[sensed], sw.models[model].sensor_range)
+            push = np.minimum(self.k_obstacle / hits.dist**2, self.force_cap)
+            self.obstacle_force[sensed] = sum_per_node(hits.row, hits.away * push[:, None], len(sensed))
+        resting = self.routers[state == State.REFERENCE]
+        v_rest = p.rest_fraction * sw.max_speed
+        if len(resting):
+            f = self._forces(step.table, resting)
+            wake = np.hypot(f[:, 0], f[:, 1]) > p.damping * 2 * v_rest[resting]
+            woken = resting[wake]
+            sw.state[woken] = State.EXPLORE
+            self.rest_count[woken] = 0
+            self.wakeups += len(woken)
+        movers = self.routers[sw.state[self.routers] == State.EXPLORE]
+        if len(movers) == 0:
+            return Command(movers, np.zeros(0))
+        force = self._forces(step.table, movers)
+        v = self.velocity[movers]
+        v += (force - p.damping * v) / p.mass * self.dt
+        v = clamp_norm(v, sw.max_speed[movers])
+        self.velocity[movers] = v
+        speed = np.hypot(v[:, 0], v[:, 1])
+        sw.heading[movers] = np.where(speed > 0, np.arctan2(v[:, 1], v[:, 0]), sw.heading[movers])
+        return Command(movers, speed)
+
+    def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
+        if len(movers) == 0:
+            return
+        sw, p = self.swarm, self.params
+        self.velocity[movers[refused]] = 0.0
+        speed = np.hypot(*self.velocity[movers].T)
+        slow = speed < p.rest_fraction * sw.max_speed[movers]
+        self.rest_count[movers] = np.where(slow, self.rest_count[movers] + 1, 0)
+        rest = movers[self.rest_count[movers] >= p.rest_steps]
+        sw.state[rest] = State.REFERENCE
+        self.velocity[rest] = 0.0
+
+    def report(self) -> dict[str, object]:
+        """The force constants used and how often resting routers woke up."""
+        return {"k_cover": self.k_cover, "k_degree": self.k_degree, "k_obstacle": self.k_obstacle,
+                "wakeups": self.wakeups}

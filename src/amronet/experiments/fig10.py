@@ -1,0 +1,273 @@
+"""Paper Figs. 10 and 11: coverage over time of self-spreading, DSSA and the potential field (paper 5.2.1).
+
+30 routers start at random in the 1 m x 1 m base region at the centre of a 6 m x 6 m field (``open-6x6`` for
+Fig. 10, ``obstacles-6x6`` for Fig. 11), with the immobile reference node at the origin and ``r_c`` = 1 m. Run
+``k`` of every algorithm uses the same seed, hence the same initial configuration: the comparison is paired.
+As in the paper, forces from obstacles are added to DSSA and the potential field only in the obstacle
+experiment (Fig. 11); walls still stop the robots in Fig. 10.
+
+A run that settles (no router will move again) ends early; its last value holds for the rest of the horizon,
+which is exact because nothing changes any more. Besides coverage (Eq. 1) we report *connected coverage*,
+the area covered by nodes with a path to the base station, the part an agent can use.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from amronet.experiments.common import Claim, claims_markdown, csv_text, write_outputs
+from amronet.experiments.runner import run_jobs
+from amronet.experiments.stats import mean_ci, mean_ci_columns
+
+__all__ = ["ALGORITHMS", "run_coverage_over_time"]
+
+ALGORITHMS = ("self-spreading", "dssa", "potential-field")
+"""The three algorithms of Figs. 10 and 11, in the paper's order of presentation."""
+MAPS = {"fig10": "open-6x6", "fig11": "obstacles-6x6"}
+LABELS = {"self-spreading": "self-spreading", "dssa": "DSSA", "potential-field": "potential field (K = 1)"}
+EARLY_S = 10.0
+"""'Initially' in the paper's claim that self-spreading starts lower: the first ``EARLY_S`` seconds."""
+
+
+def spreading_scenario(map_name: str, algorithm: str, obstacle_forces: bool, time_limit: float) -> dict[str, Any]:
+    """The scenario of paper 5.2 for one algorithm, as plain data."""
+    params: dict[str, Any] = {"triangular": "local"} if algorithm == "self-spreading" else {
+        "obstacle_forces": obstacle_forces}
+    return {
+        "name": f"{algorithm}-{map_name}",
+        "map": map_name,
+        "algorithm": {"name": algorithm, "params": params},
+        "radio": {"model": "unit-disk", "r_c": 1.0},
+        "base_stations": [{"x": 0.0, "y": 0.0, "region": [1.0, 1.0]}],
+        "routers": {"count": 30, "robot": "bebot"},
+        "sim": {"dt": 0.1, "time_limit": float(time_limit), "record_every": 10, "coverage_method": "raster"},
+    }
+
+
+def run_coverage_over_time(
+    figure: str,
+    out_dir: Path,
+    runs: int = 50,
+    time_limit: float = 300.0,
+    algorithms: tuple[str, ...] = ALGORITHMS,
+    workers: int | None = None,
+    show_progress: bool = True,
+    seed: int = 0,
+    baseline_dir: Path | None = None,
+    store: Path | None = None,
+) -> dict[str, Any]:
+    """Run Fig. 10 or Fig. 11 and write its files to ``out_dir``.
+
+    Files: ``FIG_timeseries.csv`` (every run's coverage over time), ``FIG_runs.csv`` (one row per run),
+    ``FIG_table.csv``, ``FIG.png`` (mean and 95 % confidence band of coverage and connected coverage) and
+    ``FIG_claims.md``.
+
+    Args:
+        figure: ``"fig10"`` (no obstacles) or ``"fig11"`` (obstacles).
+        out_dir: Output folder (replaced atomically).
+        runs: Runs per algorithm (the paper: 50).
+        time_limit: Horizon in simulated seconds.
+        algorithms: Which algorithms to compare.
+        workers: Worker processes (default: all cores).
+        show_progress: Draw a progress bar.
+        seed: Base seed; run ``k`` uses ``seed * 100000 + k`` for every algorithm.
+        baseline_dir: For Fig. 11, the folder of a Fig. 10 run to compare final coverage with (default: the
+            sibling folder ``fig10`` of ``out_dir``, when it has a table).
+        store: Result store (SQLite) that finished runs are kept in and loaded from, when the runner supports it.
+    """
+    if figure not in MAPS:
+        raise ValueError(f"figure must be one of {sorted(MAPS)}, not {figure!r}")
+    map_name = MAPS[figure]
+    obstacles = figure == "fig11"
+    jobs = []
+    for algorithm in algorithms:
+        scenario = spreading_scenario(map_name, algorithm, obstacles, time_limit)
+        for k in range(runs):
+            jobs.append({"scenario": scenario, "seed": seed * 100_000 + k, "timeseries": True,
+                         "labels": {"figure": figure, "map": map_name, "algorithm": algorithm, "run": k}})
+    extra = {"store": store} if store is not None else {}
+    results = run_jobs(jobs, workers=workers, description=figure, show_progress=show_progress, **extra)
+
+    grid = np.arange(0.0, time_limit + 1e-9, 1.0)
+    series: dict[str, dict[str, np.ndarray]] = {a: {"coverage": [], "connected_coverage": []} for a in algorithms}
+    rows, ts_rows = [], []
+    for res in results:
+        lab, s, ts = res["labels"], res["summary"], res["timeseries"]
+        t = np.asarray(ts["t"], dtype=float)
+        for col in ("coverage", "connected_coverage"):
+            series[lab["algorithm"]][col].append(_hold(t, np.asarray(ts[col], dtype=float), grid))
+        cov = np.asarray(ts["coverage"], dtype=float)
+        rows.append({**lab, "seed": res["seed"], "coverage": round(s["coverage"], 6),
+                     "connected_coverage": round(s["connected_coverage"], 6),
+                     "coverage_at_early": round(float(_hold(t, cov, np.array([EARLY_S]))[0]), 6),
+                     "time_to_90pct_s": _time_to_fraction(t, cov, 0.9),
+                     "distance_per_router_m": round(s["mean_distance_per_router_m"], 4),
+                     "routers_connected_fraction": round(s["routers_connected_fraction"], 4),
+                     "components": s["components"], "settled_at_s": s["settled_at_s"],
+                     "stop_reason": s["stop_reason"], "wall_time_s": round(s["wall_time_s"], 3)})
+        ts_rows += [{"algorithm": lab["algorithm"], "run": lab["run"], "seed": res["seed"], "t": float(tk),
+                     "coverage": round(float(c), 6), "connected_coverage": round(float(cc), 6)}
+                    for tk, c, cc in zip(t, ts["coverage"], ts["connected_coverage"], strict=True)]
+    curves = {a: {col: np.array(v) for col, v in d.items()} for a, d in series.items()}
+    table = [_table_row(a, [r for r in rows if r["algorithm"] == a]) for a in algorithms]
+    baseline = _load_baseline(baseline_dir if baseline_dir is not None else Path(out_dir).parent / "fig10")
+    claims = _claims(figure, table, baseline if obstacles else None)
+    markdown = _markdown(figure, map_name, runs, time_limit, table, claims)
+    files = {f"{figure}_timeseries.csv": csv_text(ts_rows), f"{figure}_runs.csv": csv_text(rows),
+             f"{figure}_table.csv": csv_text(table), f"{figure}_claims.md": markdown,
+             f"{figure}.png": _figure(figure, map_name, grid, curves, runs)}
+    write_outputs(out_dir, files)
+    return {"rows": rows, "table": table, "claims": claims, "markdown": markdown, "curves": curves, "grid": grid}
+
+
+def _hold(t: np.ndarray, values: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """Values on ``grid``: the last recorded value at or before each instant (held after the run ended)."""
+    idx = np.searchsorted(t, grid + 1e-9, side="right") - 1
+    return values[np.clip(idx, 0, len(values) - 1)]
+
+
+def _time_to_fraction(t: np.ndarray, values: np.ndarray, fraction: float) -> float:
+    """First recorded time at which ``values`` reach ``fraction`` of their final value."""
+    reached = np.flatnonzero(values >= fraction * values[-1] - 1e-12)
+    return float(t[reached[0]]) if len(reached) else float("nan")
+
+
+def _table_row(algorithm: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    def stat(key: str) -> tuple[float, float]:
+        return mean_ci(np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float))
+
+    cov, cov_h = stat("coverage")
+    con, con_h = stat("connected_coverage")
+    early, early_h = stat("coverage_at_early")
+    t90, t90_h = stat("time_to_90pct_s")
+    dist, dist_h = stat("distance_per_router_m")
+    linked, linked_h = stat("routers_connected_fraction")
+    settled = [r["settled_at_s"] for r in rows if r["settled_at_s"] is not None]
+    return {"algorithm": algorithm, "runs": len(rows),
+            "coverage_mean": cov, "coverage_ci95": cov_h,
+            "connected_coverage_mean": con, "connected_coverage_ci95": con_h,
+            "coverage_early_mean": early, "coverage_early_ci95": early_h,
+            "time_to_90pct_mean_s": t90, "time_to_90pct_ci95_s": t90_h,
+            "distance_per_router_mean_m": dist, "distance_per_router_ci95_m": dist_h,
+            "routers_connected_mean": linked, "routers_connected_ci95": linked_h,
+            "runs_one_component": sum(1 for r in rows if r["components"] == 1),
+            "runs_converged": len(settled),
+            "converged_at_median_s": float(np.median(settled)) if settled else float("nan")}
+
+
+def _load_baseline(folder: Path) -> dict[str, dict[str, float]] | None:
+    import csv
+
+    path = Path(folder) / "fig10_table.csv"
+    if not path.is_file():
+        return None
+    with path.open() as fh:
+        return {r["algorithm"]: {k: float(v) for k, v in r.items() if k != "algorithm"} for r in csv.DictReader(fh)}
+
+
+def _pp(x: float) -> str:
+    return f"{100 * x:.1f} %"
+
+
+def _claims(figure: str, table: list[dict[str, Any]], baseline: dict[str, dict[str, float]] | None) -> list[Claim]:
+    by = {e["algorithm"]: e for e in table}
+    ss = by.get("self-spreading")
+    others = [e for e in table if e["algorithm"] != "self-spreading"]
+    claims: list[Claim] = []
+    if ss is None or not others:
+        return claims
+    for key, what in (("coverage", "coverage"), ("connected_coverage", "connected coverage")):
+        beaten = [e for e in others if ss[f"{key}_mean"] - ss[f"{key}_ci95"] > e[f"{key}_mean"] + e[f"{key}_ci95"]]
+        ours = "; ".join(f"{LABELS[e['algorithm']]} {_pp(e[f'{key}_mean'])} ± {_pp(e[f'{key}_ci95'])}"
+                         for e in others)
+        claims.append(Claim(f"Self-spreading ends with more {what} than the force-based algorithms",
+                            "higher" if key == "coverage" else "(not in the paper)",
+                            f"self-spreading {_pp(ss[f'{key}_mean'])} ± {_pp(ss[f'{key}_ci95'])}; {ours}",
+                            _verdict(len(beaten) == len(others), len(beaten) > 0,
+                                     "reproduced" if key == "coverage" else "holds")))
+    lower = [e for e in others if ss["coverage_early_mean"] < e["coverage_early_mean"]]
+    claims.append(Claim(f"Initially (t = {EARLY_S:g} s) self-spreading covers slightly less",
+                        "slightly lower",
+                        f"self-spreading {_pp(ss['coverage_early_mean'])}; "
+                        + "; ".join(f"{LABELS[e['algorithm']]} {_pp(e['coverage_early_mean'])}" for e in others),
+                        _verdict(len(lower) == len(others), len(lower) > 0, "reproduced")))
+    if figure == "fig11":
+        if baseline is None:
+            claims.append(Claim("Force-based algorithms degrade with obstacles, self-spreading does not",
+                                "degrade / almost the same", "no Fig. 10 table found next to this folder",
+                                "not evaluated (run fig10 first)"))
+        else:
+            drops = {e["algorithm"]: baseline[e["algorithm"]]["coverage_mean"] - e["coverage_mean"]
+                     for e in table if e["algorithm"] in baseline}
+            halfs = {e["algorithm"]: baseline[e["algorithm"]]["coverage_ci95"] + e["coverage_ci95"]
+                     for e in table if e["algorithm"] in baseline}
+            ss_same = abs(drops.get("self-spreading", np.nan)) <= max(0.02, halfs.get("self-spreading", 0.0))
+            degraded = [a for a in drops if a != "self-spreading" and drops[a] > halfs[a]
+                        and drops[a] > drops.get("self-spreading", 0.0)]
+            ours = "; ".join(f"{LABELS[a]} {'-' if d >= 0 else '+'}{_pp(abs(d))}" for a, d in drops.items())
+            claims.append(Claim("Self-spreading's final coverage is almost the same with obstacles",
+                                "almost the same", f"change from Fig. 10: {ours}",
+                                "reproduced" if ss_same else "not reproduced"))
+            n_force = len([a for a in drops if a != "self-spreading"])
+            claims.append(Claim("DSSA and the potential field degrade with obstacles (more than self-spreading)",
+                                "degrade", f"significant drops larger than self-spreading's: "
+                                f"{', '.join(LABELS[a] for a in degraded) or 'none'}",
+                                _verdict(len(degraded) == n_force, len(degraded) > 0, "reproduced")))
+    return claims
+
+
+def _verdict(all_: bool, some: bool, yes: str) -> str:
+    return yes if all_ else ("partly" if some else f"not {yes}")
+
+
+def _markdown(figure: str, map_name: str, runs: int, horizon: float, table: list[dict[str, Any]],
+              claims: list[Claim]) -> str:
+    number = figure[3:]
+    lines = [f"# Fig. {number}: coverage over time on {map_name} ({runs} runs per algorithm, {horizon:g} s)", "",
+             "| algorithm | final coverage | final connected coverage | coverage at "
+             f"{EARLY_S:g} s | time to 90 % of final (s) | distance per router (m) | routers connected to base "
+             "| runs in one component | runs converged (median time) |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for e in table:
+        conv = (f"{e['runs_converged']}/{e['runs']} ({e['converged_at_median_s']:.0f} s)" if e["runs_converged"]
+                else f"0/{e['runs']}")
+        lines.append(
+            f"| {LABELS[e['algorithm']]} | {_pp(e['coverage_mean'])} ± {_pp(e['coverage_ci95'])} | "
+            f"{_pp(e['connected_coverage_mean'])} ± {_pp(e['connected_coverage_ci95'])} | "
+            f"{_pp(e['coverage_early_mean'])} | {e['time_to_90pct_mean_s']:.0f} ± {e['time_to_90pct_ci95_s']:.0f} | "
+            f"{e['distance_per_router_mean_m']:.2f} | {_pp(e['routers_connected_mean'])} | "
+            f"{e['runs_one_component']}/{e['runs']} | {conv} |")
+    return "\n".join(lines) + "\n\n" + claims_markdown(f"The paper's claims (5.2.1, Fig. {number}) and ours", claims)
+
+
+def _figure(figure: str, map_name: str, grid: np.ndarray, curves: dict[str, dict[str, np.ndarray]],
+            runs: int) -> bytes:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10.0, 4.2))
+    FigureCanvasAgg(fig)
+    panels = (("coverage", "coverage (Eq. 1)"), ("connected_coverage", "connected coverage"))
+    for k, (col, label) in enumerate(panels):
+        ax = fig.add_subplot(1, 2, k + 1)
+        for algorithm, d in curves.items():
+            if len(d[col]) == 0:
+                continue
+            mean, half = mean_ci_columns(d[col])
+            (line,) = ax.plot(grid, 100 * mean, label=LABELS[algorithm])
+            ax.fill_between(grid, 100 * (mean - half), 100 * (mean + half), color=line.get_color(), alpha=0.25,
+                            linewidth=0)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel(f"{label} (%)")
+        ax.set_ylim(0, 100)
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="lower right")
+    fig.suptitle(f"Fig. {figure[3:]}: {map_name}, 30 routers, r_c = 1 m, mean and 95 % CI of {runs} runs")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return buf.getvalue()
