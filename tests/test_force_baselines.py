@@ -199,3 +199,39 @@ def test_same_seed_same_run(algorithm):
     b = Simulation(scenario(algorithm, map_name="obstacles-6x6", time_limit=20.0), seed=5).run()
     np.testing.assert_array_equal(a.simulation.swarm.xy, b.simulation.swarm.xy)
     np.testing.assert_array_equal(a.timeseries["coverage"], b.timeseries["coverage"])
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(2, 25), st.integers(0, 2), st.integers(0, 2**31 - 1))
+def test_compiled_constrained_coverage_matches_the_link_formula(n, k_conn, seed):
+    from amronet.algorithms.forces import constrained_coverage_forces
+
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0, 1.5, size=(n, 2))
+    table = UnitDisk(1.0).update(xy)
+    who = np.sort(rng.choice(n, size=max(1, n // 2), replace=False))
+    k_cover, k_degree, q_rc, cap = 0.0125, 0.0014, 0.8, 0.2
+    links = links_of(table, xy, who)
+    mag = np.minimum(k_cover / links.dist**2, cap)
+    critical = np.diff(table.indptr)[links.row] <= k_conn
+    slack = q_rc - links.dist
+    pull = np.where(slack > 0, np.minimum(k_degree / np.maximum(slack, 1e-12) ** 2, cap), cap)
+    mag = mag - np.where(critical, pull, 0.0)
+    expected = sum_per_node(links.row, links.away * mag[:, None], n)[who]
+    got = constrained_coverage_forces(table, xy, who, k_cover, k_degree, q_rc, cap, k_conn)
+    np.testing.assert_allclose(got, expected, atol=1e-12)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(1, 8), st.integers(0, 2**31 - 1))
+def test_compiled_obstacle_forces_match_the_hits(m, seed):
+    from amronet.algorithms.forces import inverse_square_obstacle_forces
+
+    rng = np.random.default_rng(seed)
+    scans = np.where(rng.random((m, 12)) < 0.4, rng.uniform(0.0, 0.14, (m, 12)), 0.14)
+    heading = rng.uniform(-np.pi, np.pi, m)
+    hits = obstacle_hits(scans, heading, 0.14)
+    push = np.minimum(0.0125 / hits.dist**2, 0.2)
+    expected = sum_per_node(hits.row, hits.away * push[:, None], m)
+    np.testing.assert_allclose(inverse_square_obstacle_forces(scans, heading, 0.14, 0.0125, 0.2), expected,
+                               atol=1e-12)

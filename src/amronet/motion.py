@@ -23,6 +23,7 @@ from numba import njit
 from amronet.neighbours import neighbour_csr
 from amronet.radio import NeighbourTable
 from amronet.sensing import beam_angles
+from amronet.world.gridwalk import walk_next, walk_start
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
 
@@ -128,29 +129,7 @@ def random_walk(
 def _segment_ok(clear, ox, oy, res, x0, y0, x1, y1, radius):  # pragma: no cover - numba
     """Walk every cell the segment touches (Amanatides-Woo) and require clearance >= radius in each."""
     rows, cols = clear.shape
-    c = int(math.floor((x0 - ox) / res))
-    r = int(math.floor((y0 - oy) / res))
-    c_end = int(math.floor((x1 - ox) / res))
-    r_end = int(math.floor((y1 - oy) / res))
-    dx = x1 - x0
-    dy = y1 - y0
-    step_c = 1 if dx > 0 else -1
-    step_r = 1 if dy > 0 else -1
-    inf = 1e300
-    if dx != 0.0:
-        next_x = ox + (c + (1 if dx > 0 else 0)) * res
-        t_max_x = (next_x - x0) / dx
-        t_delta_x = res / abs(dx)
-    else:
-        t_max_x = inf
-        t_delta_x = inf
-    if dy != 0.0:
-        next_y = oy + (r + (1 if dy > 0 else 0)) * res
-        t_max_y = (next_y - y0) / dy
-        t_delta_y = res / abs(dy)
-    else:
-        t_max_y = inf
-        t_delta_y = inf
+    r, c, r_end, c_end, step_r, step_c, t_x, t_y, dt_x, dt_y = walk_start(ox, oy, res, x0, y0, x1, y1)
     for _ in range(4 * (rows + cols) + 4):
         if r < 0 or r >= rows or c < 0 or c >= cols:
             return False
@@ -158,16 +137,9 @@ def _segment_ok(clear, ox, oy, res, x0, y0, x1, y1, radius):  # pragma: no cover
             return False
         if r == r_end and c == c_end:
             return True
-        if t_max_x < t_max_y:
-            if t_max_x > 1.0:
-                return True
-            c += step_c
-            t_max_x += t_delta_x
-        else:
-            if t_max_y > 1.0:
-                return True
-            r += step_r
-            t_max_y += t_delta_y
+        r, c, t_x, t_y, past_end = walk_next(r, c, step_r, step_c, t_x, t_y, dt_x, dt_y)
+        if past_end:
+            return True
     return True
 
 

@@ -17,12 +17,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from amronet.radio import NeighbourTable
 from amronet.sensing import beam_angles
 
-__all__ = ["Links", "ObstacleHits", "clamp_norm", "links_of", "obstacle_hits", "sum_per_node"]
+__all__ = ["Links", "ObstacleHits", "clamp_norm", "constrained_coverage_forces", "inverse_square_obstacle_forces",
+           "links_of", "obstacle_hits", "sum_per_node"]
 
 
 @dataclass(frozen=True)
@@ -104,3 +106,76 @@ def clamp_norm(v: np.ndarray, limit: np.ndarray | float) -> np.ndarray:
     norm = np.hypot(v[:, 0], v[:, 1])
     scale = np.minimum(1.0, np.asarray(limit) / np.maximum(norm, 1e-300))
     return v * scale[:, None]
+
+
+@numba.njit(cache=True)
+def _constrained_coverage(who, indptr, indices, dist, xy, k_cover, k_degree, q_rc, cap, k_conn, out):  # pragma: no cov
+    for m in range(len(who)):
+        i = who[m]
+        start, stop = indptr[i], indptr[i + 1]
+        critical = stop - start <= k_conn
+        fx = 0.0
+        fy = 0.0
+        for e in range(start, stop):
+            j = indices[e]
+            d = dist[e]
+            if d > 1e-12:
+                ux = (xy[i, 0] - xy[j, 0]) / d
+                uy = (xy[i, 1] - xy[j, 1]) / d
+            else:  # same convention as links_of
+                d = 1e-12
+                a = 0.618 * abs(i - j)
+                sgn = 1.0 if i > j else -1.0
+                ux = np.cos(a) * sgn
+                uy = np.sin(a) * sgn
+            mag = min(k_cover / (d * d), cap)
+            if critical:
+                slack = q_rc - d
+                mag -= cap if slack <= 0.0 else min(k_degree / (slack * slack), cap)
+            fx += mag * ux
+            fy += mag * uy
+        out[m, 0] = fx
+        out[m, 1] = fy
+
+
+def constrained_coverage_forces(table: NeighbourTable, xy: np.ndarray, who: np.ndarray, k_cover: float,
+                                k_degree: float, q_rc: float, cap: float, k_conn: int) -> np.ndarray:
+    """Net link force of Poduri & Sukhatme's constrained coverage on robots ``who`` ``(M, 2)``.
+
+    Every link pushes with ``min(k_cover / d^2, cap)``; when the robot hears ``k_conn`` or fewer nodes its links
+    are critical and also pull with ``min(k_degree / (q_rc - d)^2, cap)`` (``cap`` once stretched past
+    ``q_rc``). A compiled loop over the robots' neighbour-table rows; :func:`links_of` gives the same vectors.
+    """
+    out = np.zeros((len(who), 2))
+    _constrained_coverage(np.asarray(who, dtype=np.int64), table.indptr, table.indices, table.dist, xy,
+                          float(k_cover), float(k_degree), float(q_rc), float(cap), int(k_conn), out)
+    return out
+
+
+@numba.njit(cache=True)
+def _inverse_square_hits(scans, heading, angles, max_range, k, cap, out):  # pragma: no cover - numba
+    for m in range(scans.shape[0]):
+        fx = 0.0
+        fy = 0.0
+        for b in range(scans.shape[1]):
+            d = scans[m, b]
+            if d < max_range - 1e-9:
+                d = max(d, 1e-6)
+                mag = min(k / (d * d), cap)
+                theta = heading[m] + angles[b]
+                fx -= mag * np.cos(theta)
+                fy -= mag * np.sin(theta)
+        out[m, 0] = fx
+        out[m, 1] = fy
+
+
+def inverse_square_obstacle_forces(scans: np.ndarray, heading: np.ndarray, sensor_range: float, k: float,
+                                   cap: float) -> np.ndarray:
+    """Net push ``min(k / d^2, cap)`` of every beam that saw something, per robot ``(M, 2)`` (compiled).
+
+    The same forces as summing :func:`obstacle_hits` with that law.
+    """
+    out = np.zeros((scans.shape[0], 2))
+    _inverse_square_hits(np.ascontiguousarray(scans, dtype=float), np.asarray(heading, dtype=float),
+                         beam_angles(scans.shape[1]), float(sensor_range), float(k), float(cap), out)
+    return out

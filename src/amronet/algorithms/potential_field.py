@@ -44,7 +44,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
 from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
-from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
+from amronet.algorithms.forces import clamp_norm, constrained_coverage_forces, inverse_square_obstacle_forces
+from amronet.radio import NeighbourTable
 from amronet.robots import Kind, State
 
 __all__ = ["PotentialField", "PotentialFieldParams"]
@@ -118,20 +119,12 @@ class PotentialField(Controller):
     def settled(self) -> bool:  # noqa: D102
         return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
 
-    def _forces(self, table, who: np.ndarray) -> np.ndarray:
+    def _forces(self, table: NeighbourTable, who: np.ndarray) -> np.ndarray:
         """Net force of links (and cached obstacle forces) on robots ``who``, ``(len(who), 2)``."""
-        sw, p = self.swarm, self.params
-        n = len(sw)
-        links = links_of(table, sw.xy, who)
-        cap = self.force_cap
-        magnitude = np.minimum(self.k_cover / links.dist**2, cap)
-        if p.connectivity_k > 0:
-            critical = np.diff(table.indptr)[links.row] <= p.connectivity_k
-            slack = self.q_rc - links.dist[critical]
-            pull = np.where(slack > 0, self.k_degree / np.maximum(slack, 1e-12) ** 2, cap)
-            magnitude[critical] -= np.minimum(pull, cap)
-        force = sum_per_node(links.row, links.away * magnitude[:, None], n)
-        return force[who] + self.obstacle_force[who]
+        p = self.params
+        force = constrained_coverage_forces(table, self.swarm.xy, who, self.k_cover, self.k_degree, self.q_rc,
+                                            self.force_cap, p.connectivity_k)
+        return force + self.obstacle_force[who]
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params
@@ -140,9 +133,8 @@ class PotentialField(Controller):
         if p.obstacle_forces and len(sensed):
             model = int(sw.model[sensed[0]])
             scans = step.readings.of(sensed, model)
-            hits = obstacle_hits(scans, sw.heading[sensed], sw.models[model].sensor_range)
-            push = np.minimum(self.k_obstacle / hits.dist**2, self.force_cap)
-            self.obstacle_force[sensed] = sum_per_node(hits.row, hits.away * push[:, None], len(sensed))
+            self.obstacle_force[sensed] = inverse_square_obstacle_forces(
+                scans, sw.heading[sensed], sw.models[model].sensor_range, self.k_obstacle, self.force_cap)
         resting = self.routers[state == State.REFERENCE]
         v_rest = p.rest_fraction * sw.max_speed
         if len(resting):

@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from amronet.sensing import beam_angles
+from amronet.world.gridwalk import walk_next, walk_start
 
 __all__ = ["FREE_FLOOR", "HIT_GAIN", "OCCUPIED_CAP", "KnowledgeGrid"]
 
@@ -28,27 +29,7 @@ FREE_FLOOR = 4
 @njit(cache=True)
 def _trace(ox, oy, res, rows, cols, x0, y0, x1, y1, out_r, out_c):  # pragma: no cover - numba
     """Cells the segment crosses, in order (Amanatides-Woo); stops at the grid's edge. Returns how many."""
-    c = int(math.floor((x0 - ox) / res))
-    r = int(math.floor((y0 - oy) / res))
-    c_end = int(math.floor((x1 - ox) / res))
-    r_end = int(math.floor((y1 - oy) / res))
-    dx = x1 - x0
-    dy = y1 - y0
-    step_c = 1 if dx > 0 else -1
-    step_r = 1 if dy > 0 else -1
-    inf = 1e300
-    if dx != 0.0:
-        t_max_x = (ox + (c + (1 if dx > 0 else 0)) * res - x0) / dx
-        t_delta_x = res / abs(dx)
-    else:
-        t_max_x = inf
-        t_delta_x = inf
-    if dy != 0.0:
-        t_max_y = (oy + (r + (1 if dy > 0 else 0)) * res - y0) / dy
-        t_delta_y = res / abs(dy)
-    else:
-        t_max_y = inf
-        t_delta_y = inf
+    r, c, r_end, c_end, step_r, step_c, t_x, t_y, dt_x, dt_y = walk_start(ox, oy, res, x0, y0, x1, y1)
     n = 0
     while n < out_r.shape[0]:
         if r < 0 or r >= rows or c < 0 or c >= cols:
@@ -58,16 +39,9 @@ def _trace(ox, oy, res, rows, cols, x0, y0, x1, y1, out_r, out_c):  # pragma: no
         n += 1
         if r == r_end and c == c_end:
             break
-        if t_max_x < t_max_y:
-            if t_max_x > 1.0:
-                break
-            c += step_c
-            t_max_x += t_delta_x
-        else:
-            if t_max_y > 1.0:
-                break
-            r += step_r
-            t_max_y += t_delta_y
+        r, c, t_x, t_y, past_end = walk_next(r, c, step_r, step_c, t_x, t_y, dt_x, dt_y)
+        if past_end:
+            break
     return n
 
 
