@@ -29,6 +29,8 @@ ALGORITHMS = ("self-spreading", "dssa", "potential-field")
 """The three algorithms of Figs. 10 and 11, in the paper's order of presentation."""
 MAPS = {"fig10": "open-6x6", "fig11": "obstacles-6x6"}
 LABELS = {"self-spreading": "self-spreading", "dssa": "DSSA", "potential-field": "potential field (K = 1)"}
+DEFAULT_HORIZON_S = 300.0
+"""Simulated seconds per run (the paper does not print its horizon; self-spreading has levelled off by then)."""
 EARLY_S = 10.0
 """'Initially' in the paper's claim that self-spreading starts lower: the first ``EARLY_S`` seconds."""
 
@@ -52,7 +54,7 @@ def run_coverage_over_time(
     figure: str,
     out_dir: Path,
     runs: int = 50,
-    time_limit: float = 300.0,
+    time_limit: float | None = None,
     algorithms: tuple[str, ...] = ALGORITHMS,
     workers: int | None = None,
     show_progress: bool = True,
@@ -70,7 +72,7 @@ def run_coverage_over_time(
         figure: ``"fig10"`` (no obstacles) or ``"fig11"`` (obstacles).
         out_dir: Output folder (replaced atomically).
         runs: Runs per algorithm (the paper: 50).
-        time_limit: Horizon in simulated seconds.
+        time_limit: Horizon in simulated seconds (default 300).
         algorithms: Which algorithms to compare.
         workers: Worker processes (default: all cores).
         show_progress: Draw a progress bar.
@@ -82,6 +84,7 @@ def run_coverage_over_time(
     if figure not in MAPS:
         raise ValueError(f"figure must be one of {sorted(MAPS)}, not {figure!r}")
     map_name = MAPS[figure]
+    time_limit = DEFAULT_HORIZON_S if time_limit is None else float(time_limit)
     obstacles = figure == "fig11"
     jobs = []
     for algorithm in algorithms:

@@ -1,0 +1,43 @@
+import csv
+
+import numpy as np
+from PIL import Image
+
+from amronet.experiments.fig10 import _hold, _time_to_fraction, run_coverage_over_time
+
+
+def test_hold_carries_the_last_value_past_the_end():
+    t = np.array([0.0, 1.0, 2.0])
+    v = np.array([0.1, 0.5, 0.7])
+    np.testing.assert_allclose(_hold(t, v, np.array([0.0, 0.5, 1.0, 2.0, 5.0])), [0.1, 0.1, 0.5, 0.7, 0.7])
+    assert _time_to_fraction(t, v, 0.9) == 2.0
+    assert _time_to_fraction(t, np.array([0.1, 0.95, 1.0]), 0.9) == 1.0
+
+
+def test_fig10_and_fig11_small(tmp_path):
+    f10 = run_coverage_over_time("fig10", tmp_path / "fig10", runs=2, time_limit=20.0, workers=1,
+                                 show_progress=False)
+    out = tmp_path / "fig10"
+    rows = list(csv.DictReader((out / "fig10_runs.csv").open()))
+    assert len(rows) == 6 and {r["algorithm"] for r in rows} == {"self-spreading", "dssa", "potential-field"}
+    # paired comparison: run k of every algorithm starts from the same seed
+    assert {(r["run"], r["seed"]) for r in rows} == {("0", "0"), ("1", "1")}
+    ts = list(csv.DictReader((out / "fig10_timeseries.csv").open()))
+    assert {r["algorithm"] for r in ts} == {"self-spreading", "dssa", "potential-field"}
+    assert all(0.0 <= float(r["connected_coverage"]) <= float(r["coverage"]) + 1e-9 <= 1.0 + 1e-9 for r in ts)
+    for algorithm, curves in f10["curves"].items():
+        assert curves["coverage"].shape == (2, 21), algorithm
+        assert curves["coverage"][:, -1].mean() > curves["coverage"][:, 0].mean()  # everybody spreads
+    text = (out / "fig10_claims.md").read_text()
+    assert "| claim (paper) |" in text and "slightly lower" in text
+    assert Image.open(out / "fig10.png").size[0] > 800
+
+    # Fig. 11 finds the Fig. 10 table next to it and compares final coverage
+    f11 = run_coverage_over_time("fig11", tmp_path / "fig11", runs=2, time_limit=20.0, workers=1,
+                                 show_progress=False)
+    claims = {c.claim: c for c in f11["claims"]}
+    assert "almost the same" in " ".join(c.paper for c in claims.values())
+    assert all("not evaluated" not in c.verdict for c in claims.values())
+    alone = run_coverage_over_time("fig11", tmp_path / "elsewhere" / "x", runs=1, time_limit=5.0, workers=1,
+                                   show_progress=False, algorithms=("self-spreading", "dssa"))
+    assert any("not evaluated" in c.verdict for c in alone["claims"])
