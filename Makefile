@@ -4,19 +4,31 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench clean browser
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,cluster]'
 	touch $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/amronet run --preset self-spreading-autolab --seed 1 --out runs/demo
 	@echo "picture: runs/demo/snapshot.png"
 
-test: $(STAMP)
+# The replay viewer's test drives a real headless Chromium (Debian's package; Playwright from PyPI drives it).
+# Set AMRONET_SKIP_BROWSER=1 to skip both the install and that test.
+CHROMIUM := /usr/bin/chromium
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+browser:
+	@if [ "$(AMRONET_SKIP_BROWSER)" != 1 ] && [ ! -x $(CHROMIUM) ]; then \
+		echo "installing Debian's chromium for the replay viewer's browser test"; \
+		$(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive \
+		$(SUDO) apt-get install -y -qq --no-install-recommends chromium >/dev/null; \
+	fi
+
+test: $(STAMP) browser
 	$(BIN)/ruff check src tests benchmarks tools
 	MPLBACKEND=Agg $(BIN)/python -m pytest
 

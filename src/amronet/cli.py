@@ -28,12 +28,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario if args.scenario is not None else args.preset, overrides)
     sim = Simulation(scenario, args.seed)
     quiet = args.quiet
+    from amronet.cli_viz import make_recorder
+
+    recorder = make_recorder(args, scenario)
 
     def progress(t: float, limit: float) -> None:
         if not quiet and sys.stderr.isatty():
             print(f"\r  t = {t:7.1f} s / {limit:g} s", end="", file=sys.stderr, flush=True)
 
-    result = sim.run(progress=progress)
+    result = sim.run(progress=progress, recorder=recorder)
     if not quiet and sys.stderr.isatty():
         print(file=sys.stderr)
     result.save(args.out, snapshot=not args.no_snapshot)
@@ -46,7 +49,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"  coverage {100 * s['coverage']:.2f} %, connected coverage {100 * s['connected_coverage']:.2f} % "
               f"of {s['reachable_area_m2']:.1f} m² reachable ({s['coverage_method']})")
         print(f"  wrote {args.out}/: summary.json timeseries.csv network.json"
-              + ("" if args.no_snapshot else " snapshot.png"))
+              + ("" if args.no_snapshot else " snapshot.png") + (" recording.npz" if recorder.full else ""))
     return 0
 
 
@@ -103,22 +106,17 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from amronet.experiments.fig5 import run_fig5
-    from amronet.experiments.fig7 import run_fig7
+    from amronet.experiments.registry import FIGURES
 
-    out = Path(args.out or f"runs/{args.figure}")
-    common = {"workers": args.workers, "show_progress": not args.quiet, "explorer": args.explorer,
-              "time_limit": args.time_limit}
-    if args.figure == "fig5":
-        kw = {"radii": (6, 10), "agents": (1, 2), "starts": 2} if args.quick else {}
-        report = run_fig5(out, **common, **kw)
-    else:
-        kw = {"bases": (1, 2), "agents": (1, 2), "runs": 2} if args.quick else {}
-        report = run_fig7(out, **common, **kw)
-    if not args.quiet:
-        print(report["markdown"])
-        print(f"wrote {out}/: {args.figure}_runs.csv {args.figure}_table.csv {args.figure}.png "
-              f"{args.figure}_claims.md")
+    names = list(FIGURES) if args.figure == "all" else [args.figure]
+    for name in names:
+        out = Path(args.out or "runs") / name if args.figure == "all" else Path(args.out or f"runs/{name}")
+        store = Path(args.store) if args.store else out / "results.sqlite"
+        report = FIGURES[name].run(out, quick=args.quick, workers=args.workers, show_progress=not args.quiet,
+                                   explorer=args.explorer, time_limit=args.time_limit, store=store)
+        if not args.quiet:
+            print(report["markdown"])
+            print(f"wrote {out}/: {name}_runs.csv {name}_table.csv {name}.png {name}_claims.md; runs in {store}")
     return 0
 
 
@@ -134,6 +132,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", required=True, help="output folder (replaced atomically)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field, e.g. radio.r_c=1.5")
     r.add_argument("--no-snapshot", action="store_true", help="skip snapshot.png")
+    r.add_argument("--record", action="store_true", help="also write recording.npz (for animate, replay, snapshot)")
+    r.add_argument("--record-every", type=int, metavar="K", help="record every K-th step (default sim.record_every)")
     r.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     r.set_defaults(func=_cmd_run)
 
@@ -153,13 +153,26 @@ def _parser() -> argparse.ArgumentParser:
     from amronet.cli_patterns import add_parser as add_patterns_parser
 
     add_patterns_parser(sub)
+    from amronet.cli_sweep import add_parsers as add_sweep_parsers
+
+    add_sweep_parsers(sub)
+    from amronet.cli_plan import add_parsers as add_plan_parsers
+
+    add_plan_parsers(sub)
+    from amronet.cli_viz import add_parsers as add_viz_parsers
+
+    add_viz_parsers(sub)
 
     rp = sub.add_parser("reproduce", help="run one of the paper's experiments (figures) end to end")
-    rp.add_argument("figure", choices=["fig5", "fig7"], help="which figure")
+    from amronet.experiments.registry import FIGURES
+
+    rp.add_argument("figure", choices=[*FIGURES, "all"], help="which figure (all: every one, into OUT/FIGURE)")
     rp.add_argument("--out", help="output folder (default runs/FIGURE)")
+    rp.add_argument("--store", help="result store: finished runs are kept and reused (default OUT/results.sqlite)")
     rp.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     rp.add_argument("--explorer", default="frontier", help="agents' exploration strategy (default frontier)")
-    rp.add_argument("--time-limit", type=float, default=6000.0, help="simulated seconds per run at most")
+    rp.add_argument("--time-limit", type=float, default=None,
+                    help="simulated seconds per run at most (default: the figure's own, 6000 for fig5 and fig7)")
     rp.add_argument("--quick", action="store_true", help="a small subset, for a smoke test")
     rp.add_argument("-q", "--quiet", action="store_true")
     rp.set_defaults(func=_cmd_reproduce)

@@ -23,6 +23,7 @@ from amronet.errors import AmronetError
 from amronet.robots import KIND_NAMES, STATE_NAMES, Kind
 
 if TYPE_CHECKING:
+    from amronet.recording import Recorder
     from amronet.sim import Metrics, Simulation
 
 __all__ = ["RunResult", "write_file_atomically", "write_files_atomically"]
@@ -39,12 +40,15 @@ class RunResult:
         timeseries: Column name → array, one entry per recorded step (``timeseries.csv``).
         network: The ``network.json`` content: ``r_c``, ``map`` and ``nodes``.
         simulation: The finished simulation (world, swarm, neighbour table) for pictures and further analysis.
+        recorder: The :class:`~amronet.recording.Recorder` the run was given, if any: agents' trails for the
+            snapshot and, when it keeps whole frames, ``recording.npz``.
     """
 
     summary: dict[str, Any]
     timeseries: dict[str, np.ndarray]
     network: dict[str, Any]
     simulation: Simulation
+    recorder: Recorder | None = None
 
     @classmethod
     def from_simulation(cls, sim: Simulation, final: Metrics, wall_time_s: float) -> RunResult:
@@ -76,6 +80,9 @@ class RunResult:
             "reachable_area_m2": sim.world.coverage.area_m2,
             "mean_distance_per_router_m": float(sw.distance[routers].mean()) if routers.any() else 0.0,
             "states": sim.state_counts(),
+            "settled_at_s": None if sim.settled_at is None else round(sim.settled_at, 9),
+            "routers_connected_fraction": _routers_connected(sim),
+            **sim.controller.report(),
             "wall_time_s": wall_time_s,
             "amronet_version": __version__,
             "scenario": sc.to_dict(),
@@ -134,6 +141,7 @@ class RunResult:
             reachable=sim.world.reachable,
             title=title,
             dpi=dpi,
+            trails=self.recorder.trails() if self.recorder is not None else None,
         )
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=dpi)
@@ -148,6 +156,8 @@ class RunResult:
         }
         if snapshot:
             out["snapshot.png"] = self.snapshot_png()
+        if self.recorder is not None and self.recorder.full:
+            out["recording.npz"] = self.recorder.npz_bytes(self.simulation)
         return out
 
     def save(self, out_dir: str | Path, snapshot: bool = True) -> Path:
@@ -155,10 +165,12 @@ class RunResult:
         return write_files_atomically(Path(out_dir), self.files(snapshot=snapshot))
 
 
-def write_files_atomically(out_dir: Path, files: dict[str, bytes]) -> Path:
+def write_files_atomically(out_dir: Path, files: dict[str, bytes], keep: tuple[str, ...] = ()) -> Path:
     """Write ``files`` as the complete content of ``out_dir``, all at once.
 
-    An existing ``out_dir`` is replaced only after the new content is complete on disk.
+    An existing ``out_dir`` is replaced only after the new content is complete on disk. Files of the old
+    folder named in ``keep`` (e.g. a result store) are carried over by hard link (or copy), so they exist at
+    every moment.
 
     Raises:
         AmronetError: ``out_dir`` exists and is not a folder, or cannot be written.
@@ -178,6 +190,12 @@ def write_files_atomically(out_dir: Path, files: dict[str, bytes]) -> Path:
                 fh.write(content)
                 fh.flush()
                 os.fsync(fh.fileno())
+        for name in keep:
+            if name not in files and (out_dir / name).is_file():
+                try:
+                    os.link(out_dir / name, staging / name)
+                except OSError:
+                    shutil.copy2(out_dir / name, staging / name)
         old = None
         if out_dir.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=parent))
@@ -209,3 +227,15 @@ def write_file_atomically(path: Path, write) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def _routers_connected(sim: Simulation) -> float:
+    """Fraction of the routers that have a multi-hop path to a base station through the network."""
+    from amronet.network import connected_to
+
+    sw = sim.swarm
+    routers = sw.kind == Kind.ROUTER
+    if not routers.any():
+        return 1.0
+    linked = connected_to(sim.table, sim.bases, sw.kind != Kind.AGENT)
+    return float(np.count_nonzero(linked & routers) / np.count_nonzero(routers))

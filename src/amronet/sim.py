@@ -35,6 +35,7 @@ from amronet.sensing import range_scan
 from amronet.world.occupancy import OccupancyMap
 
 if TYPE_CHECKING:
+    from amronet.recording import Recorder
     from amronet.results import RunResult
 
 __all__ = ["Metrics", "Simulation"]
@@ -93,6 +94,8 @@ class Simulation:
         self.agents_connected_window = self._agents_connected()
         self.agents_connected_min = self.agents_connected_window
         self.phase_seconds = {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0}
+        self.settled_at: float | None = 0.0 if self.controller.settled else None
+        """Start of the final stretch of time in which no router moved (``None`` while one still moves)."""
 
     @property
     def t(self) -> float:
@@ -190,25 +193,34 @@ class Simulation:
         return m
 
     # -- the run ---------------------------------------------------------------------------------------------
-    def run(self, progress: Callable[[float, float], None] | None = None) -> RunResult:
+    def run(self, progress: Callable[[float, float], None] | None = None, recorder: Recorder | None = None
+            ) -> RunResult:
         """Run until a stop condition holds and return a :class:`~amronet.results.RunResult`.
 
         The coverage target is checked at recorded steps (every ``record_every`` steps); settling and the time
         limit after every step. A run that reaches its target or settles *terminates*; one that hits the time
-        limit first is *truncated*.
+        limit first is *truncated*. An optional :class:`~amronet.recording.Recorder` is shown the simulation in
+        the metrics phase of every step (it keeps every k-th step and the last) and ends up in the result.
         """
         from amronet.results import RunResult
 
         sim = self.scenario.sim
         start = time.perf_counter()
         reached = self._reached(self._record())
+        if recorder is not None:
+            recorder.observe(self)
         max_steps = round(sim.time_limit / self.dt)
         while self.stop_reason is None:
             if reached:
                 self.stop_reason = "coverage_target"
                 break
             self.step()
-            settled = sim.stop_when_settled and self.controller.settled
+            now_settled = self.controller.settled
+            if not now_settled:
+                self.settled_at = None
+            elif self.settled_at is None:
+                self.settled_at = self.t
+            settled = sim.stop_when_settled and now_settled
             at_limit = self.steps >= max_steps
             if self.steps % sim.record_every == 0 or settled or at_limit:
                 reached = self._reached(self._record())
@@ -220,8 +232,12 @@ class Simulation:
                 self.stop_reason = "settled"
             elif at_limit:
                 self.stop_reason = "time_limit"
+            if recorder is not None:
+                recorder.observe(self)
         final = self.metrics(method=sim.coverage_method)
-        return RunResult.from_simulation(self, final, wall_time_s=time.perf_counter() - start)
+        result = RunResult.from_simulation(self, final, wall_time_s=time.perf_counter() - start)
+        result.recorder = recorder
+        return result
 
     @property
     def terminated(self) -> bool:

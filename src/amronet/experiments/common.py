@@ -10,7 +10,7 @@ from typing import Any
 
 from amronet.results import write_files_atomically
 
-__all__ = ["Claim", "agent_scenario", "claims_markdown", "csv_text", "write_outputs"]
+__all__ = ["STORE_FILES", "Claim", "agent_scenario", "claims_markdown", "csv_text", "write_outputs"]
 
 CORNERS = ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))
 """Base-station positions at the corners of the 32 m x 32 m floors (paper 5.1: 'located at the corner')."""
@@ -60,6 +60,11 @@ def csv_text(rows: list[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
+STORE_FILES = ("results.sqlite", "results.sqlite-wal")
+"""The default result store of ``amronet reproduce`` (in the output folder), kept when the folder is replaced."""
+
+
 def write_outputs(out_dir: Path, files: dict[str, bytes | str]) -> Path:
-    """Write an experiment's files atomically as the content of ``out_dir``."""
-    return write_files_atomically(Path(out_dir), {k: v.encode() if isinstance(v, str) else v for k, v in files.items()})
+    """Write an experiment's files atomically as the content of ``out_dir`` (keeping its result store)."""
+    return write_files_atomically(Path(out_dir), {k: v.encode() if isinstance(v, str) else v for k, v in files.items()},
+                                  keep=STORE_FILES)

@@ -49,6 +49,7 @@ def run_fig5(
     workers: int | None = None,
     show_progress: bool = True,
     seed: int = 0,
+    store: str | Path | None = None,
 ) -> dict[str, Any]:
     """Run the Fig. 5 experiment and write ``fig5_runs.csv``, ``fig5.png`` and ``fig5_claims.md`` to ``out_dir``.
 
@@ -63,7 +64,7 @@ def run_fig5(
                     labels = {"map": map_name, "r_c": float(r), "agents": n_a, "start": s}
                     jobs.append({"scenario": agent_scenario(map_name, r, (loc,), n_a, explorer, time_limit),
                                  "seed": seed * 100_000 + len(jobs), "labels": labels})
-    results = run_jobs(jobs, workers=workers, description="fig5", show_progress=show_progress)
+    results = run_jobs(jobs, workers=workers, description="fig5", show_progress=show_progress, store=store)
     rows = []
     for res in results:
         s = res["summary"]

@@ -1,20 +1,23 @@
-"""Run many (scenario, seed) jobs on a local process pool, with a progress bar, in a deterministic order.
+"""Run many (scenario, seed) jobs on a process pool or a Dask cluster, with a progress bar, in a deterministic order.
 
 Each job is a plain dict (scenario data, seed and labels), so it pickles cheaply; each worker runs it without
 writing files and returns the run's summary (and, when asked, its time series). Results come back in job order
 whatever the order they finish in.
+
+With ``store`` (a path), the jobs form a sweep of the result store (:mod:`amronet.sweeps.store`): jobs whose
+resolved scenario and seed are already done there are loaded instead of run, and every new run is committed as
+it finishes, so an interrupted figure resumes where it stopped.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
 from typing import Any
 
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from amronet.sweeps.executors import Executor, LocalExecutor, default_workers
 
-__all__ = ["Job", "run_jobs"]
+__all__ = ["Job", "default_workers", "run_job", "run_jobs"]
 
 Job = dict[str, Any]
 """``{"scenario": dict, "seed": int, "labels": dict, "timeseries": bool}``."""
@@ -32,51 +35,120 @@ def run_job(job: Job) -> dict[str, Any]:
     return out
 
 
-def default_workers() -> int:
-    """Worker processes by default: the cores this process may use."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-
-
 def run_jobs(
     jobs: Sequence[Job],
     workers: int | None = None,
     description: str = "runs",
     show_progress: bool = True,
     on_result: Callable[[int, dict[str, Any]], None] | None = None,
+    store: str | Path | None = None,
+    executor: Executor | None = None,
 ) -> list[dict[str, Any]]:
     """Run jobs, in parallel when ``workers > 1``; results in job order.
 
     Args:
         jobs: The jobs.
         workers: Worker processes (default: the cores available); 1 runs in this process.
-        description: Label of the progress bar.
+        description: Label of the progress bar (and the sweep's name in the store).
         show_progress: Draw a progress bar (on stderr).
-        on_result: Called with ``(index, result)`` as each job finishes.
+        on_result: Called with ``(index, result)`` as each job finishes (or is loaded from the store).
+        store: Result store (SQLite path) to load finished runs from and commit new ones to.
+        executor: Where the jobs run (default: a local process pool with ``workers`` processes).
+
+    Raises:
+        AmronetError: With a store, some runs failed (they are recorded; the next call retries them).
     """
-    workers = workers or default_workers()
     if jobs:  # fail fast, in this process, on a scenario that cannot start
         from amronet.scenario import load_scenario
         from amronet.sim import Simulation
 
         Simulation(load_scenario(jobs[0]["scenario"]), jobs[0]["seed"])
+    own = executor is None
+    executor = executor or LocalExecutor(workers or default_workers())
+    try:
+        if store is not None:
+            return _run_with_store(jobs, Path(store), executor, description, show_progress, on_result)
+        return _run_plain(jobs, executor, description, show_progress, on_result)
+    finally:
+        if own:
+            executor.close()
+
+
+def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_progress: bool,
+               on_result: Callable[[int, dict[str, Any]], None] | None) -> list[dict[str, Any]]:
+    from amronet.sweeps.engine import progress_bar
+
     results: list[dict[str, Any] | None] = [None] * len(jobs)
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-               TextColumn("eta"), TimeRemainingColumn())
-    with Progress(*columns, disable=not show_progress, transient=False) as progress:
-        task = progress.add_task(description, total=len(jobs))
-        if workers == 1 or len(jobs) <= 1:
-            for k, job in enumerate(jobs):
-                results[k] = run_job(job)
-                if on_result:
-                    on_result(k, results[k])
-                progress.advance(task)
-        else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = {pool.submit(run_job, job): k for k, job in enumerate(jobs)}
-                for fut in as_completed(futures):
-                    k = futures[fut]
-                    results[k] = fut.result()
-                    if on_result:
-                        on_result(k, results[k])
-                    progress.advance(task)
+    slots = executor.slots if jobs else 0
+    with progress_bar(show_progress) as bar:
+        task = bar.add_task(description, total=len(jobs), done=0, failed=0, running=min(slots, len(jobs)))
+        for n, (k, result) in enumerate(executor.imap_unordered(run_job, list(jobs)), start=1):
+            results[k] = result
+            if on_result:
+                on_result(k, result)
+            bar.update(task, advance=1, done=n, running=min(slots, len(jobs) - n))
+    return [r for r in results if r is not None]
+
+
+def _run_with_store(jobs: Sequence[Job], store_path: Path, executor: Executor, description: str,
+                    show_progress: bool, on_result: Callable[[int, dict[str, Any]], None] | None
+                    ) -> list[dict[str, Any]]:
+    from amronet.errors import AmronetError
+    from amronet.scenario import load_scenario
+    from amronet.sweeps.engine import execute_into_store, pending_runs
+    from amronet.sweeps.identity import canonical_json, resolve_scenario, scenario_hash
+    from amronet.sweeps.store import ResultStore, check_store_path
+
+    check_store_path(store_path)
+    resolved: dict[str, tuple[str, dict[str, Any]]] = {}
+    keys = []
+    for job in jobs:
+        text = canonical_json(job["scenario"])
+        if text not in resolved:
+            sc = resolve_scenario(load_scenario(job["scenario"]))
+            resolved[text] = (scenario_hash(sc), sc)
+        keys.append(resolved[text])
+    results: list[dict[str, Any] | None] = [None] * len(jobs)
+    by_key: dict[tuple[str, int], list[int]] = {}
+    for k, ((h, _), job) in enumerate(zip(keys, jobs, strict=True)):
+        by_key.setdefault((h, int(job["seed"])), []).append(k)
+
+    def deliver(k: int, loaded: dict[str, Any]) -> None:
+        job = jobs[k]
+        out = {"labels": job.get("labels", {}), "seed": job["seed"], "summary": loaded["summary"]}
+        if job.get("timeseries"):
+            out["timeseries"] = loaded["timeseries"]
+        results[k] = out
+        if on_result:
+            on_result(k, out)
+
+    with ResultStore(store_path) as store:
+        spec = {"kind": "jobs", "name": description,
+                "jobs": [[h, int(job["seed"]), job.get("labels", {})] for (h, _), job in zip(keys, jobs, strict=True)]}
+        links = [(h, int(job["seed"]), k, job.get("labels", {})) for k, ((h, _), job) in enumerate(zip(keys, jobs,
+                                                                                                      strict=True))]
+        store.add_sweep(description, spec, links)
+        runs = [(h, int(job["seed"]), sc) for (h, sc), job in zip(keys, jobs, strict=True)]
+        pending = pending_runs(store, runs, retry_failed=True)
+        waiting = {(h, s) for h, s, _ in pending}
+        for (h, s), ks in by_key.items():
+            if (h, s) not in waiting:
+                loaded = store.load(h, s)
+                for k in ks:
+                    deliver(k, loaded)
+
+        def arrived(h: str, seed: int, outcome: dict[str, Any]) -> None:
+            if outcome["status"] == "done":
+                loaded = store.load(h, seed)
+                for k in by_key[(h, seed)]:
+                    deliver(k, loaded)
+
+        _, failed = execute_into_store(store, pending, executor, description=description,
+                                       show_progress=show_progress, total=len(by_key), on_outcome=arrived,
+                                       already=(len(by_key) - len(pending), 0))
+        if failed:
+            errors = [r["error"] for r in store.runs() if r["status"] == "failed" and (r["scenario_hash"],
+                                                                                       r["seed"]) in waiting]
+            raise AmronetError(f"{description}: {failed} of {len(by_key)} runs failed (recorded in "
+                               f"{str(store_path)!r}; run again to retry them); first error: {errors[0]}")
     return [r for r in results if r is not None]

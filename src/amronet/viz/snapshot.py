@@ -12,7 +12,7 @@ Example:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping
 from pathlib import Path
 
 import matplotlib as mpl
@@ -24,8 +24,9 @@ from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
-from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
+from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, marker_handle
+from amronet.viz.validate import KINDS, STATES, check_mask, validate_nodes
 from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
@@ -37,12 +38,6 @@ __all__ = [
     "save_snapshot",
     "snapshot_figure",
 ]
-
-KINDS: tuple[str, ...] = ("base", "router", "agent")
-"""Allowed values of the ``kind`` array."""
-
-STATES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent")
-"""Allowed values of the ``state`` array."""
 
 MAP_COLOURS: dict[str, tuple[int, int, int]] = {
     "free": (255, 255, 255),
@@ -83,7 +78,7 @@ _DISK_EDGE_ALPHA = 0.4
 # Fixed layout, in inches.
 _AX_LONG_SIDE = 6.0
 _AX_MIN_SIDE = 1.5
-_MARGIN_LEFT, _MARGIN_BOTTOM, _MARGIN_TOP, _GAP = 0.8, 0.6, 0.45, 0.15
+_MARGIN_LEFT, _MARGIN_BOTTOM, _MARGIN_TOP = 0.8, 0.6, 0.45
 _MIN_FIG_HEIGHT = 4.6
 
 
@@ -101,18 +96,6 @@ def _map_image(omap: OccupancyMap, reachable: np.ndarray | None, covered: np.nda
     if covered is not None:
         cat[counted & ~covered] = 4
     return _LUT[cat]
-
-
-def _check_mask(name: str, mask: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
-    """Return ``mask`` as a boolean array of ``shape``, or raise ``ValueError`` naming it."""
-    if mask is None:
-        return None
-    mask = np.asarray(mask)
-    if mask.shape != tuple(shape):
-        raise ValueError(f"{name} must have the map's shape {tuple(shape)}, got {mask.shape}")
-    if mask.dtype != np.bool_:
-        raise ValueError(f"{name} must be a boolean mask, got dtype {mask.dtype}")
-    return mask
 
 
 def draw_map(
@@ -141,8 +124,8 @@ def draw_map(
     Raises:
         ValueError: If a mask has the wrong shape or is not boolean.
     """
-    reachable = _check_mask("reachable", reachable, omap.shape)
-    covered = _check_mask("covered", covered, omap.shape)
+    reachable = check_mask("reachable", reachable, omap.shape)
+    covered = check_mask("covered", covered, omap.shape)
     im = ax.imshow(
         _map_image(omap, reachable, covered),
         extent=omap.extent,
@@ -172,24 +155,9 @@ def _new_figure(omap: OccupancyMap, right: float, dpi: float) -> tuple[Figure, A
     return fig, ax
 
 
-def _add_legend(fig: Figure, ax: Axes, handles: Sequence[Patch | Line2D]) -> None:
-    """Place a legend of ``handles`` outside the axes, to the right of its top edge."""
-    _, _, x1, y1 = ax.get_position().extents
-    fig_w = fig.get_figwidth()
-    fig.legend(
-        handles=list(handles),
-        loc="upper left",
-        bbox_to_anchor=(x1 + _GAP / fig_w, y1),
-        fontsize=8,
-        frameon=False,
-        borderaxespad=0.0,
-        handlelength=1.6,
-    )
-
-
 def _map_patch(category: str) -> Patch:
     """Legend patch of one map cell category."""
-    return _legend_patch(tuple(c / 255 for c in MAP_COLOURS[category]), _LABELS[category])
+    return legend_patch(tuple(c / 255 for c in MAP_COLOURS[category]), _LABELS[category])
 
 
 def _format_of(path: str | Path) -> str:
@@ -228,16 +196,8 @@ def save_map_picture(omap: OccupancyMap, path: str | Path, *, dpi: float = 150) 
     draw_map(ax, omap)
     w, h = omap.size_m
     ax.set_title(f"{omap.name}: {w:.1f} m x {h:.1f} m, {omap.resolution:g} m/cell", fontsize=10)
-    _add_legend(fig, ax, [_map_patch(c) for c in ("free", "occupied", "unknown")])
+    add_legend(fig, ax, [_map_patch(c) for c in ("free", "occupied", "unknown")])
     return _save(fig, path, dpi)
-
-
-def _nice_length(width: float) -> float:
-    """A round length (1, 2 or 5 times a power of ten) close to a fifth of ``width``."""
-    target = width / 5
-    exp = math.floor(math.log10(target))
-    candidates = [m * 10.0**e for e in (exp, exp + 1) for m in (1, 2, 5)]
-    return min(candidates, key=lambda c: abs(math.log(c / target)))
 
 
 def _status_colours(status: np.ndarray) -> np.ndarray:
@@ -247,58 +207,6 @@ def _status_colours(status: np.ndarray) -> np.ndarray:
     out[:, 3] = 1.0
     out[status < 0] = _NO_STATUS
     return out
-
-
-def _validate_nodes(
-    xy: np.ndarray, kind: np.ndarray, state: np.ndarray, status: np.ndarray, links: np.ndarray, r_c: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Check the node arrays' shapes and values; return them as NumPy arrays."""
-    xy = np.asarray(xy, dtype=float)
-    if xy.size == 0:
-        xy = xy.reshape(0, 2)
-    if xy.ndim != 2 or xy.shape[1] != 2:
-        raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
-    if not np.all(np.isfinite(xy)):
-        raise ValueError("xy must be finite")
-    n = xy.shape[0]
-    kind = np.asarray(kind, dtype=str)
-    state = np.asarray(state, dtype=str)
-    status = np.asarray(status)
-    for name, arr in (("kind", kind), ("state", state), ("status", status)):
-        if arr.shape != (n,):
-            raise ValueError(f"{name} must have shape ({n},) like xy, got {arr.shape}")
-    for name, arr, allowed in (("kind", kind, KINDS), ("state", state, STATES)):
-        bad = sorted(set(arr.tolist()) - set(allowed))
-        if bad:
-            raise ValueError(f"{name} has unknown values {bad}; allowed: {list(allowed)}")
-    if n and not np.issubdtype(status.dtype, np.integer):
-        raise ValueError(f"status must be integer, got dtype {status.dtype}")
-    status = status.astype(np.int64)
-    links = np.asarray(links)
-    if links.size == 0:
-        links = links.reshape(0, 2).astype(np.int64)
-    if links.ndim != 2 or links.shape[1] != 2:
-        raise ValueError(f"links must have shape (M, 2), got {links.shape}")
-    if not np.issubdtype(links.dtype, np.integer):
-        raise ValueError(f"links must be integer indices, got dtype {links.dtype}")
-    if links.size and (links.min() < 0 or links.max() >= n):
-        raise ValueError(f"links must index xy's {n} rows, got values in [{links.min()}, {links.max()}]")
-    if not (math.isfinite(r_c) and r_c > 0):
-        raise ValueError(f"r_c must be a positive finite number, got {r_c}")
-    return xy, kind, state, status, links
-
-
-def _marker_handle(marker: str, size: float, face: object, label: str, edge: object = "0.15") -> Line2D:
-    """Legend handle showing one marker."""
-    return Line2D(
-        [], [], linestyle="none", marker=marker, markersize=size, markerfacecolor=face,
-        markeredgecolor=edge, markeredgewidth=0.8, label=label,
-    )  # fmt: skip
-
-
-def _legend_patch(face: object, label: str, edge: object = "0.3") -> Patch:
-    """Legend handle showing a filled rectangle."""
-    return Patch(facecolor=face, edgecolor=edge, linewidth=0.5, label=label)
 
 
 def _draw_nodes(ax: Axes, xy: np.ndarray, state: np.ndarray, colours: np.ndarray) -> list[Patch | Line2D]:
@@ -320,22 +228,28 @@ def _draw_nodes(ax: Axes, xy: np.ndarray, state: np.ndarray, colours: np.ndarray
                 x, y, s=size * shrink, marker=marker, facecolors="none", edgecolors=colours[sel],
                 linewidths=1.0, zorder=z,
             )  # fmt: skip
-        handles.append(_marker_handle(marker, math.sqrt(size), "0.45" if filled else "none", label))
+        handles.append(marker_handle(marker, math.sqrt(size), "0.45" if filled else "none", label))
     return handles
 
 
-def _add_scale_bar(ax: Axes, omap: OccupancyMap) -> None:
-    """Add a scale bar of a round length, about a fifth of the map's width, in the lower right corner."""
-    w, h = omap.size_m
-    length = _nice_length(w)
-    bar = AnchoredSizeBar(
-        ax.transData, length, f"{length:g} m", loc="lower right", pad=0.4, borderpad=0.6, sep=3,
-        frameon=True, size_vertical=h / 200, fontproperties={"size": 8},
-    )  # fmt: skip
-    bar.patch.set_alpha(0.75)
-    bar.patch.set_edgecolor("0.6")
-    bar.set_zorder(8)
-    ax.add_artist(bar)
+def _draw_trails(
+    ax: Axes, trails: Mapping[int, np.ndarray] | None, colours: np.ndarray, n: int
+) -> Line2D | None:
+    """Draw each node's trail as one polyline in its status colour (one collection); return a legend handle."""
+    if not trails:
+        return None
+    segments, seg_colours = [], []
+    for i, path in trails.items():
+        path = np.asarray(path, dtype=float).reshape(-1, 2)
+        if not 0 <= int(i) < n:
+            raise ValueError(f"trails: node index {i} is not one of xy's {n} rows")
+        if len(path) >= 2:
+            segments.append(path)
+            seg_colours.append(colours[int(i)])
+    if not segments:
+        return None
+    ax.add_collection(LineCollection(segments, colors=seg_colours, linewidths=0.7, alpha=0.55, zorder=2.5))
+    return Line2D([], [], color="0.35", linewidth=1.0, label="agent trail")
 
 
 def snapshot_figure(
@@ -351,6 +265,7 @@ def snapshot_figure(
     reachable: np.ndarray | None = None,
     title: str = "",
     dpi: float = 150,
+    trails: Mapping[int, np.ndarray] | None = None,
 ) -> Figure:
     """Build the deployment picture as an Agg figure (see `save_snapshot` for the arguments).
 
@@ -360,9 +275,9 @@ def snapshot_figure(
     Raises:
         ValueError: If an argument has the wrong shape or an unknown value.
     """
-    xy, kind, state, status, links = _validate_nodes(xy, kind, state, status, links, float(r_c))
-    reachable = _check_mask("reachable", reachable, omap.shape)
-    covered = _check_mask("covered", covered, omap.shape)
+    xy, kind, state, status, links = validate_nodes(xy, kind, state, status, links, float(r_c))
+    reachable = check_mask("reachable", reachable, omap.shape)
+    covered = check_mask("covered", covered, omap.shape)
     fig, ax = _new_figure(omap, right=2.2, dpi=dpi)
     draw_map(ax, omap, reachable=reachable, covered=covered)
     colours = _status_colours(status)
@@ -390,9 +305,12 @@ def snapshot_figure(
     if len(links):
         ax.add_collection(LineCollection(xy[links], colors=[_LINK_COLOUR], linewidths=0.6, zorder=2))
 
+    trail_handle = _draw_trails(ax, trails, colours, len(xy))
     handles = _draw_nodes(ax, xy, state, colours)
+    if trail_handle is not None:
+        handles.append(trail_handle)
     if deployed.any():
-        handles.append(_legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {r_c:g} m", edge="0.4"))
+        handles.append(legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {r_c:g} m", edge="0.4"))
     if len(links):
         handles.append(Line2D([], [], color=_LINK_COLOUR, linewidth=1.0, label="link"))
     cells = omap.cells
@@ -409,11 +327,11 @@ def snapshot_figure(
     groups = np.unique(status)
     for s in groups[: len(_PALETTE)]:
         label = f"BS {s}" if s >= 0 else "no BS yet"
-        handles.append(_marker_handle("o", 7.0, _status_colours(np.array([s]))[0], label, edge="none"))
+        handles.append(marker_handle("o", 7.0, _status_colours(np.array([s]))[0], label, edge="none"))
     if len(groups) > len(_PALETTE):
         handles.append(Line2D([], [], linestyle="none", label=f"... {len(groups) - len(_PALETTE)} more BS"))
-    _add_legend(fig, ax, handles)
-    _add_scale_bar(ax, omap)
+    add_legend(fig, ax, handles)
+    add_scale_bar(ax, omap)
 
     if not title:
         n_routers = int(np.sum(kind == "router"))
@@ -440,6 +358,7 @@ def save_snapshot(
     reachable: np.ndarray | None = None,
     title: str = "",
     dpi: float = 150,
+    trails: Mapping[int, np.ndarray] | None = None,
 ) -> Path:
     """Write the deployment picture: map, communication disks, links and nodes.
 
@@ -464,6 +383,8 @@ def save_snapshot(
         reachable: Optional boolean mask ``omap.shape``; free cells outside it are tinted pale beige.
         title: Figure title; by default the map's name and the numbers of routers and agents.
         dpi: Resolution of the PNG (and of the map raster inside an SVG).
+        trails: Optional node index → path ``(k, 2)`` in metres (agents' trails), drawn as thin lines in the
+            node's status colour.
 
     Returns:
         The path written.
@@ -484,5 +405,6 @@ def save_snapshot(
         reachable=reachable,
         title=title,
         dpi=dpi,
+        trails=trails,
     )
     return _save(fig, path, dpi)

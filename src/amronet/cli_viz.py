@@ -1,0 +1,201 @@
+"""The picture subcommands: ``amronet snapshot``, ``amronet animate`` and ``amronet replay``, and ``run --record``.
+
+``amronet run ... --record [--record-every K]`` adds ``recording.npz`` to the run folder (every K-th step,
+default the scenario's ``sim.record_every``). Then:
+
+- ``amronet snapshot RUN --out pic.svg [--time T]``: the deployment picture of one frame (default the last), PNG
+  or SVG, from the recording, or from ``network.json`` of a run recorded without ``--record``;
+- ``amronet animate RUN --out run.gif`` (or ``.mp4`` with ``imageio-ffmpeg`` installed);
+- ``amronet replay RUN --out replay.html``: one self-contained page that plays the run in any browser.
+
+Every output is written atomically. Bad input raises :class:`amronet.errors.AmronetError` with one line naming
+the option and the fix.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from amronet.errors import AmronetError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from amronet.recording import Recorder
+    from amronet.scenario import Scenario
+
+__all__ = ["add_parsers", "make_recorder"]
+
+
+def make_recorder(args: argparse.Namespace, scenario: Scenario) -> Recorder:
+    """The recorder of ``amronet run``: whole frames with ``--record`` (or ``--record-every``), else trails only.
+
+    Raises:
+        AmronetError: ``--record-every`` is not a positive whole number.
+    """
+    from amronet.recording import Recorder
+
+    every = args.record_every if args.record_every is not None else scenario.sim.record_every
+    if every < 1:
+        raise AmronetError(f"--record-every: {every} must be a whole number of steps >= 1, e.g. 10")
+    return Recorder(every=every, full=bool(args.record or args.record_every is not None))
+
+
+def _run_folder(text: str) -> Path:
+    folder = Path(text)
+    if not folder.is_dir():
+        raise AmronetError(f"RUN: {text!r} is not a folder; give the --out folder of amronet run")
+    return folder
+
+
+def _check_dpi(dpi: float) -> None:
+    if not (math.isfinite(dpi) and 10 <= dpi <= 1200):
+        raise AmronetError(f"--dpi: {dpi:g} must be a number between 10 and 1200, e.g. 120")
+
+
+def _frame_index(times: Any, time: float | None) -> int:
+    """Index of the last frame at or before ``time`` (the last frame when ``time`` is None)."""
+    import numpy as np
+
+    if time is None:
+        return len(times) - 1
+    if not math.isfinite(time) or time < 0:
+        raise AmronetError(f"--time: {time} must be a finite number of seconds >= 0")
+    return max(int(np.searchsorted(times, time + 1e-9, side="right")) - 1, 0)
+
+
+def _snapshot_from_network(folder: Path, dpi: float) -> Figure:
+    """The final snapshot of a run folder without a recording, from ``network.json`` and the scenario."""
+    import numpy as np
+
+    from amronet.assemble import build_world
+    from amronet.radio import make_medium
+    from amronet.scenario import load_scenario
+    from amronet.viz import snapshot_figure
+
+    try:
+        summary = json.loads((folder / "summary.json").read_text())
+        network = json.loads((folder / "network.json").read_text())
+    except FileNotFoundError:
+        raise AmronetError(f"{folder} has neither recording.npz nor network.json and summary.json: give the "
+                           "--out folder of amronet run") from None
+    except json.JSONDecodeError as exc:
+        raise AmronetError(f"{folder}: a JSON file is damaged ({exc.msg}); run it again") from None
+    try:
+        sc = load_scenario(summary["scenario"])
+        world = build_world(sc)
+    except (AmronetError, KeyError) as exc:
+        raise AmronetError(f"{folder}: cannot rebuild the run's map ({exc}); run it again with --record") from None
+    nodes = network["nodes"]
+    xy = np.array([[n["x"], n["y"]] for n in nodes], dtype=float).reshape(-1, 2)
+    kind = np.array([n["kind"] for n in nodes], dtype=str)
+    r_c = float(network["r_c"])
+    s = summary
+    title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
+             f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")
+    return snapshot_figure(
+        world.omap, xy=xy, kind=kind, state=np.array([n["state"] for n in nodes], dtype=str),
+        status=np.array([n["status"] for n in nodes], dtype=np.int64), r_c=r_c,
+        links=make_medium(sc.radio.model, r_c).update(xy).pairs, covered=world.coverage.covered_mask(
+            xy[kind != "agent"], r_c), reachable=world.reachable, title=title, dpi=dpi,
+    )  # fmt: skip
+
+
+def _cmd_snapshot(args: argparse.Namespace) -> int:
+    from amronet.recording import load_recording
+    from amronet.results import write_file_atomically
+    from amronet.viz.recorded import recording_snapshot
+
+    folder = _run_folder(args.run)
+    out = Path(args.out)
+    _check_dpi(args.dpi)
+    if out.suffix.lower() not in (".png", ".svg"):
+        raise AmronetError(f"--out: {args.out!r} must end in .png or .svg")
+    if (folder / "recording.npz").is_file():
+        rec = load_recording(folder)
+        f = _frame_index(rec.t, args.time)
+        fig = recording_snapshot(rec, f, dpi=args.dpi)
+        where = f"frame {f} (t = {rec.t[f]:g} s) of {folder}/recording.npz"
+    else:
+        if args.time is not None:
+            raise AmronetError(f"--time: {folder} has no recording.npz, only the final network: run it again "
+                               "with --record")
+        fig = _snapshot_from_network(folder, args.dpi)
+        where = f"{folder}/network.json"
+    fmt = out.suffix.lower().lstrip(".")
+    write_file_atomically(out, lambda tmp: fig.savefig(tmp, format=fmt, dpi=args.dpi, facecolor="white"))
+    if not args.quiet:
+        print(f"{where} -> {out}")
+    return 0
+
+
+def _cmd_animate(args: argparse.Namespace) -> int:
+    from amronet.recording import load_recording
+    from amronet.results import write_file_atomically
+    from amronet.viz.recorded import write_animation
+
+    rec = load_recording(_run_folder(args.run))
+    out = Path(args.out)
+    if out.suffix.lower() not in (".gif", ".mp4"):
+        raise AmronetError(f"--out: {args.out!r} must end in .gif or .mp4")
+    _check_dpi(args.dpi)
+    count = [0]
+
+    def write(tmp: Path) -> None:
+        count[0] = write_animation(rec, tmp, fps=args.fps, every=args.every, max_frames=args.max_frames,
+                                   dpi=args.dpi)
+
+    write_file_atomically(out, write)
+    if not args.quiet:
+        print(f"{count[0]} frames of {rec.frames} recorded, {args.fps:g} per second -> {out}")
+    return 0
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from amronet.recording import load_recording
+    from amronet.results import write_file_atomically
+    from amronet.viz.replay import replay_html
+
+    folder = _run_folder(args.run)
+    rec = load_recording(folder)
+    out = Path(args.out)
+    if out.suffix.lower() not in (".html", ".htm"):
+        raise AmronetError(f"--out: {args.out!r} must end in .html")
+    page = replay_html(rec, folder, every=args.every, max_frames=args.max_frames)
+    write_file_atomically(out, lambda tmp: tmp.write_bytes(page))
+    if not args.quiet:
+        print(f"replay of {rec.frames} frames, {int(rec.n.max())} robots ({len(page) / 1e6:.1f} MB) -> {out}")
+    return 0
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """Register ``snapshot``, ``animate`` and ``replay`` on the ``amronet`` subcommand parser."""
+    s = sub.add_parser("snapshot", help="draw one frame of a run (PNG or SVG)")
+    s.add_argument("run", help="a run folder (amronet run --out)")
+    s.add_argument("--out", required=True, help="picture to write (.png or .svg)")
+    s.add_argument("--time", type=float, help="simulated time in seconds (default: the end; needs a recording)")
+    s.add_argument("--dpi", type=float, default=120)
+    s.add_argument("-q", "--quiet", action="store_true")
+    s.set_defaults(func=_cmd_snapshot)
+
+    a = sub.add_parser("animate", help="animate a recorded run (GIF, or MP4 with imageio-ffmpeg)")
+    a.add_argument("run", help="a run folder written with amronet run --record")
+    a.add_argument("--out", required=True, help="animation to write (.gif or .mp4)")
+    a.add_argument("--fps", type=float, default=10.0, help="frames per second (default 10)")
+    a.add_argument("--every", type=int, default=1, help="draw every N-th recorded frame (default 1)")
+    a.add_argument("--max-frames", type=int, default=200, help="at most this many frames (default 200)")
+    a.add_argument("--dpi", type=float, default=80)
+    a.add_argument("-q", "--quiet", action="store_true")
+    a.set_defaults(func=_cmd_animate)
+
+    r = sub.add_parser("replay", help="write a self-contained HTML page that plays a recorded run")
+    r.add_argument("run", help="a run folder written with amronet run --record")
+    r.add_argument("--out", required=True, help="page to write (.html)")
+    r.add_argument("--every", type=int, default=1, help="keep every N-th recorded frame (default 1)")
+    r.add_argument("--max-frames", type=int, default=None, help="at most this many frames (default all)")
+    r.add_argument("-q", "--quiet", action="store_true")
+    r.set_defaults(func=_cmd_replay)

@@ -1,0 +1,286 @@
+"""The deployment planner: how many routers must the team carry for this building?
+
+Three answers side by side, for a map, its base stations, ``r_c`` and the agents per base station:
+
+1. the paper's planning estimate ``0.77 A / r_c**2`` (section 5.1.1) on ``A``, the free space reachable from the
+   base stations (:func:`amronet.world.reachable_free`);
+2. the static patterns (r-strip, hexagonal, square, triangular) placed on that same free space
+   (:func:`amronet.patterns.place_all`): what a team that could place routers anywhere would need;
+3. the distribution of routers actually released by agent-assisted deployment over ``K`` seeded runs (a sweep
+   through the same executors and result store as ``amronet sweep``), with the recommendation: the
+   ``confidence`` quantile (default the 95th percentile) of the routers deployed in the runs that reached the
+   coverage target, rounded up.
+
+Counts: the estimate and the patterns count *nodes*; each base station has an immobile reference node that
+the team does not carry, so "routers to carry" is nodes minus base stations for them, and the routers released
+by the agents for agent-assisted deployment.
+
+Example:
+    >>> p = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=3, workers=1)
+    >>> p.recommended >= p.distribution["median"] > 0
+    True
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from amronet.errors import AmronetError, MapError
+
+__all__ = ["PLAN_ESTIMATE_DENSITY", "Plan", "plan", "write_plan"]
+
+PLAN_ESTIMATE_DENSITY = 0.77
+"""The paper's planning estimate: ``0.77 A / r**2`` nodes (the honeycomb's density)."""
+
+
+@dataclass
+class Plan:
+    """The planner's answer (see the module docstring); :meth:`to_dict` for machines, :meth:`markdown` for people.
+
+    Attributes:
+        map: The map's name.
+        bases: Base-station positions.
+        r_c: Communication radius (m).
+        agents_per_base: Agents per base station.
+        area_m2: Reachable free area.
+        estimate_nodes: ``ceil(0.77 A / r_c**2)``.
+        patterns: Pattern name → ``{"placed", "estimated", "coverage", "connected"}`` on the map.
+        runs: One dict per agent-assisted run: ``seed``, ``status``, ``routers_deployed``, ``nodes_total``,
+            ``coverage``, ``stop_reason``, ``sim_time_s``, ``agents_connected_min``, ``error``.
+        confidence: The quantile the recommendation is taken at.
+        distribution: ``runs``, ``completed``, ``min``, ``median``, ``mean``, ``quantile``, ``max`` of routers
+            deployed over the completed runs.
+        recommended: Routers to carry (``None`` when no run reached the coverage target).
+        typical_seed: Seed of the completed run closest to the median (the picture's run).
+        warnings: Lines the user must read (incomplete or failed runs).
+        settings: Explorer, time limit, coverage target, seeds.
+    """
+
+    map: str
+    bases: list[tuple[float, float]]
+    r_c: float
+    agents_per_base: int
+    area_m2: float
+    estimate_nodes: int
+    patterns: dict[str, dict[str, Any]]
+    runs: list[dict[str, Any]]
+    confidence: float
+    distribution: dict[str, Any]
+    recommended: int | None
+    typical_seed: int | None
+    warnings: list[str] = field(default_factory=list)
+    settings: dict[str, Any] = field(default_factory=dict)
+    scenario: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-compatible content of ``plan.json``."""
+        n_b = len(self.bases)
+        return {
+            "map": self.map, "bases": [list(b) for b in self.bases], "r_c": self.r_c,
+            "agents_per_base": self.agents_per_base, "reachable_area_m2": self.area_m2,
+            "estimate_077": {"nodes": self.estimate_nodes, "routers_to_carry": max(0, self.estimate_nodes - n_b)},
+            "patterns": {k: {**v, "routers_to_carry": max(0, v["placed"] - n_b)} for k, v in self.patterns.items()},
+            "agent_assisted": {"distribution": self.distribution, "runs": self.runs},
+            "confidence": self.confidence, "recommended_routers": self.recommended, "typical_seed": self.typical_seed,
+            "warnings": self.warnings, "settings": self.settings, "scenario": self.scenario,
+        }  # fmt: skip
+
+    def markdown(self, picture: str | None = "typical.png") -> str:
+        """``plan.md``: the inputs, the three answers in one table, the distribution and the recommendation."""
+        n_b = len(self.bases)
+        d = self.distribution
+        q = f"{100 * self.confidence:g}th percentile"
+        bases = ", ".join(f"({x:g}, {y:g})" for x, y in self.bases)
+        lines = [f"# Deployment plan: {self.map}", "",
+                 f"Base stations {bases}; r_c = {self.r_c:g} m; {self.agents_per_base} agent(s) per base station; "
+                 f"reachable free area {self.area_m2:.1f} m².", ""]
+        if self.recommended is not None:
+            lines += [f"**Carry {self.recommended} routers** (the {q} of {d['completed']} agent-assisted runs "
+                      f"that reached {100 * self.settings['coverage_target']:g} % coverage, rounded up).", ""]
+        else:
+            lines += ["**No recommendation**: no agent-assisted run reached the coverage target.", ""]
+        lines += ["| method | nodes (incl. base nodes) | routers to carry |", "|---|---:|---:|",
+                  f"| 0.77·A/r² (paper's estimate) | {self.estimate_nodes} | {max(0, self.estimate_nodes - n_b)} |"]
+        for name, p in self.patterns.items():
+            conn = "" if p["connected"] else ", not connected"
+            lines.append(f"| {name} placed on the map (estimated {p['estimated']}{conn}) | {p['placed']} | "
+                         f"{max(0, p['placed'] - n_b)} |")
+        if d["completed"]:
+            for label, key in (("minimum", "min"), ("median", "median"), ("mean", "mean"), (q, "quantile"),
+                               ("maximum", "max")):
+                value = d[key]
+                shown = f"{value:.1f}" if isinstance(value, float) and not float(value).is_integer() else f"{value:g}"
+                lines.append(f"| agent-assisted deployment, {label} | {float(value) + n_b:g} | {shown} |")
+        lines += ["", f"Agent-assisted runs: {d['runs']} ({d['completed']} reached the target), "
+                      f"explorer {self.settings['explorer']}, time limit {self.settings['time_limit']:g} s, "
+                      f"seeds {self.settings['seeds'][0]}..{self.settings['seeds'][-1]}."]
+        if self.warnings:
+            lines += ["", *(f"- warning: {w}" for w in self.warnings)]
+        if picture and self.typical_seed is not None:
+            lines += ["", f"![a typical deployment (seed {self.typical_seed})]({picture})"]
+        return "\n".join(lines) + "\n"
+
+
+def _check(option: str, ok: bool, message: str) -> None:
+    if not ok:
+        raise AmronetError(f"{option}: {message}")
+
+
+def _scenario(map_ref: str, bases: list[tuple[float, float]], r_c: float, agents: int, explorer: str,
+              time_limit: float, dt: float) -> dict[str, Any]:
+    from amronet.experiments.common import agent_scenario
+    from amronet.world.builtin import BUILTIN_MAPS
+
+    sc = agent_scenario(map_ref, r_c, tuple(bases), agents, explorer, time_limit, dt=dt)
+    if map_ref not in BUILTIN_MAPS:
+        sc["map"] = str(Path(map_ref).resolve())
+        sc["name"] = f"agent-assisted-{Path(map_ref).stem}"
+    return sc
+
+
+def plan(
+    map_ref: str,
+    bases: list[tuple[float, float]],
+    r_c: float,
+    agents_per_base: int,
+    runs: int = 20,
+    confidence: float = 0.95,
+    explorer: str = "frontier",
+    time_limit: float = 6000.0,
+    dt: float = 0.25,
+    seed: int = 0,
+    store: str | Path | None = None,
+    workers: int | None = None,
+    executor: Any = None,
+    show_progress: bool = False,
+) -> Plan:
+    """Plan a deployment (see the module docstring).
+
+    Args:
+        map_ref: Built-in map name or ROS map_server YAML path.
+        bases: Base-station positions ``(x, y)`` in metres; each in free space.
+        r_c: Communication radius in metres.
+        agents_per_base: Agents per base station (>= 1).
+        runs: Agent-assisted runs ``K``.
+        confidence: Quantile of the recommendation, in (0, 1].
+        explorer: The agents' exploration strategy.
+        time_limit: Simulated seconds per run at most.
+        dt: Simulation step.
+        seed: First seed (runs use ``seed .. seed + K - 1``).
+        store: Result store to keep the runs in (and reuse); ``None`` for a temporary one.
+        workers: Local worker processes (when no ``executor``).
+        executor: An :class:`~amronet.sweeps.executors.Executor` (e.g. Dask).
+        show_progress: Draw the sweep's progress bar.
+
+    Raises:
+        AmronetError: Bad input, with one line naming the option.
+    """
+    from amronet.patterns import as_area, place_all
+    from amronet.scenario import load_scenario
+    from amronet.sim import Simulation
+    from amronet.sweeps import LocalExecutor, ResultStore, run_sweep, sweep_from_spec
+    from amronet.sweeps.store import check_store_path
+    from amronet.world import reachable_free, resolve_map
+
+    _check("--rc", math.isfinite(r_c) and r_c > 0, f"must be a finite number > 0 (metres), got {r_c:g}")
+    _check("--agents", agents_per_base >= 1, f"must be >= 1 agent per base station, got {agents_per_base}")
+    _check("--runs", runs >= 1, f"must be >= 1, got {runs}")
+    _check("--confidence", 0 < confidence <= 1, f"must be in (0, 1], e.g. 0.95, got {confidence:g}")
+    _check("--base", len(bases) >= 1, "give at least one base station as --base X,Y")
+    _check("--seed", seed >= 0, f"must be >= 0, got {seed}")
+    omap = resolve_map(map_ref)
+    try:
+        mask = reachable_free(omap, np.array(bases, dtype=float))
+    except MapError as exc:
+        raise AmronetError(f"--base: {exc.message}") from None
+    area = float(mask.sum()) * omap.resolution**2
+    scenario = _scenario(map_ref, bases, r_c, agents_per_base, explorer, time_limit, dt)
+    try:
+        Simulation(load_scenario(scenario), seed)  # fail fast, here, on a scenario that cannot start
+    except MapError as exc:
+        raise AmronetError(f"--base: {exc.message}" if exc.field.startswith("base_stations") else str(exc)) from None
+    if store is not None:
+        check_store_path(Path(store))
+    placements = place_all(as_area(omap, mask=mask, r=r_c), r_c)
+    patterns = {name: {"placed": p.count, "estimated": p.estimate, "coverage": p.coverage, "connected": p.connected}
+                for name, p in placements.items()}
+    sweep = sweep_from_spec({"name": f"plan-{scenario['name'].removeprefix('agent-assisted-')}", "base": scenario,
+                             "seeds": runs, "seed_start": seed})
+    with tempfile.TemporaryDirectory(prefix="amronet-plan-") as tmp:
+        store_path = Path(store) if store is not None else Path(tmp) / "results.sqlite"
+        run_sweep(sweep, store_path, executor or LocalExecutor(workers), show_progress=show_progress)
+        point = sweep.points[0]
+        with ResultStore(store_path, must_exist=True) as st:
+            outcomes = {s: st.load(point.hash, s, timeseries=False) for s in sweep.seeds}
+    rows = []
+    for s, out in outcomes.items():
+        summ = out["summary"] or {}
+        rows.append({"seed": s, "status": out["status"], "routers_deployed": summ.get("routers_deployed"),
+                     "nodes_total": summ.get("nodes_total"), "coverage": summ.get("coverage"),
+                     "stop_reason": summ.get("stop_reason"), "sim_time_s": summ.get("sim_time_s"),
+                     "agents_connected_min": summ.get("agents_connected_min"), "error": out["error"]})
+    target = float(load_scenario(scenario).sim.coverage_target or 0.99)
+    completed = [r for r in rows if r["status"] == "done" and r["stop_reason"] == "coverage_target"]
+    warnings = []
+    failed = [r for r in rows if r["status"] == "failed"]
+    if failed:
+        warnings.append(f"{len(failed)} of {runs} runs failed: {failed[0]['error']}")
+    short = [r for r in rows if r["status"] == "done" and r["stop_reason"] != "coverage_target"]
+    if short:
+        warnings.append(f"{len(short)} of {runs} runs did not reach {100 * target:g} % coverage within "
+                        f"{time_limit:g} s (left out; raise --time-limit)")
+    values = np.array([r["routers_deployed"] for r in completed], dtype=float)
+    distribution: dict[str, Any] = {"runs": runs, "completed": len(completed)}
+    recommended = typical = None
+    if len(values):
+        median = float(np.median(values))
+        quantile = float(np.percentile(values, 100 * confidence))
+        distribution.update(min=int(values.min()), median=median, mean=float(values.mean()), quantile=quantile,
+                            max=int(values.max()))
+        recommended = math.ceil(quantile - 1e-9)
+        typical = min(completed, key=lambda r: (abs(r["routers_deployed"] - median), r["seed"]))["seed"]
+    else:
+        warnings.append("no run reached the coverage target, so there is no recommendation")
+    return Plan(map=omap.name, bases=[tuple(map(float, b)) for b in bases], r_c=float(r_c),
+                agents_per_base=agents_per_base, area_m2=area,
+                estimate_nodes=math.ceil(PLAN_ESTIMATE_DENSITY * area / r_c**2 - 1e-9), patterns=patterns,
+                runs=rows, confidence=confidence, distribution=distribution, recommended=recommended,
+                typical_seed=typical, warnings=warnings,
+                settings={"explorer": explorer, "time_limit": time_limit, "dt": dt, "coverage_target": target,
+                          "seeds": list(sweep.seeds)},
+                scenario=point.scenario)
+
+
+def typical_picture(p: Plan) -> bytes | None:
+    """PNG of the typical run (re-run here from its seed; the same seed gives the same deployment)."""
+    if p.typical_seed is None:
+        return None
+    from amronet.scenario import load_scenario
+    from amronet.sim import Simulation
+
+    result = Simulation(load_scenario(p.scenario), p.typical_seed).run()
+    stored = next(r["routers_deployed"] for r in p.runs if r["seed"] == p.typical_seed)
+    if result.summary["routers_deployed"] != stored:  # the same seed must give the same run
+        raise AmronetError(f"plan: seed {p.typical_seed} re-ran with {result.summary['routers_deployed']} routers, "
+                           f"the store holds {stored}; the store was written by another amronet version")
+    return result.snapshot_png()
+
+
+def write_plan(p: Plan, out_dir: str | Path) -> Path:
+    """Write ``plan.json``, ``plan.md`` and ``typical.png`` into ``out_dir`` (replaced atomically)."""
+    import json
+
+    from amronet.results import write_files_atomically
+
+    picture = typical_picture(p)
+    files = {"plan.json": (json.dumps(p.to_dict(), indent=2) + "\n").encode(),
+             "plan.md": p.markdown("typical.png" if picture else None).encode()}
+    if picture is not None:
+        files["typical.png"] = picture
+    return write_files_atomically(Path(out_dir), files)

@@ -1,0 +1,164 @@
+"""Running the missing runs of a sweep on an executor, recording each in the store as it finishes.
+
+:func:`run_sweep` is ``amronet sweep``; :func:`execute_into_store` is the loop it shares with
+:func:`amronet.experiments.runner.run_jobs` (the paper's figures): submit the runs that are not in the store
+yet, record every outcome in its own transaction as it arrives, and draw a progress bar (done / running /
+failed, elapsed, ETA) on stderr.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from amronet.sweeps.executors import Executor, LocalExecutor
+from amronet.sweeps.spec import Sweep
+from amronet.sweeps.store import ResultStore
+from amronet.sweeps.worker import execute_job
+
+__all__ = ["SweepReport", "execute_into_store", "pending_runs", "run_sweep"]
+
+StoreJob = tuple[str, int, dict[str, Any]]
+"""``(scenario_hash, seed, resolved scenario)``."""
+
+
+@dataclass
+class SweepReport:
+    """What one invocation of a sweep did.
+
+    Attributes:
+        sweep_id: The sweep's id in the store.
+        total: Runs in the sweep.
+        already: Runs found in the store (done, or failed and not retried) before starting.
+        done: Runs that finished now.
+        failed: Runs that raised now.
+        wall_time_s: Seconds this invocation took.
+        executor: Where the runs ran.
+    """
+
+    sweep_id: int
+    total: int
+    already: int
+    done: int
+    failed: int
+    wall_time_s: float
+    executor: str
+
+
+def progress_bar(show: bool) -> Progress:
+    """The progress bar of sweeps and figures: bar, done / running / failed, elapsed, ETA (on stderr)."""
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("[green]{task.fields[done]} done[/] [cyan]{task.fields[running]} running[/] "
+                          "[red]{task.fields[failed]} failed[/]"),
+               TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn())
+    return Progress(*columns, console=Console(stderr=True), disable=not show, transient=False)
+
+
+def pending_runs(store: ResultStore, runs: Sequence[StoreJob], retry_failed: bool) -> list[StoreJob]:
+    """The runs that still have to run: not in the store, or failed when ``retry_failed``."""
+    statuses = store.statuses()
+    out, seen = [], set()
+    for h, seed, scenario in runs:
+        status = statuses.get((h, seed))
+        if (h, seed) in seen or status == "done" or (status == "failed" and not retry_failed):
+            continue
+        seen.add((h, seed))
+        out.append((h, seed, scenario))
+    return out
+
+
+def execute_into_store(
+    store: ResultStore,
+    pending: Sequence[StoreJob],
+    executor: Executor,
+    description: str = "runs",
+    show_progress: bool = True,
+    total: int | None = None,
+    on_outcome: Callable[[str, int, dict[str, Any]], None] | None = None,
+    already: tuple[int, int] = (0, 0),
+) -> tuple[int, int]:
+    """Run ``pending`` on ``executor`` and record each outcome in ``store`` as soon as it arrives.
+
+    Args:
+        store: The open store (only this process writes to it).
+        pending: The runs to run.
+        executor: Where they run.
+        description: Label of the progress bar.
+        show_progress: Draw the progress bar.
+        total: Runs in the whole sweep (the bar starts at ``total - len(pending)``); default ``len(pending)``.
+        on_outcome: Called with ``(scenario_hash, seed, outcome)`` after each run is recorded.
+        already: ``(done, failed)`` runs of the sweep found in the store, for the bar's counts.
+
+    Returns:
+        ``(done, failed)`` among ``pending``.
+    """
+    total = len(pending) if total is None else total
+    jobs = [{"scenario": sc, "seed": seed} for _, seed, sc in pending]
+    done = failed = 0
+    slots = executor.slots if pending else 0
+    with progress_bar(show_progress) as bar:
+        task = bar.add_task(description, total=total, completed=total - len(pending), done=already[0],
+                            failed=already[1], running=min(slots, len(pending)))
+        for k, outcome in executor.imap_unordered(execute_job, jobs):
+            h, seed, scenario = pending[k]
+            store.record(h, seed, scenario, outcome)
+            if outcome["status"] == "done":
+                done += 1
+            else:
+                failed += 1
+            bar.update(task, advance=1, done=already[0] + done, failed=already[1] + failed,
+                       running=min(slots, len(pending) - done - failed))
+            if on_outcome is not None:
+                on_outcome(h, seed, outcome)
+    return done, failed
+
+
+def run_sweep(
+    sweep: Sweep,
+    store_path: str | Path,
+    executor: Executor | None = None,
+    retry_failed: bool = False,
+    show_progress: bool = True,
+) -> SweepReport:
+    """Run every (point, seed) of ``sweep`` that is not in the store yet.
+
+    Args:
+        sweep: A validated sweep (:func:`~amronet.sweeps.spec.load_sweep`).
+        store_path: The result store (created when missing).
+        executor: Where the runs run (default: a local process pool on every core).
+        retry_failed: Run again the runs recorded as failed.
+        show_progress: Draw a progress bar on stderr.
+
+    Returns:
+        A :class:`SweepReport`.
+
+    Raises:
+        StoreError: The store path is not an amronet store.
+    """
+    start = time.perf_counter()
+    own = executor is None
+    executor = executor or LocalExecutor()
+    runs = sweep.runs()
+    try:
+        with ResultStore(store_path) as store:
+            spec = sweep.spec.model_dump(mode="json")
+            links = [(p.hash, seed, p.index, p.overrides) for p, seed in runs]
+            sweep_id = store.add_sweep(sweep.name, spec, links)
+            pending = pending_runs(store, [(p.hash, seed, p.scenario) for p, seed in runs], retry_failed)
+            statuses, waiting = store.statuses(), {(h, s) for h, s, _ in pending}
+            before = [statuses[(p.hash, s)] for p, s in runs if (p.hash, s) not in waiting]
+            done, failed = execute_into_store(store, pending, executor, description=sweep.name,
+                                              show_progress=show_progress, total=len(runs),
+                                              already=(before.count("done"), before.count("failed")))
+        where = executor.describe()
+    finally:
+        if own:
+            executor.close()
+    return SweepReport(sweep_id=sweep_id, total=len(runs), already=len(runs) - len(pending), done=done,
+                       failed=failed, wall_time_s=time.perf_counter() - start, executor=where)

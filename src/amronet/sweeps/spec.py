@@ -1,0 +1,235 @@
+"""Sweep files: a base scenario, a grid (and/or a list) of overrides, and seeds — parsed and validated up front.
+
+A sweep is one YAML file::
+
+    name: rc-vs-triangular
+    description: coverage of self-spreading vs r_c, local and global triangular rule
+    base: self-spreading-6x6          # a preset name, a scenario file (relative to this file) or a mapping
+    overrides: {sim.time_limit: 60}   # applied to every point (optional)
+    grid:                             # the cartesian product of these lists (optional)
+      radio.r_c: [0.8, 1.0, 1.2]
+      algorithm.params.triangular: [local, global]
+    points:                           # explicit points, run after the grid's (optional)
+      - {radio.r_c: 2.0, routers.count: 10}
+    seeds: 5                          # seeds seed_start .. seed_start + 4 for every point, or a list [3, 7, 11]
+    seed_start: 0
+
+Keys are the dotted paths of ``--set`` (:func:`amronet.scenario.apply_overrides`). Without ``grid`` and
+``points`` the sweep has one point, the base. Every point is validated as a whole scenario before anything
+runs: unknown keys (in the sweep file or in a point), empty grids, a seed count of 0 or a bad value raise
+:class:`~amronet.errors.ScenarioError` with one line naming the field, and nothing is written.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, ValidationError, model_validator
+
+from amronet.errors import ScenarioError
+from amronet.scenario import Scenario, _to_scenario_error, load_scenario
+from amronet.sweeps.identity import resolve_scenario, scenario_hash
+
+__all__ = ["Point", "Sweep", "SweepSpec", "load_sweep", "sweep_from_spec"]
+
+
+class SweepSpec(BaseModel):
+    """A sweep file, validated (see the module docstring)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: str = Field(min_length=1)
+    description: str = ""
+    base: Any
+    """A preset name, a scenario file path (relative to the sweep file) or an inline scenario mapping."""
+    overrides: dict[str, Any] = Field(default_factory=dict)
+    grid: dict[str, list[Any]] | None = None
+    points: list[dict[str, Any]] | None = None
+    seeds: Any
+    """A number of seeds (``>= 1``; seeds ``seed_start, seed_start + 1, ...``) or a list of distinct seeds."""
+    seed_start: StrictInt = Field(default=0, ge=0)
+
+    @model_validator(mode="after")
+    def _check(self) -> SweepSpec:
+        if not isinstance(self.base, str | dict) or (isinstance(self.base, str) and not self.base.strip()):
+            raise ValueError("@base@must be a preset name, a scenario file path or a scenario mapping")
+        if self.grid is not None:
+            if not self.grid:
+                raise ValueError("@grid@is empty; give at least one KEY: [values] (or drop grid and use points)")
+            for key, values in self.grid.items():
+                if not values:
+                    raise ValueError(f"@grid.{key}@is an empty list; give at least one value")
+        if self.points is not None and not self.points:
+            raise ValueError("@points@is an empty list; give at least one mapping of KEY: value (or drop it)")
+        seeds = self.seeds
+        if isinstance(seeds, bool) or not isinstance(seeds, int | list):
+            raise ValueError(f"@seeds@must be a number of seeds (>= 1) or a list of seeds, got {seeds!r}")
+        if isinstance(seeds, int):
+            if seeds < 1:
+                raise ValueError(f"@seeds@must be at least 1 (got {seeds}); it is the number of seeded runs per point")
+        else:
+            if not seeds:
+                raise ValueError("@seeds@is an empty list; give at least one seed")
+            if any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in seeds):
+                raise ValueError("@seeds@a list of seeds must hold integers >= 0")
+            if len(set(seeds)) != len(seeds):
+                raise ValueError("@seeds@lists a seed twice; give distinct seeds")
+            if self.seed_start:
+                raise ValueError("@seed_start@only goes with a number of seeds, not with a list")
+        return self
+
+    def seed_list(self) -> list[int]:
+        """The seeds every point runs with."""
+        if isinstance(self.seeds, int):
+            return list(range(self.seed_start, self.seed_start + self.seeds))
+        return list(self.seeds)
+
+
+@dataclass(frozen=True)
+class Point:
+    """One point of a sweep.
+
+    Attributes:
+        index: Position in the sweep (grid points first, then the explicit points).
+        overrides: The swept keys' values at this point (without the sweep's fixed ``overrides``).
+        scenario: The fully resolved scenario (:func:`~amronet.sweeps.identity.resolve_scenario`).
+        hash: Its hash (the store's key together with the seed).
+    """
+
+    index: int
+    overrides: dict[str, Any]
+    scenario: dict[str, Any]
+    hash: str
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A validated sweep: its spec, its points and its seeds.
+
+    Attributes:
+        spec: The sweep file's content.
+        points: Every point, validated and resolved.
+        seeds: The seeds each point runs with.
+        keys: The swept keys, in the order they first appear.
+    """
+
+    spec: SweepSpec
+    points: list[Point]
+    seeds: list[int]
+    keys: list[str]
+
+    @property
+    def name(self) -> str:
+        """The sweep's name."""
+        return self.spec.name
+
+    def runs(self) -> list[tuple[Point, int]]:
+        """Every (point, seed), point-major; a run repeated by two identical points is listed once."""
+        seen: set[tuple[str, int]] = set()
+        out = []
+        for p in self.points:
+            for s in self.seeds:
+                if (p.hash, s) not in seen:
+                    seen.add((p.hash, s))
+                    out.append((p, s))
+        return out
+
+
+def _base_scenario(spec: SweepSpec, base_dir: str | None) -> Scenario:
+    base = spec.base
+    try:
+        if isinstance(base, dict):
+            sc = load_scenario(base)
+            return sc.model_copy(update={"base_dir": base_dir}) if base_dir else sc
+        candidate = Path(base_dir) / base if base_dir and not Path(base).is_absolute() else Path(base)
+        return load_scenario(candidate if candidate.is_file() else base)
+    except ScenarioError as exc:
+        raise ScenarioError(f"base: {exc.field}" if exc.field else "base", exc.message) from None
+
+
+def _owner(field: str, keys: list[str]) -> str | None:
+    for key in keys:
+        if field == key or field.startswith(key + ".") or field.startswith(key + "[") or key.startswith(field + "."):
+            return key
+    return None
+
+
+def _point(base: Scenario, fixed: dict[str, Any], overrides: dict[str, Any], where: str, index: int) -> Point:
+    try:
+        sc = base.with_overrides({**fixed, **overrides}) if fixed or overrides else base
+        resolved = resolve_scenario(sc)
+    except ScenarioError as exc:
+        key = _owner(exc.field, list(overrides))
+        if key is not None:
+            value = f" (at {key} = {overrides[key]!r})" if key != exc.field else ""
+            raise ScenarioError(f"{where}.{exc.field}" if where else exc.field, exc.message + value) from None
+        key = _owner(exc.field, list(fixed))
+        raise ScenarioError(f"overrides.{exc.field}" if key is not None else f"base: {exc.field}",
+                            exc.message) from None
+    return Point(index=index, overrides=dict(overrides), scenario=resolved, hash=scenario_hash(resolved))
+
+
+def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | None = None) -> Sweep:
+    """Validate a sweep given as a spec or a mapping and expand its points.
+
+    Args:
+        spec: The sweep.
+        base_dir: Folder that a relative ``base`` path and an inline base's relative map path are taken from.
+
+    Raises:
+        ScenarioError: The sweep or one of its points is invalid; one line naming the field.
+    """
+    if not isinstance(spec, SweepSpec):
+        if not isinstance(spec, dict):
+            raise ScenarioError("sweep", f"must be a mapping of fields, got {type(spec).__name__}")
+        try:
+            spec = SweepSpec.model_validate(spec)
+        except ValidationError as exc:
+            raise _to_scenario_error(exc, model=SweepSpec) from None
+    folder = str(Path(base_dir).resolve()) if base_dir is not None else None
+    base = _base_scenario(spec, folder)
+    _point(base, spec.overrides, {}, "", -1)  # the fixed overrides alone, so their errors name them
+    combos: list[tuple[dict[str, Any], str]] = []
+    if spec.grid:
+        keys = list(spec.grid)
+        for values in itertools.product(*(spec.grid[k] for k in keys)):
+            combos.append((dict(zip(keys, values, strict=True)), "grid"))
+    for i, item in enumerate(spec.points or []):
+        combos.append((item, f"points[{i}]"))
+    if not combos:
+        combos.append(({}, ""))
+    points = [_point(base, spec.overrides, o, where, k) for k, (o, where) in enumerate(combos)]
+    keys = list(dict.fromkeys(k for o, _ in combos for k in o))
+    return Sweep(spec=spec, points=points, seeds=spec.seed_list(), keys=keys)
+
+
+def load_sweep(source: str | Path | dict[str, Any]) -> Sweep:
+    """Load, validate and expand a sweep file (or mapping).
+
+    Args:
+        source: Path of a sweep YAML file, or its content as a mapping.
+
+    Returns:
+        The sweep.
+
+    Raises:
+        ScenarioError: The file cannot be read or the sweep is invalid; one line naming the field.
+    """
+    if isinstance(source, dict):
+        return sweep_from_spec(source)
+    path = Path(source)
+    if not path.is_file():
+        raise ScenarioError("sweep", f"no sweep file {str(path)!r}; give the path of a sweep YAML")
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError("sweep", f"cannot read {str(path)!r}: {exc}") from None
+    except yaml.YAMLError as exc:
+        line = getattr(getattr(exc, "problem_mark", None), "line", None)
+        where = f" at line {line + 1}" if line is not None else ""
+        raise ScenarioError("sweep", f"{str(path)!r} is not valid YAML{where}; fix the syntax") from None
+    return sweep_from_spec(data, base_dir=path.resolve().parent)

@@ -1,0 +1,69 @@
+"""Decorations shared by the pictures: the legend beside the map, legend handles and the scale bar."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+from amronet.world.occupancy import OccupancyMap
+
+__all__ = ["GAP", "add_legend", "add_scale_bar", "legend_patch", "marker_handle", "nice_length"]
+
+GAP = 0.15
+"""Gap in inches between the map's axes and the legend."""
+
+
+def add_legend(fig: Figure, ax: Axes, handles: Sequence[Patch | Line2D]) -> None:
+    """Place a legend of ``handles`` outside the axes, to the right of its top edge."""
+    _, _, x1, y1 = ax.get_position().extents
+    fig_w = fig.get_figwidth()
+    fig.legend(
+        handles=list(handles),
+        loc="upper left",
+        bbox_to_anchor=(x1 + GAP / fig_w, y1),
+        fontsize=8,
+        frameon=False,
+        borderaxespad=0.0,
+        handlelength=1.6,
+    )
+
+
+def nice_length(width: float) -> float:
+    """A round length (1, 2 or 5 times a power of ten) close to a fifth of ``width``."""
+    target = width / 5
+    exp = math.floor(math.log10(target))
+    candidates = [m * 10.0**e for e in (exp, exp + 1) for m in (1, 2, 5)]
+    return min(candidates, key=lambda c: abs(math.log(c / target)))
+
+
+def marker_handle(marker: str, size: float, face: object, label: str, edge: object = "0.15") -> Line2D:
+    """Legend handle showing one marker."""
+    return Line2D(
+        [], [], linestyle="none", marker=marker, markersize=size, markerfacecolor=face,
+        markeredgecolor=edge, markeredgewidth=0.8, label=label,
+    )  # fmt: skip
+
+
+def legend_patch(face: object, label: str, edge: object = "0.3") -> Patch:
+    """Legend handle showing a filled rectangle."""
+    return Patch(facecolor=face, edgecolor=edge, linewidth=0.5, label=label)
+
+
+def add_scale_bar(ax: Axes, omap: OccupancyMap) -> None:
+    """Add a scale bar of a round length, about a fifth of the map's width, in the lower right corner."""
+    w, h = omap.size_m
+    length = nice_length(w)
+    bar = AnchoredSizeBar(
+        ax.transData, length, f"{length:g} m", loc="lower right", pad=0.4, borderpad=0.6, sep=3,
+        frameon=True, size_vertical=h / 200, fontproperties={"size": 8},
+    )  # fmt: skip
+    bar.patch.set_alpha(0.75)
+    bar.patch.set_edgecolor("0.6")
+    bar.set_zorder(8)
+    ax.add_artist(bar)

@@ -1,0 +1,36 @@
+"""Shared pieces of the sweep, store, Dask and planner tests: tiny sweeps and store comparisons."""
+
+import sqlite3
+from pathlib import Path
+
+import yaml
+
+WALL_TIME = {"wall_time_s", "finished_at", "created"}
+
+
+def tiny_sweep(name="tiny", time_limit=3.0, radii=(0.8, 1.0), seeds=2, **extra):
+    """A sweep of short self-spreading runs on the 6 m x 6 m field (each a few milliseconds)."""
+    spec = {"name": name, "base": "self-spreading-6x6", "overrides": {"sim.time_limit": time_limit},
+            "grid": {"radio.r_c": list(radii)}, "seeds": seeds}
+    spec.update(extra)
+    return spec
+
+
+def write_sweep(path: Path, spec) -> Path:
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    return path
+
+
+def table_rows(store: Path, table: str):
+    """Every row of a store's table as sorted tuples, without the wall-time columns."""
+    con = sqlite3.connect(store)
+    try:
+        cols = [r[1] for r in con.execute(f"PRAGMA table_info({table})") if r[1] not in WALL_TIME]
+        rows = con.execute(f"SELECT {', '.join(cols)} FROM {table}").fetchall()
+    finally:
+        con.close()
+    return sorted(rows, key=repr)
+
+
+def same_store_content(a: Path, b: Path, tables=("runs", "timeseries", "sweep_runs", "sweeps")) -> bool:
+    return all(table_rows(a, t) == table_rows(b, t) for t in tables)

@@ -1,0 +1,112 @@
+"""End-to-end tests of ``amronet run --record``, ``snapshot``, ``animate`` and ``replay``, including bad input."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import sys
+import zlib
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from amronet.cli import main
+
+TINY = ["--preset", "self-spreading-6x6", "--set", "sim.time_limit=20", "--seed", "2", "-q"]
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs") / "a"
+    assert main(["run", *TINY, "--out", str(out), "--record", "--record-every", "5"]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def plain(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs") / "b"
+    assert main(["run", *TINY, "--out", str(out)]) == 0
+    return out
+
+
+def _error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("amronet: error: ")
+    return err
+
+
+def test_run_record_writes_the_recording_with_the_other_files(recorded, plain):
+    names = sorted(p.name for p in recorded.iterdir())
+    assert names == ["network.json", "recording.npz", "snapshot.png", "summary.json", "timeseries.csv"]
+    with np.load(recorded / "recording.npz") as data:
+        assert data["steps"].tolist() == list(range(0, 201, 5))
+    assert not (plain / "recording.npz").exists()
+    # recording changes nothing else
+    assert (recorded / "network.json").read_bytes() == (plain / "network.json").read_bytes()
+
+
+def test_snapshot_png_svg_and_time(recorded, plain, tmp_path, capsys):
+    assert main(["snapshot", str(recorded), "--out", str(tmp_path / "end.png"), "--dpi", "50", "-q"]) == 0
+    assert main(["snapshot", str(recorded), "--out", str(tmp_path / "t5.svg"), "--time", "5", "-q"]) == 0
+    assert main(["snapshot", str(plain), "--out", str(tmp_path / "net.png"), "--dpi", "50", "-q"]) == 0
+    end = np.asarray(Image.open(tmp_path / "end.png").convert("RGB"), dtype=int)
+    net = np.asarray(Image.open(tmp_path / "net.png").convert("RGB"), dtype=int)
+    assert end.shape == net.shape and end.std() > 0
+    assert np.abs(end - net).mean() < 3  # the same run's last frame, from the recording or from network.json
+    assert "t = 5 s" in (tmp_path / "t5.svg").read_text()
+
+
+def test_animate_gif(recorded, tmp_path):
+    out = tmp_path / "run.gif"
+    assert main(["animate", str(recorded), "--out", str(out), "--max-frames", "5", "--dpi", "40", "-q"]) == 0
+    assert Image.open(out).n_frames == 5
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary file left
+
+
+def test_replay_page_is_self_contained(recorded, tmp_path):
+    out = tmp_path / "replay.html"
+    assert main(["replay", str(recorded), "--out", str(out), "-q"]) == 0
+    page = out.read_text()
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", page)  # nothing fetched
+    assert "fetch(" not in page and "import(" not in page
+    header = json.loads(re.search(r'id="amronet-header">(.*?)</script>', page, re.S).group(1))
+    assert header["frames"] == 41 and header["robots"] == 31 and header["r_c"] == 1.0
+    payload = re.search(r'id="amronet-payload">(.*?)</script>', page, re.S).group(1)
+    raw = zlib.decompress(base64.b64decode(payload))
+    xy = header["arrays"]["xy_delta"]
+    assert xy["dtype"] == "uint16" and xy["length"] == 41 * 31 * 2
+    assert len(raw) >= xy["offset"] + 2 * xy["length"]
+    assert len(header["timeseries"]["t"]) == 21
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["replay", "{plain}", "--out", "{tmp}/r.html"], "has no recording.npz: run it again with --record"),
+        (["animate", "{plain}", "--out", "{tmp}/r.gif"], "has no recording.npz: run it again with --record"),
+        (["replay", "{tmp}/nowhere", "--out", "{tmp}/r.html"], "is not a folder"),
+        (["replay", "{recorded}", "--out", "{tmp}/r.txt"], "--out: .* must end in .html"),
+        (["animate", "{recorded}", "--out", "{tmp}/r.avi"], "--out: .* must end in .gif or .mp4"),
+        (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--fps", "0"], "--fps"),
+        (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--every", "0"], "--every"),
+        (["snapshot", "{recorded}", "--out", "{tmp}/r.jpg"], "--out: .* must end in .png or .svg"),
+        (["snapshot", "{plain}", "--out", "{tmp}/r.png", "--time", "3"], "--time: .* run it again with --record"),
+        (["snapshot", "{recorded}", "--out", "{tmp}/r.png", "--time", "-1"], "--time"),
+        (["snapshot", "{recorded}", "--out", "{tmp}/r.png", "--dpi", "0"], "--dpi"),
+        (["run", *TINY, "--out", "{tmp}/x", "--record-every", "0"], "--record-every"),
+    ],
+)
+def test_bad_input_is_one_line(argv, message, recorded, plain, tmp_path, capsys):
+    argv = [a.format(plain=plain, recorded=recorded, tmp=tmp_path) for a in argv]
+    assert main(argv) == 2
+    assert re.search(message, _error(capsys))
+    assert [p.name for p in tmp_path.iterdir()] == []
+
+
+def test_mp4_without_encoder(recorded, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)
+    assert main(["animate", str(recorded), "--out", str(tmp_path / "r.mp4")]) == 2
+    assert "needs an encoder: pip install 'amronet[video]'" in _error(capsys)
+    assert list(tmp_path.iterdir()) == []

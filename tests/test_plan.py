@@ -1,0 +1,84 @@
+import json
+import math
+
+import pytest
+from PIL import Image
+
+from amronet.cli import main
+from amronet.errors import AmronetError
+from amronet.planning import plan, write_plan
+from amronet.sweeps import ResultStore
+
+
+@pytest.fixture(scope="module")
+def office_plan():
+    return plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=5, workers=2)
+
+
+def test_plan_has_estimate_patterns_distribution_and_recommendation(office_plan):
+    p = office_plan
+    assert 900 < p.area_m2 <= 1024
+    assert p.estimate_nodes == math.ceil(0.77 * p.area_m2 / 64 - 1e-9)
+    assert set(p.patterns) == {"r-strip", "hexagonal", "square", "triangular"}
+    assert all(v["placed"] >= 1 for v in p.patterns.values())
+    d = p.distribution
+    assert d["runs"] == 5 and d["completed"] == 5
+    values = sorted(r["routers_deployed"] for r in p.runs)
+    assert d["min"] == values[0] and d["max"] == values[-1] and d["median"] == values[2]
+    assert values[-2] <= p.recommended <= values[-1]  # the 95th percentile of 5, rounded up
+    assert p.typical_seed in [r["seed"] for r in p.runs if abs(r["routers_deployed"] - d["median"]) ==
+                              min(abs(v - d["median"]) for v in values)]
+    assert all(r["agents_connected_min"] == 1.0 for r in p.runs)
+
+
+def test_confidence_changes_the_recommendation(office_plan):
+    low = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=5, workers=1, confidence=0.5)
+    assert low.recommended == math.ceil(office_plan.distribution["median"])
+    assert low.runs == office_plan.runs  # same seeds, same runs
+
+
+def test_plan_writes_json_markdown_and_a_typical_picture(office_plan, tmp_path):
+    out = write_plan(office_plan, tmp_path / "plan")
+    doc = json.loads((out / "plan.json").read_text())
+    assert doc["recommended_routers"] == office_plan.recommended
+    assert doc["estimate_077"]["routers_to_carry"] == office_plan.estimate_nodes - 1
+    md = (out / "plan.md").read_text()
+    assert f"Carry {office_plan.recommended} routers" in md and "typical.png" in md
+    assert Image.open(out / "typical.png").size[0] > 400
+
+
+def test_plan_cli_json_with_a_store(tmp_path, capsys):
+    store = tmp_path / "plan.sqlite"
+    args = ["plan", "--map", "office-32x32", "--base", "1,1", "--rc", "8", "--agents", "1", "--runs", "3",
+            "--workers", "1", "--store", str(store), "--json"]
+    assert main(args) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["agent_assisted"]["distribution"]["runs"] == 3 and doc["recommended_routers"] >= 1
+    with ResultStore(store) as st:
+        assert len(st.runs()) == 3 and st.sweeps()[0]["name"].startswith("plan-office-32x32")
+    assert main(args) == 0  # the runs come from the store
+    assert json.loads(capsys.readouterr().out)["agent_assisted"] == doc["agent_assisted"]
+
+
+@pytest.mark.parametrize(("args", "option"), [
+    (["--base", "0.02,0.02"], "--base"),  # inside the office's outer wall
+    (["--base", "40,1"], "--base"),  # outside the map
+    (["--base", "1,1", "--runs", "0"], "--runs"),
+    (["--base", "1,1", "--confidence", "1.5"], "--confidence"),
+    (["--base", "1,1", "--agents", "0"], "--agents"),
+    (["--base", "x"], "--base"),
+    ([], "--base"),
+])
+def test_plan_bad_input_is_one_line(tmp_path, capsys, args, option):
+    assert main(["plan", "--map", "office-32x32", "--rc", "8", "--runs", "2", "--workers", "1", "--out",
+                 str(tmp_path / "o"), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"amronet: error: {option}") and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_plan_unknown_map_and_bad_radius():
+    with pytest.raises(AmronetError, match="unknown map"):
+        plan("no-such-map", [(1.0, 1.0)], r_c=8.0, agents_per_base=1, runs=1)
+    with pytest.raises(AmronetError, match="--rc"):
+        plan("office-32x32", [(1.0, 1.0)], r_c=-1.0, agents_per_base=1, runs=1)

@@ -1,0 +1,175 @@
+import csv
+import json
+
+import pytest
+from PIL import Image
+
+from amronet.cli import main
+from amronet.errors import AmronetError
+from amronet.experiments.registry import FIGURES, Figure
+from amronet.experiments.runner import run_jobs
+from amronet.sweeps import ResultStore
+from sweep_helpers import tiny_sweep, write_sweep
+
+
+@pytest.fixture
+def swept(tmp_path, capsys):
+    spec = tiny_sweep(grid={"radio.r_c": [0.8, 1.0], "algorithm.params.triangular": ["local", "none"]})
+    path = write_sweep(tmp_path / "sweep.yaml", spec)
+    store = tmp_path / "results.sqlite"
+    assert main(["sweep", str(path), "--store", str(store), "--workers", "2"]) == 0
+    return path, store, capsys.readouterr().out
+
+
+def test_sweep_prints_a_table_and_resumes_nothing_twice(swept, capsys):
+    path, store, out = swept
+    assert "radio.r_c" in out and "nodes_total" in out and "8 runs: 0 already in the store, 8 done" in out
+    assert main(["sweep", str(path), "--store", str(store), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["runs"], doc["already_in_store"], doc["done_now"]) == (8, 8, 0)
+    assert [p["runs"] for p in doc["points"]] == [2, 2, 2, 2]
+
+
+def test_results_lists_and_exports_tidy_tables(swept, tmp_path, capsys):
+    _, store, _ = swept
+    assert main(["results", str(store)]) == 0
+    out = capsys.readouterr().out
+    assert "tiny" in out and "done" in out
+    assert main(["results", str(store), "--export", "csv", "--out", str(tmp_path / "csv")]) == 0
+    runs = list(csv.DictReader((tmp_path / "csv" / "runs.csv").open()))
+    assert len(runs) == 8 and {r["radio.r_c"] for r in runs} == {"0.8", "1.0"}
+    assert {"nodes_total", "coverage", "algorithm.params.triangular", "states.explore"} <= set(runs[0])
+    links = list(csv.DictReader((tmp_path / "csv" / "sweep_runs.csv").open()))
+    assert len(links) == 8 and links[0]["sweep"] == "tiny"
+    ts = list(csv.DictReader((tmp_path / "csv" / "timeseries.csv").open()))
+    assert len(ts) > 8 and "agents_connected" not in ts[0]
+    pq = pytest.importorskip("pyarrow.parquet")
+    assert main(["results", str(store), "--export", "parquet", "--out", str(tmp_path / "pq"), "--sweep",
+                 "tiny"]) == 0
+    table = pq.read_table(tmp_path / "pq" / "runs.parquet")
+    assert table.num_rows == 8 and str(table.schema.field("radio.r_c").type) == "double"
+    assert str(table.schema.field("nodes_total").type) == "int64"
+
+
+def test_plot_draws_mean_and_ci(swept, tmp_path, capsys):
+    _, store, _ = swept
+    out = tmp_path / "plot.png"
+    assert main(["plot", str(store), "--x", "radio.r_c", "--y", "nodes_total", "--hue",
+                 "algorithm.params.triangular", "--out", str(out)]) == 0
+    assert Image.open(out).size[0] > 400 and "4 points from 8 runs" in capsys.readouterr().out
+    assert main(["plot", str(store), "--x", "algorithm.params.triangular", "--y", "coverage", "--out",
+                 str(tmp_path / "cat.svg")]) == 0
+    assert main(["plot", str(store), "--x", "radio.rc", "--y", "nodes_total", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--x: no column 'radio.rc'" in err and "radio.r_c" in err and len(err.strip().splitlines()) == 1
+
+
+def test_results_and_plot_of_a_missing_store_are_one_line(tmp_path, capsys):
+    assert main(["results", str(tmp_path / "none.sqlite")]) == 2
+    assert main(["plot", str(tmp_path / "none.sqlite"), "--x", "a", "--y", "b", "--out", "p.png"]) == 2
+    assert capsys.readouterr().err.count("no result store") == 2
+    assert not (tmp_path / "none.sqlite").exists()
+
+
+def _jobs(timeseries=False):
+    sc = {"map": "open-6x6", "base_stations": [{"x": 0, "y": 0}], "routers": {"count": 10},
+          "sim": {"time_limit": 3.0}}
+    return [{"scenario": sc, "seed": s, "labels": {"k": s}, "timeseries": timeseries} for s in (3, 1, 2, 3)]
+
+
+def test_run_jobs_with_a_store_gives_the_same_results_and_resumes(tmp_path):
+    plain = run_jobs(_jobs(True), workers=1, show_progress=False)
+    store = tmp_path / "r.sqlite"
+    first = run_jobs(_jobs(True), workers=2, show_progress=False, store=store)
+    seen = []
+    again = run_jobs(_jobs(True), workers=2, show_progress=False, store=store, on_result=lambda k, r: seen.append(k))
+    assert sorted(seen) == [0, 1, 2, 3]
+    for a, b, c in zip(plain, first, again, strict=True):
+        assert a["labels"] == b["labels"] == c["labels"] and a["seed"] == b["seed"]
+        assert a["timeseries"] == b["timeseries"] == c["timeseries"]
+        drop = ("wall_time_s", "scenario")
+        assert {k: v for k, v in a["summary"].items() if k not in drop} == \
+            {k: v for k, v in b["summary"].items() if k not in drop}
+        assert b["summary"] == c["summary"]
+    with ResultStore(store) as st:
+        assert len(st.runs()) == 3 and st.sweeps()[0]["name"] == "runs"
+    no_ts = run_jobs(_jobs(False), workers=1, show_progress=False, store=store)
+    assert "timeseries" not in no_ts[0]
+
+
+def test_run_jobs_with_a_store_raises_after_recording_failures(tmp_path):
+    jobs = _jobs()
+    jobs[1] = {**jobs[1], "scenario": {**jobs[1]["scenario"], "base_stations": [{"x": 2.999, "y": 0}]}}
+    with pytest.raises(AmronetError, match="1 of 3 runs failed"):
+        run_jobs(jobs, workers=1, show_progress=False, store=tmp_path / "r.sqlite")
+    with ResultStore(tmp_path / "r.sqlite") as st:
+        assert sorted(r["status"] for r in st.runs()) == ["done", "done", "failed"]
+
+
+def test_reproduce_keeps_its_store_in_the_output_folder(tmp_path, capsys):
+    out = tmp_path / "f7"
+    args = ["reproduce", "fig7", "--quick", "--explorer", "random", "--time-limit", "200", "--workers", "2",
+            "--out", str(out), "-q"]
+    assert main(args) == 0
+    first = (out / "fig7_runs.csv").read_text()
+    with ResultStore(out / "results.sqlite") as st:
+        stamps = {(r["scenario_hash"], r["seed"]): r["wall_time_s"] for r in st.runs()}
+    assert len(stamps) == 8
+    assert main(args) == 0  # every run comes from the store: same table, no run repeated
+    assert (out / "fig7_runs.csv").read_text() == first
+    with ResultStore(out / "results.sqlite") as st:
+        assert {(r["scenario_hash"], r["seed"]): r["wall_time_s"] for r in st.runs()} == stamps
+
+
+def _fake_module(monkeypatch, seen):
+    import sys
+    import types
+
+    def fake(out_dir, figure="a", runs=1, workers=None, time_limit=10.0, store=None):
+        seen.append({"out_dir": out_dir, "figure": figure, "runs": runs, "workers": workers,
+                     "time_limit": time_limit, "store": store})
+        return {"markdown": f"# {figure}"}
+
+    module = types.ModuleType("amronet_fake_fig")
+    module.run_fake = fake
+    monkeypatch.setitem(sys.modules, "amronet_fake_fig", module)
+
+
+def test_figure_registry_passes_only_accepted_options(tmp_path, monkeypatch):
+    assert {"fig5", "fig7"} <= set(FIGURES)
+    seen = []
+    _fake_module(monkeypatch, seen)
+    fig = Figure("amronet_fake_fig:run_fake", kwargs={"figure": "b"}, quick={"runs": 2, "time_limit": 3.0})
+    fig.run(tmp_path, quick=True, workers=3, explorer="x", time_limit=None)
+    fig.run(tmp_path, quick=True, time_limit=5.0)  # a given option wins over quick's
+    assert seen == [{"out_dir": tmp_path, "figure": "b", "runs": 2, "workers": 3, "time_limit": 3.0, "store": None},
+                    {"out_dir": tmp_path, "figure": "b", "runs": 2, "workers": None, "time_limit": 5.0,
+                     "store": None}]
+
+
+def test_reproduce_all_runs_every_registered_figure(tmp_path, monkeypatch, capsys):
+    from amronet.experiments import registry
+
+    seen = []
+    _fake_module(monkeypatch, seen)
+    monkeypatch.setattr(registry, "FIGURES", {"f1": Figure("amronet_fake_fig:run_fake", kwargs={"figure": "f1"}),
+                                              "f2": Figure("amronet_fake_fig:run_fake", kwargs={"figure": "f2"})})
+    assert main(["reproduce", "all", "--out", str(tmp_path), "--workers", "1"]) == 0
+    assert [(s["figure"], s["out_dir"], s["store"]) for s in seen] == [
+        ("f1", tmp_path / "f1", tmp_path / "f1" / "results.sqlite"),
+        ("f2", tmp_path / "f2", tmp_path / "f2" / "results.sqlite")]
+    assert "# f1" in capsys.readouterr().out
+    seen.clear()
+    assert main(["reproduce", "f2", "--store", str(tmp_path / "s.sqlite"), "-q"]) == 0
+    assert seen[0]["store"] == tmp_path / "s.sqlite" and seen[0]["out_dir"].name == "f2"
+
+
+def test_parquet_without_pyarrow_is_one_line(swept, tmp_path, capsys, monkeypatch):
+    import sys
+
+    _, store, _ = swept
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    assert main(["results", str(store), "--export", "parquet", "--out", str(tmp_path / "pq")]) == 2
+    err = capsys.readouterr().err
+    assert "pip install 'amronet[cluster]'" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "pq").exists()

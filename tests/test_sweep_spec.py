@@ -1,0 +1,131 @@
+import pytest
+import yaml
+
+from amronet.cli import main
+from amronet.errors import AmronetError, ScenarioError
+from amronet.scenario import load_scenario
+from amronet.sweeps import load_sweep, resolve_scenario, scenario_hash, sweep_from_spec
+from sweep_helpers import tiny_sweep, write_sweep
+
+
+def test_grid_then_points_in_order_with_seeds():
+    sweep = sweep_from_spec(tiny_sweep(grid={"radio.r_c": [0.8, 1.0], "algorithm.params.triangular": ["local",
+                                                                                                      "global"]},
+                                       points=[{"routers.count": 10}], seeds=3, seed_start=5))
+    assert [p.overrides for p in sweep.points] == [
+        {"radio.r_c": 0.8, "algorithm.params.triangular": "local"},
+        {"radio.r_c": 0.8, "algorithm.params.triangular": "global"},
+        {"radio.r_c": 1.0, "algorithm.params.triangular": "local"},
+        {"radio.r_c": 1.0, "algorithm.params.triangular": "global"},
+        {"routers.count": 10}]
+    assert sweep.seeds == [5, 6, 7] and len(sweep.runs()) == 15
+    assert sweep.keys == ["radio.r_c", "algorithm.params.triangular", "routers.count"]
+    assert sweep.points[4].scenario["routers"]["count"] == 10
+    assert all(p.scenario["sim"]["time_limit"] == 3.0 for p in sweep.points)
+
+
+def test_without_grid_one_point_and_seed_list():
+    sweep = sweep_from_spec({"name": "one", "base": "self-spreading-6x6", "seeds": [9, 2]})
+    assert len(sweep.points) == 1 and sweep.points[0].overrides == {} and sweep.seeds == [9, 2]
+
+
+def test_identical_points_are_one_run():
+    sweep = sweep_from_spec(tiny_sweep(radii=(1.0,), points=[{"radio.r_c": 1.0}]))
+    assert len(sweep.points) == 2 and sweep.points[0].hash == sweep.points[1].hash
+    assert len(sweep.runs()) == 2  # 2 seeds, not 4
+
+
+def test_hash_is_of_the_resolved_scenario():
+    a = resolve_scenario(load_scenario("self-spreading-6x6"))
+    b = resolve_scenario(load_scenario("self-spreading-6x6", {"algorithm.params": {}, "radio.r_c": 1}))
+    c = resolve_scenario(load_scenario("self-spreading-6x6", {"radio.r_c": 1.01}))
+    assert a["algorithm"]["params"]["loss_margin"] == 0.05  # defaults spelt out
+    assert scenario_hash(a) == scenario_hash(b) != scenario_hash(c)
+
+
+def test_relative_paths_are_taken_from_the_sweep_file(tmp_path):
+    (tmp_path / "sub").mkdir()
+    sc = load_scenario("self-spreading-6x6").to_dict()
+    (tmp_path / "sub" / "sc.yaml").write_text(yaml.safe_dump(sc))
+    sweep = load_sweep(write_sweep(tmp_path / "s.yaml", {"name": "rel", "base": "sub/sc.yaml", "seeds": 1}))
+    assert sweep.points[0].scenario["map"] == "open-6x6"
+    inline = {**sc, "map": "maps/m.yaml"}  # the map is loaded when a run starts; here its path is resolved
+    sweep = load_sweep(write_sweep(tmp_path / "t.yaml", {"name": "inline", "base": inline, "seeds": 1}))
+    assert sweep.points[0].scenario["map"] == str(tmp_path / "maps" / "m.yaml")
+
+
+@pytest.mark.parametrize(("spec", "field"), [
+    (tiny_sweep(grid={}), "grid"),
+    (tiny_sweep(grid={"radio.r_c": []}), "grid.radio.r_c"),
+    (tiny_sweep(grid={"radio.rc": [1.0]}), "grid.radio.rc"),
+    (tiny_sweep(grid={"radio.r_c": [1.0, -1.0]}), "grid.radio.r_c"),
+    (tiny_sweep(grid={"algorithm.name": ["telepathy"]}), "grid.algorithm.name"),
+    (tiny_sweep(points=[{"routers.count": 3}, {"routers.cont": 3}]), "points[1].routers.cont"),
+    (tiny_sweep(points=[]), "points"),
+    (tiny_sweep(seeds=0), "seeds"),
+    (tiny_sweep(seeds=[]), "seeds"),
+    (tiny_sweep(seeds=[1, 1]), "seeds"),
+    (tiny_sweep(seeds="five"), "seeds"),
+    (tiny_sweep(seeds=[1, 2], seed_start=3), "seed_start"),
+    (tiny_sweep(seedz=3), "seedz"),
+    (tiny_sweep(overrides={"sim.time_limt": 3}), "overrides.sim.time_limt"),
+    (tiny_sweep(base="no-such-preset"), "base"),
+    (tiny_sweep(base={"map": "open-6x6"}), "base"),
+    (tiny_sweep(name=""), "name"),
+])
+def test_bad_sweeps_name_the_field(spec, field):
+    with pytest.raises(ScenarioError) as info:
+        sweep_from_spec(spec)
+    assert str(info.value).startswith(field + ":") or info.value.field.startswith(field)
+    assert "\n" not in str(info.value)
+
+
+BAD_FILES = {
+    "unknown-key": "name: x\nbase: self-spreading-6x6\nseeds: 2\ngrdi: {radio.r_c: [1]}\n",
+    "empty-grid": "name: x\nbase: self-spreading-6x6\nseeds: 2\ngrid: {}\n",
+    "zero-seeds": "name: x\nbase: self-spreading-6x6\nseeds: 0\n",
+    "bad-override": "name: x\nbase: self-spreading-6x6\nseeds: 1\ngrid: {routers.count: [5, many]}\n",
+    "not-yaml": "name: [x\n",
+    "not-a-mapping": "- 1\n- 2\n",
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_sweep_file_is_one_line_and_leaves_the_store_untouched(tmp_path, capsys, case):
+    store = tmp_path / "results.sqlite"
+    assert main(["sweep", str(write_sweep(tmp_path / "ok.yaml", tiny_sweep(seeds=1))), "--store", str(store),
+                 "--workers", "1", "-q"]) == 0
+    before = store.read_bytes()
+    capsys.readouterr()
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(BAD_FILES[case])
+    assert main(["sweep", str(bad), "--store", str(store), "--workers", "1", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("amronet: error: ") and len(err.strip().splitlines()) == 1
+    assert store.read_bytes() == before
+
+
+def test_missing_sweep_file(tmp_path, capsys):
+    assert main(["sweep", str(tmp_path / "nope.yaml"), "--store", str(tmp_path / "r.sqlite")]) == 2
+    assert "no sweep file" in capsys.readouterr().err and not (tmp_path / "r.sqlite").exists()
+
+
+def test_bad_workers_is_one_line(tmp_path, capsys):
+    path = write_sweep(tmp_path / "s.yaml", tiny_sweep())
+    assert main(["sweep", str(path), "--store", str(tmp_path / "r.sqlite"), "--workers", "0"]) == 2
+    assert "--workers" in capsys.readouterr().err
+    with pytest.raises(AmronetError, match="--cluster"):
+        from amronet.sweeps import make_executor
+
+        make_executor(cluster="slurm")
+
+
+def test_a_store_that_is_not_a_database_is_one_line_and_untouched(tmp_path, capsys):
+    store = tmp_path / "results.sqlite"
+    store.write_text("my notes, not a database\n")
+    path = write_sweep(tmp_path / "s.yaml", tiny_sweep())
+    assert main(["sweep", str(path), "--store", str(store), "--workers", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "--store" in err and "not a SQLite database" in err and len(err.strip().splitlines()) == 1
+    assert store.read_text() == "my notes, not a database\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.sqlite", "s.yaml"]

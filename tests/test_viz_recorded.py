@@ -1,0 +1,153 @@
+"""Tests of amronet.viz.recorded: snapshots of recorded frames (PNG, SVG) and animations (GIF, MP4), by content."""
+
+from __future__ import annotations
+
+import io
+import itertools
+import sys
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from amronet.errors import AmronetError
+from amronet.recording import Recorder, Recording
+from amronet.robots import Kind, State
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.viz.recorded import FrameRenderer, pick_frames, recording_snapshot, write_animation
+from amronet.viz.snapshot import _PALETTE, MAP_COLOURS
+
+DPI = 60
+SVG = "{http://www.w3.org/2000/svg}"
+
+
+def _recording(preset: str, overrides: dict, every: int = 10) -> Recording:
+    sim = Simulation(load_scenario(preset, overrides), 1)
+    result = sim.run(recorder=Recorder(every))
+    with np.load(io.BytesIO(result.files(snapshot=False)["recording.npz"])) as data:
+        return Recording.from_arrays({k: data[k] for k in data.files})
+
+
+@pytest.fixture(scope="module")
+def spread() -> Recording:
+    return _recording("self-spreading-autolab", {"sim.time_limit": 40})
+
+
+@pytest.fixture(scope="module")
+def agents() -> Recording:
+    return _recording("agent-assisted-office", {"sim.time_limit": 150})
+
+
+def _png(fig) -> np.ndarray:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=DPI)
+    return np.asarray(Image.open(buf).convert("RGB"), dtype=np.int16)
+
+
+def _pixel(fig, xy) -> tuple[int, int]:
+    fig.canvas.draw()
+    px, py = fig.axes[0].transData.transform(xy)
+    return int(np.rint(fig.get_figheight() * fig.dpi - py)), int(np.rint(px))
+
+
+def test_snapshot_png_shows_routers_in_their_status_colour(spread):
+    f = spread.frames - 1
+    fig = recording_snapshot(spread, f, dpi=DPI)
+    img = _png(fig)
+    fr = spread.frame(f)
+    blue = np.rint(255 * _PALETTE[0])
+    base = np.flatnonzero(fr["kind"] == Kind.BASE)[0]
+    r, c = _pixel(fig, fr["xy"][base])
+    assert np.abs(img[r, c] - blue).max() <= 12  # the base station's square, status 0
+    refs = np.flatnonzero(fr["state"] == State.REFERENCE)
+    assert len(refs) >= 3
+    hits = [np.abs(img[_pixel(fig, fr["xy"][i])] - blue).max() <= 30 for i in refs]
+    assert np.mean(hits) >= 0.8  # a neighbour's marker may sit on top of a few
+    uncovered = np.all(np.abs(img - np.array(MAP_COLOURS["uncovered"])) <= 6, axis=-1)
+    assert uncovered.sum() > 1000  # 40 s in, most of autolab is uncovered
+    assert "coverage" in fig.axes[0].get_title() and "t = 40 s" in fig.axes[0].get_title()
+
+
+def test_snapshot_svg_has_one_marker_per_robot_one_disk_per_deployed_node_one_line_per_link(spread):
+    f = spread.frames - 1
+    fig = recording_snapshot(spread, f, dpi=DPI)
+    buf = io.StringIO()
+    fig.savefig(buf, format="svg")
+    root = ET.fromstring(buf.getvalue())
+    groups = {g.get("id"): g for g in root.iter(f"{SVG}g") if g.get("id")}
+    markers = sum(len(list(g.iter(f"{SVG}use"))) for k, g in groups.items() if k.startswith("PathCollection"))
+    assert markers == spread.n[f]
+    fr = spread.frame(f)
+    deployed = np.isin(fr["state"], (State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED)).sum()
+    disks = [g for k, g in groups.items() if k.startswith("EllipseCollection")]
+    assert len(disks) == 1 and len(list(disks[0].iter(f"{SVG}use"))) == deployed
+    links = [g for k, g in groups.items() if k.startswith("LineCollection")]
+    assert len(links) == 1 and len(list(links[0].iter(f"{SVG}path"))) == len(spread.links(f))
+
+
+def test_snapshot_draws_agent_trails(agents):
+    f = agents.frames - 1
+    fig = recording_snapshot(agents, f, dpi=DPI)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "agent trail" in labels and "agent" in labels
+    trails = agents.trails(f)
+    assert len(trails) == 3
+    collections = [c for c in fig.axes[0].collections if c.get_zorder() == 2.5]
+    assert len(collections) == 1 and len(collections[0].get_segments()) == 3
+    # a trail's midpoint is drawn in its agent's status colour (or a blend with the map under it)
+    img = _png(fig)
+    path = next(iter(trails.values()))
+    r, c = _pixel(fig, path[len(path) // 2])
+    window = img[r - 2: r + 3, c - 2: c + 3].reshape(-1, 3)
+    assert np.any(window[:, 2] - window[:, 0] > 40)  # bluish
+
+
+def test_gif_frames_count_and_differ(spread, tmp_path):
+    path = tmp_path / "run.gif"
+    count = write_animation(spread, path, fps=5, max_frames=8, dpi=40)
+    assert count == 8 == len(pick_frames(spread.frames, 1, 8))
+    im = Image.open(path)
+    assert im.n_frames == 8
+    assert im.info["duration"] == 200 and im.info["loop"] == 0
+    frames = []
+    for k in range(im.n_frames):
+        im.seek(k)
+        frames.append(np.asarray(im.convert("RGB"), dtype=np.int16))
+    assert all(np.abs(a - b).sum() > 0 for a, b in itertools.pairwise(frames))
+    assert frames[0].shape == frames[-1].shape
+
+
+def test_renderer_matches_the_snapshot_layout(spread):
+    renderer = FrameRenderer(spread, dpi=DPI)
+    a = renderer.render(0)
+    b = renderer.render(spread.frames - 1)
+    assert a.shape == b.shape == _png(recording_snapshot(spread, 0, dpi=DPI)).shape
+    assert np.abs(a.astype(int) - b).sum() > 0
+
+
+def test_pick_frames():
+    assert pick_frames(10).tolist() == list(range(10))
+    assert pick_frames(10, every=4).tolist() == [0, 4, 8, 9]
+    picked = pick_frames(1000, max_frames=50)
+    assert len(picked) == 50 and picked[0] == 0 and picked[-1] == 999
+    with pytest.raises(AmronetError, match="--every"):
+        pick_frames(10, every=0)
+
+
+def test_mp4(spread, tmp_path):
+    pytest.importorskip("imageio_ffmpeg")
+    path = tmp_path / "run.mp4"
+    assert write_animation(spread, path, max_frames=6, dpi=40) == 6
+    head = path.read_bytes()[:64]
+    assert b"ftyp" in head and path.stat().st_size > 1000
+
+
+def test_mp4_without_encoder_is_a_one_line_error(spread, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)
+    with pytest.raises(AmronetError, match=r"needs an encoder: pip install 'amronet\[video\]'"):
+        write_animation(spread, tmp_path / "run.mp4")
+    assert not (tmp_path / "run.mp4").exists()
+    with pytest.raises(AmronetError, match=r"must end in .gif or .mp4"):
+        write_animation(spread, tmp_path / "run.avi")
