@@ -41,3 +41,18 @@ def test_fig10_and_fig11_small(tmp_path):
     alone = run_coverage_over_time("fig11", tmp_path / "elsewhere" / "x", runs=1, time_limit=5.0, workers=1,
                                    show_progress=False, algorithms=("self-spreading", "dssa"))
     assert any("not evaluated" in c.verdict for c in alone["claims"])
+
+
+def test_reproduce_fig10_quick_on_a_dask_local_cluster_resumes_from_the_store(tmp_path, capsys):
+    from amronet.cli import main
+
+    out = tmp_path / "fig10"
+    args = ["reproduce", "fig10", "--quick", "--out", str(out), "-q"]
+    assert main([*args, "--cluster", "local", "--workers", "1"]) == 0
+    first = (out / "fig10_runs.csv").read_text()
+    assert (out / "results.sqlite").is_file() and len(first.splitlines()) == 7
+    # again on the local pool: every run comes from the store, the table is the same
+    assert main([*args, "--workers", "1"]) == 0
+    again = (out / "fig10_runs.csv").read_text()
+    strip = [line.rsplit(",", 1)[0] for line in first.splitlines()]  # wall time is the last column
+    assert [line.rsplit(",", 1)[0] for line in again.splitlines()] == strip

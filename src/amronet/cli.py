@@ -7,11 +7,13 @@ nothing is written then.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
 
 from amronet import __version__
+from amronet.cli_common import add_executor_arguments, make_executor_from_args
 from amronet.errors import AmronetError
 
 __all__ = ["main"]
@@ -109,14 +111,17 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     from amronet.experiments.registry import FIGURES
 
     names = list(FIGURES) if args.figure == "all" else [args.figure]
-    for name in names:
-        out = Path(args.out or "runs") / name if args.figure == "all" else Path(args.out or f"runs/{name}")
-        store = Path(args.store) if args.store else out / "results.sqlite"
-        report = FIGURES[name].run(out, quick=args.quick, workers=args.workers, show_progress=not args.quiet,
-                                   explorer=args.explorer, time_limit=args.time_limit, store=store)
-        if not args.quiet:
-            print(report["markdown"])
-            print(f"wrote {out}/: {name}_runs.csv {name}_table.csv {name}.png {name}_claims.md; runs in {store}")
+    dask = args.scheduler is not None or args.cluster is not None
+    with make_executor_from_args(args) if dask else contextlib.nullcontext() as executor:
+        for name in names:
+            out = Path(args.out or "runs") / name if args.figure == "all" else Path(args.out or f"runs/{name}")
+            store = Path(args.store) if args.store else out / "results.sqlite"
+            report = FIGURES[name].run(out, quick=args.quick, workers=args.workers, show_progress=not args.quiet,
+                                       explorer=args.explorer, time_limit=args.time_limit, store=store,
+                                       executor=executor)
+            if not args.quiet:
+                print(report["markdown"])
+                print(f"wrote {out}/: {name}_runs.csv {name}_table.csv {name}.png {name}_claims.md; runs in {store}")
     return 0
 
 
@@ -169,11 +174,11 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("figure", choices=[*FIGURES, "all"], help="which figure (all: every one, into OUT/FIGURE)")
     rp.add_argument("--out", help="output folder (default runs/FIGURE)")
     rp.add_argument("--store", help="result store: finished runs are kept and reused (default OUT/results.sqlite)")
-    rp.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     rp.add_argument("--explorer", default="frontier", help="agents' exploration strategy (default frontier)")
     rp.add_argument("--time-limit", type=float, default=None,
                     help="simulated seconds per run at most (default: the figure's own, 6000 for fig5 and fig7)")
     rp.add_argument("--quick", action="store_true", help="a small subset, for a smoke test")
+    add_executor_arguments(rp)
     rp.add_argument("-q", "--quiet", action="store_true")
     rp.set_defaults(func=_cmd_reproduce)
 

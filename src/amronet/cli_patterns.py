@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from amronet.cli_common import parse_base
 from amronet.errors import AmronetError, MapError
 
 __all__ = ["add_parser", "cmd_patterns", "parse_area", "parse_radius"]
@@ -53,16 +54,6 @@ def parse_radius(text: str) -> float:
     return r
 
 
-def _parse_base(text: str) -> tuple[float, float]:
-    try:
-        x, y = (float(v) for v in text.split(","))
-    except ValueError:
-        raise AmronetError(f"--base: {text!r} is not X,Y in metres, e.g. 1.5,2") from None
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise AmronetError(f"--base: {text!r} must be finite")
-    return x, y
-
-
 def _area(args: argparse.Namespace, r: float) -> tuple[Any, str]:
     """The area to place in (a prepared PatternArea) and a one-line description of it."""
     import numpy as np
@@ -84,7 +75,7 @@ def _area(args: argparse.Namespace, r: float) -> tuple[Any, str]:
     if args.base is None:
         mask, where = omap.free, "all free cells"
     else:
-        base = _parse_base(args.base)
+        base = parse_base(args.base)
         try:
             mask = reachable_free(omap, np.array(base))
         except MapError as exc:

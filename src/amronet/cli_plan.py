@@ -13,39 +13,22 @@ import json
 import math
 import sys
 
+from amronet.cli_common import add_executor_arguments, make_executor_from_args, parse_base
 from amronet.errors import AmronetError
 
-__all__ = ["add_parsers", "cmd_plan", "parse_base"]
-
-
-def parse_base(text: str) -> tuple[float, float]:
-    """Parse ``--base X,Y`` (metres).
-
-    Raises:
-        AmronetError: Not two finite numbers.
-    """
-    try:
-        x, y = (float(v) for v in text.split(","))
-    except ValueError:
-        raise AmronetError(f"--base: {text!r} is not X,Y in metres, e.g. 1.0,2.0") from None
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise AmronetError(f"--base: {text!r} must be finite")
-    return x, y
+__all__ = ["add_parsers", "cmd_plan"]
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
     """Run ``amronet plan`` (see the module docstring)."""
     from amronet.planning import plan, write_plan
-    from amronet.sweeps import make_executor
 
     bases = [parse_base(b) for b in args.base or []]
     if not bases:
         raise AmronetError("--base: give at least one base station as --base X,Y")
     if args.time_limit <= 0 or not math.isfinite(args.time_limit):
         raise AmronetError(f"--time-limit: must be a finite number > 0, got {args.time_limit:g}")
-    if args.workers is not None and args.workers < 1:
-        raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
-    with make_executor(workers=args.workers, scheduler=args.scheduler, cluster=args.cluster) as executor:
+    with make_executor_from_args(args) as executor:
         p = plan(args.map, bases, r_c=args.rc, agents_per_base=args.agents, runs=args.runs,
                  confidence=args.confidence, explorer=args.explorer, time_limit=args.time_limit, seed=args.seed,
                  store=args.store, executor=executor, show_progress=not args.quiet and not args.json)
@@ -79,9 +62,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--time-limit", type=float, default=6000.0, help="simulated seconds per run at most")
     p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--store", help="keep the runs in this result store (and reuse them next time)")
-    p.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="run on a running Dask scheduler, e.g. tcp://host:8786")
-    p.add_argument("--cluster", metavar="KIND", help="start a Dask cluster here: local (a LocalCluster)")
+    add_executor_arguments(p)
     p.add_argument("--out", metavar="DIR", help="write plan.json, plan.md and typical.png (replaced atomically)")
     p.add_argument("--json", action="store_true", help="print the plan as JSON")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but warnings")

@@ -21,6 +21,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from amronet.cli_common import add_executor_arguments, make_executor_from_args
 from amronet.errors import AmronetError
 
 __all__ = ["add_parsers", "cmd_plot", "cmd_results", "cmd_sweep"]
@@ -38,23 +39,17 @@ def _fmt(value: Any) -> str:
     return "" if value is None else str(value)
 
 
-def _workers(value: int | None) -> int | None:
-    if value is not None and value < 1:
-        raise AmronetError(f"--workers: must be >= 1, got {value}")
-    return value
-
-
 def cmd_sweep(args: argparse.Namespace) -> int:
     """Run ``amronet sweep`` (see the module docstring)."""
     from rich.table import Table
 
-    from amronet.sweeps import ResultStore, load_sweep, make_executor, run_sweep
+    from amronet.sweeps import ResultStore, load_sweep, run_sweep
     from amronet.sweeps.store import check_store_path
     from amronet.sweeps.tables import point_summary, run_rows
 
     sweep = load_sweep(args.sweep)
     check_store_path(Path(args.store))
-    with make_executor(workers=_workers(args.workers), scheduler=args.scheduler, cluster=args.cluster) as executor:
+    with make_executor_from_args(args) as executor:
         if not args.quiet:
             print(f"{sweep.name}: {len(sweep.points)} points x {len(sweep.seeds)} seeds = {len(sweep.runs())} runs "
                   f"on {executor.describe()}", file=sys.stderr)
@@ -163,9 +158,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
                               description="Run every (point, seed) of a sweep file that is not in the store yet.")
     p.add_argument("sweep", help="sweep YAML file")
     p.add_argument("--store", required=True, help="result store (SQLite file; created when missing)")
-    p.add_argument("--workers", type=int, help="local worker processes, or LocalCluster workers (default: all cores)")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="run on a running Dask scheduler, e.g. tcp://host:8786")
-    p.add_argument("--cluster", metavar="KIND", help="start a Dask cluster here: local (a LocalCluster)")
+    add_executor_arguments(p)
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded as failed")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no table")

@@ -22,6 +22,7 @@ import numpy as np
 from amronet.experiments.common import Claim, claims_markdown, csv_text, write_outputs
 from amronet.experiments.runner import run_jobs
 from amronet.experiments.stats import mean_ci, mean_ci_columns
+from amronet.sweeps.executors import Executor
 
 __all__ = ["ALGORITHMS", "run_coverage_over_time"]
 
@@ -61,6 +62,7 @@ def run_coverage_over_time(
     seed: int = 0,
     baseline_dir: Path | None = None,
     store: Path | None = None,
+    executor: Executor | None = None,
 ) -> dict[str, Any]:
     """Run Fig. 10 or Fig. 11 and write its files to ``out_dir``.
 
@@ -79,7 +81,8 @@ def run_coverage_over_time(
         seed: Base seed; run ``k`` uses ``seed * 100000 + k`` for every algorithm.
         baseline_dir: For Fig. 11, the folder of a Fig. 10 run to compare final coverage with (default: the
             sibling folder ``fig10`` of ``out_dir``, when it has a table).
-        store: Result store (SQLite) that finished runs are kept in and loaded from, when the runner supports it.
+        store: Result store (SQLite) that finished runs are kept in and loaded from.
+        executor: Where the runs execute (default: a local process pool with ``workers`` processes).
     """
     if figure not in MAPS:
         raise ValueError(f"figure must be one of {sorted(MAPS)}, not {figure!r}")
@@ -92,8 +95,8 @@ def run_coverage_over_time(
         for k in range(runs):
             jobs.append({"scenario": scenario, "seed": seed * 100_000 + k, "timeseries": True,
                          "labels": {"figure": figure, "map": map_name, "algorithm": algorithm, "run": k}})
-    extra = {"store": store} if store is not None else {}
-    results = run_jobs(jobs, workers=workers, description=figure, show_progress=show_progress, **extra)
+    results = run_jobs(jobs, workers=workers, description=figure, show_progress=show_progress, store=store,
+                       executor=executor)
 
     grid = np.arange(0.0, time_limit + 1e-9, 1.0)
     series: dict[str, dict[str, np.ndarray]] = {a: {"coverage": [], "connected_coverage": []} for a in algorithms}

@@ -18,6 +18,7 @@ import numpy as np
 from amronet.experiments.common import START_LOCATIONS, Claim, agent_scenario, claims_markdown, csv_text, write_outputs
 from amronet.experiments.runner import run_jobs
 from amronet.experiments.stats import mean_ci
+from amronet.sweeps.executors import Executor
 
 __all__ = ["PATTERNS", "run_fig5"]
 
@@ -50,6 +51,7 @@ def run_fig5(
     show_progress: bool = True,
     seed: int = 0,
     store: str | Path | None = None,
+    executor: Executor | None = None,
 ) -> dict[str, Any]:
     """Run the Fig. 5 experiment and write ``fig5_runs.csv``, ``fig5.png`` and ``fig5_claims.md`` to ``out_dir``.
 
@@ -64,7 +66,8 @@ def run_fig5(
                     labels = {"map": map_name, "r_c": float(r), "agents": n_a, "start": s}
                     jobs.append({"scenario": agent_scenario(map_name, r, (loc,), n_a, explorer, time_limit),
                                  "seed": seed * 100_000 + len(jobs), "labels": labels})
-    results = run_jobs(jobs, workers=workers, description="fig5", show_progress=show_progress, store=store)
+    results = run_jobs(jobs, workers=workers, description="fig5", show_progress=show_progress, store=store,
+                       executor=executor)
     rows = []
     for res in results:
         s = res["summary"]

@@ -17,6 +17,7 @@ import numpy as np
 from amronet.experiments.common import CORNERS, Claim, agent_scenario, claims_markdown, csv_text, write_outputs
 from amronet.experiments.runner import run_jobs
 from amronet.experiments.stats import mean_ci
+from amronet.sweeps.executors import Executor
 
 __all__ = ["run_fig7"]
 
@@ -34,6 +35,7 @@ def run_fig7(
     show_progress: bool = True,
     seed: int = 0,
     store: str | Path | None = None,
+    executor: Executor | None = None,
 ) -> dict[str, Any]:
     """Run the Fig. 7 experiment and write ``fig7_runs.csv``, ``fig7.png`` and ``fig7_claims.md`` to ``out_dir``."""
     jobs = []
@@ -43,7 +45,8 @@ def run_fig7(
                 labels = {"map": map_name, "r_c": float(r_c), "bases": n, "agents_per_base": n_a, "run": k}
                 jobs.append({"scenario": agent_scenario(map_name, r_c, CORNERS[:n], n_a, explorer, time_limit),
                              "seed": seed * 100_000 + 50_000 + len(jobs), "labels": labels})
-    results = run_jobs(jobs, workers=workers, description="fig7", show_progress=show_progress, store=store)
+    results = run_jobs(jobs, workers=workers, description="fig7", show_progress=show_progress, store=store,
+                       executor=executor)
     rows = []
     for res in results:
         s = res["summary"]

@@ -3,12 +3,12 @@
 A figure is a function ``run_FIG(out_dir=..., **options) -> report`` (``report["markdown"]`` is printed). To add
 one, add one line to :data:`FIGURES`::
 
-    "fig10": Figure("amronet.experiments.fig10:run_fig10", kwargs={"figure": "fig10"}, quick={"runs": 2}),
+    "fig12": Figure("amronet.experiments.fig12:run_fig12", quick={"runs": 2}),
 
 ``amronet reproduce`` passes the options the function accepts among ``workers``, ``show_progress``,
-``explorer``, ``time_limit`` and ``store`` (others, and options not given, are left out, so a figure need not
-take them all), and ``quick`` with ``--quick``. ``amronet reproduce all`` runs every figure in the order of
-:data:`FIGURES`.
+``explorer``, ``time_limit``, ``store`` and ``executor`` (others, and options not given, are left out, so a
+figure need not take them all), and ``quick`` with ``--quick``. ``amronet reproduce all`` runs every figure in
+the order of :data:`FIGURES`.
 """
 
 from __future__ import annotations

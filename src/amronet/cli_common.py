@@ -1,0 +1,47 @@
+"""Argument helpers shared by the ``amronet`` subcommands: base-station positions and where runs execute."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+from amronet.errors import AmronetError
+
+__all__ = ["add_executor_arguments", "make_executor_from_args", "parse_base"]
+
+
+def parse_base(text: str) -> tuple[float, float]:
+    """Parse ``--base X,Y`` (metres).
+
+    Raises:
+        AmronetError: Not two finite numbers.
+    """
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise AmronetError(f"--base: {text!r} is not X,Y in metres, e.g. 1.0,2.0") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise AmronetError(f"--base: {text!r} must be finite")
+    return x, y
+
+
+def add_executor_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--workers``, ``--scheduler`` and ``--cluster``: where the runs of a command execute."""
+    parser.add_argument("--workers", type=int, help="local worker processes, or LocalCluster workers "
+                                                    "(default: all cores)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="run on a running Dask scheduler, e.g. tcp://host:8786")
+    parser.add_argument("--cluster", metavar="KIND", help="start a Dask cluster here: local (a LocalCluster)")
+
+
+def make_executor_from_args(args: argparse.Namespace) -> Any:
+    """The executor (a context manager) that :func:`add_executor_arguments`'s options ask for.
+
+    Raises:
+        AmronetError: ``--workers`` below 1 (or a bad scheduler / cluster, from the executor).
+    """
+    from amronet.sweeps import make_executor
+
+    if args.workers is not None and args.workers < 1:
+        raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
+    return make_executor(workers=args.workers, scheduler=args.scheduler, cluster=args.cluster)
