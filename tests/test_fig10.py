@@ -56,3 +56,21 @@ def test_reproduce_fig10_quick_on_a_dask_local_cluster_resumes_from_the_store(tm
     again = (out / "fig10_runs.csv").read_text()
     strip = [line.rsplit(",", 1)[0] for line in first.splitlines()]  # wall time is the last column
     assert [line.rsplit(",", 1)[0] for line in again.splitlines()] == strip
+
+
+def test_outputs_get_the_usual_permissions(tmp_path):
+    import stat
+
+    from amronet.results import write_file_atomically, write_files_atomically
+
+    def mode(path):
+        return stat.S_IMODE(path.stat().st_mode)
+
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "plain.txt").write_bytes(b"z")
+    write_files_atomically(tmp_path / "out", {"a.txt": b"x"})
+    write_file_atomically(tmp_path / "b.txt", lambda p: p.write_bytes(b"y"))
+    assert mode(tmp_path / "out") == mode(tmp_path / "plain")
+    assert mode(tmp_path / "out" / "a.txt") == mode(tmp_path / "plain.txt")
+    assert mode(tmp_path / "b.txt") == mode(tmp_path / "plain.txt")
+    assert mode(tmp_path / "b.txt") & stat.S_IRGRP  # not private (under the usual umask 022)

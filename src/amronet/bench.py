@@ -25,8 +25,12 @@ from amronet.robots import Kind
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.world.builtin import resolve_map
+from amronet.world.space import clearance
 
 __all__ = ["run_bench"]
+
+BASE_CLEARANCE_M = 0.3
+"""Base stations go where the nearest obstacle is at least this far (a reference node's body is 0.165 m)."""
 
 
 def _largest_free_region(omap) -> np.ndarray:
@@ -56,7 +60,8 @@ def run_bench(
     scale = max(1.0, math.sqrt(robots * area_per_robot / max(area, 1e-9)))
     if scale > 1.0:
         omap = dataclasses.replace(omap, resolution=omap.resolution * scale, _cache={})
-    rows, cols = np.nonzero(largest)
+    roomy = largest & (clearance(omap) >= BASE_CLEARANCE_M)  # room for a base node's body
+    rows, cols = np.nonzero(roomy if roomy.any() else largest)
     n_bases = max(1, robots // 1000)
     pick = rng.choice(len(rows), size=n_bases, replace=False)
     bases = omap.cell_centres(rows[pick], cols[pick])

@@ -7,6 +7,7 @@ previous output or the complete new one, never half-written files.
 
 from __future__ import annotations
 
+import functools
 import io
 import json
 import os
@@ -185,6 +186,7 @@ def write_files_atomically(out_dir: Path, files: dict[str, bytes], keep: tuple[s
     except OSError as exc:
         raise AmronetError(f"--out: cannot write to {str(parent)!r}: {exc.strerror}") from None
     try:
+        os.chmod(staging, _permissions(0o777))  # mkdtemp makes it private; results are as shareable as any file
         for name, content in files.items():
             with open(staging / name, "wb") as fh:
                 fh.write(content)
@@ -222,11 +224,24 @@ def write_file_atomically(path: Path, write) -> Path:
         raise AmronetError(f"--out: cannot write {str(path)!r}: {exc.strerror}") from None
     try:
         write(Path(tmp))
+        os.chmod(tmp, _permissions(0o666))  # mkstemp makes it private
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+@functools.cache
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _permissions(mode: int) -> int:
+    """``mode`` as the user's umask leaves it: what a plain ``open()`` or ``mkdir()`` would have given."""
+    return mode & ~_umask()
 
 
 def _routers_connected(sim: Simulation) -> float:

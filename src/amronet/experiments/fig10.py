@@ -30,7 +30,7 @@ ALGORITHMS = ("self-spreading", "dssa", "potential-field")
 """The three algorithms of Figs. 10 and 11, in the paper's order of presentation."""
 MAPS = {"fig10": "open-6x6", "fig11": "obstacles-6x6"}
 LABELS = {"self-spreading": "self-spreading", "dssa": "DSSA", "potential-field": "potential field (K = 1)"}
-DEFAULT_HORIZON_S = 300.0
+DEFAULT_HORIZON_S = 900.0
 """Simulated seconds per run (the paper does not print its horizon; self-spreading has levelled off by then)."""
 EARLY_S = 10.0
 """'Initially' in the paper's claim that self-spreading starts lower: the first ``EARLY_S`` seconds."""
