@@ -156,9 +156,12 @@ class Simulation:
         linked = connected_to(self.table, self.bases, network)
         deployed = sw.deployed
         n_comp, _ = components(self.table, deployed)
+        coverage = self.world.coverage.fraction(sw.xy[network], r_c, method=method)
+        everyone_linked = np.array_equal(linked, network)  # then both are the same area: one computation
         return Metrics(
-            coverage=self.world.coverage.fraction(sw.xy[network], r_c, method=method),
-            connected_coverage=self.world.coverage.fraction(sw.xy[linked], r_c, method=method),
+            coverage=coverage,
+            connected_coverage=coverage if everyone_linked else self.world.coverage.fraction(sw.xy[linked], r_c,
+                                                                                             method=method),
             routers_deployed=int(np.count_nonzero(deployed & (sw.kind == Kind.ROUTER))),
             components=n_comp,
         )
