@@ -1,7 +1,8 @@
 """Wall time of the paper's four figures at full size (target: one minute together on the 2-core machine).
 
 Run: ``.venv/bin/python benchmarks/bench_reproduce.py [--only fig10,fig11]``. Every figure runs from scratch
-into a temporary folder with all cores; the numbers go into the README.
+into a temporary folder with all cores, committing every run to a fresh result store as ``amronet reproduce``
+does; the numbers go into the README.
 """
 
 from __future__ import annotations
@@ -16,10 +17,10 @@ from amronet.experiments.fig7 import run_fig7
 from amronet.experiments.fig10 import run_coverage_over_time
 
 FIGURES = {
-    "fig5": lambda out: run_fig5(out, show_progress=False),
-    "fig7": lambda out: run_fig7(out, show_progress=False),
-    "fig10": lambda out: run_coverage_over_time("fig10", out, show_progress=False),
-    "fig11": lambda out: run_coverage_over_time("fig11", out, show_progress=False),
+    "fig5": lambda out, store: run_fig5(out, show_progress=False, store=store),
+    "fig7": lambda out, store: run_fig7(out, show_progress=False, store=store),
+    "fig10": lambda out, store: run_coverage_over_time("fig10", out, show_progress=False, store=store),
+    "fig11": lambda out, store: run_coverage_over_time("fig11", out, show_progress=False, store=store),
 }
 
 
@@ -33,7 +34,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.only.split(","):
             start = time.perf_counter()
-            report = FIGURES[name](Path(tmp) / name)
+            report = FIGURES[name](Path(tmp) / name, Path(tmp) / f"{name}.sqlite")
             wall = time.perf_counter() - start
             total += wall
             print(f"| {name} | {len(report['rows'])} | {wall:.1f} |", flush=True)

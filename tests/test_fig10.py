@@ -38,6 +38,11 @@ def test_fig10_and_fig11_small(tmp_path):
     claims = {c.claim: c for c in f11["claims"]}
     assert "almost the same" in " ".join(c.paper for c in claims.values())
     assert all("not evaluated" not in c.verdict for c in claims.values())
+    mismatched = run_coverage_over_time("fig11", tmp_path / "fig11", runs=2, time_limit=10.0, workers=1,
+                                        show_progress=False)
+    verdicts = [c.verdict for c in mismatched["claims"]]
+    assert any("not evaluated" in v for v in verdicts)
+    assert any("20 s" in c.ours and "10 s" in c.ours for c in mismatched["claims"])
     alone = run_coverage_over_time("fig11", tmp_path / "elsewhere" / "x", runs=1, time_limit=5.0, workers=1,
                                    show_progress=False, algorithms=("self-spreading", "dssa"))
     assert any("not evaluated" in c.verdict for c in alone["claims"])
@@ -74,3 +79,14 @@ def test_outputs_get_the_usual_permissions(tmp_path):
     assert mode(tmp_path / "out" / "a.txt") == mode(tmp_path / "plain.txt")
     assert mode(tmp_path / "b.txt") == mode(tmp_path / "plain.txt")
     assert mode(tmp_path / "b.txt") & stat.S_IRGRP  # not private (under the usual umask 022)
+
+
+def test_bad_seed_and_workers_are_one_line_errors(tmp_path, capsys):
+    from amronet.cli import main
+
+    assert main(["run", "--preset", "dssa-6x6", "--seed", "-1", "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("amronet: error: seed:") and len(err.strip().splitlines()) == 1
+    assert main(["reproduce", "fig10", "--quick", "--workers", "0", "--out", str(tmp_path / "f"), "-q"]) == 2
+    assert "--workers" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists() and not (tmp_path / "f").exists()

@@ -110,6 +110,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from amronet.experiments.registry import FIGURES
 
+    if args.workers is not None and args.workers < 1:
+        raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
     names = list(FIGURES) if args.figure == "all" else [args.figure]
     dask = args.scheduler is not None or args.cluster is not None
     with make_executor_from_args(args) if dask else contextlib.nullcontext() as executor:
@@ -121,7 +123,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
                                        executor=executor)
             if not args.quiet:
                 print(report["markdown"])
-                print(f"wrote {out}/: {name}_runs.csv {name}_table.csv {name}.png {name}_claims.md; runs in {store}")
+                written = " ".join(sorted(f.name for f in out.iterdir() if f.name.startswith(name)))
+                print(f"wrote {out}/: {written}; runs in {store}")
     return 0
 
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from amronet.algorithms import ALGORITHMS, Readings, StepInput
 from amronet.assemble import World, build_swarm, build_world
+from amronet.errors import ScenarioError
 from amronet.motion import drive
 from amronet.network import agents_connected, components, connected_to
 from amronet.radio import NeighbourTable, make_medium
@@ -70,6 +71,8 @@ class Simulation:
 
     def __post_init__(self) -> None:
         sc = self.scenario
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) or not 0 <= self.seed < 2**63:
+            raise ScenarioError("seed", f"{self.seed!r} is not an integer in [0, 2**63 - 1]; give e.g. --seed 1")
         self.rng = np.random.default_rng(self.seed)
         self.dt = sc.sim.dt
         params = sc.algorithm_params()

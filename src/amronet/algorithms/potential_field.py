@@ -31,9 +31,12 @@ was not at hand; see ``docs/baselines.md``):
   ``K_obstacle / d^2`` (``K_obstacle = K_cover`` by default), when ``obstacle_forces`` is on (paper's
   experiment 2).
 
-Convergence ("coming to rest"): a router whose speed stays below ``rest_fraction v_max`` for ``rest_steps`` steps
-in a row rests (state *reference*); a resting router wakes up (state *explore*) when the force on it would drive
-it faster than twice that speed. The run has converged when every router rests (:attr:`PotentialField.settled`).
+Convergence ("coming to rest"): a router rests (state *reference*) when two things hold. First, over a window
+of ``rest_steps`` steps it got no farther from where the window started than a router creeping at
+``rest_fraction v_max`` would (jitter in place counts as rest, drifting does not). Second, the force on it is
+below the wake-up threshold. A resting router wakes up (state *explore*) when the force on it would drive it
+faster than twice that creeping speed. The run has converged when every router rests
+(:attr:`PotentialField.settled`).
 """
 
 from __future__ import annotations
@@ -67,8 +70,9 @@ class PotentialFieldParams(BaseModel):
         k_degree: Override the derived ``K_degree``.
         obstacle_forces: Add forces from obstacle points seen by the range sensors.
         k_obstacle: Override ``K_obstacle`` (default ``K_cover``).
-        rest_fraction: Speed below which a router counts as at rest, as a fraction of its maximum speed.
-        rest_steps: Steps at rest in a row after which a router rests.
+        rest_fraction: Mean speed over a window below which a router counts as at rest, as a fraction of its
+            maximum speed.
+        rest_steps: Length of that window in steps.
         force_cap_factor: Cap of a single force, in units of ``nu v_max`` (the force that holds full speed).
     """
 
@@ -113,6 +117,8 @@ class PotentialField(Controller):
         self.velocity = np.zeros((n, 2))
         self.obstacle_force = np.zeros((n, 2))
         self.rest_count = np.zeros(n, dtype=np.int64)
+        self.window_start = sw.xy.copy()
+        self.force_norm = np.zeros(n)
         self.wakeups = 0
 
     @property
@@ -143,11 +149,13 @@ class PotentialField(Controller):
             woken = resting[wake]
             sw.state[woken] = State.EXPLORE
             self.rest_count[woken] = 0
+            self.window_start[woken] = sw.xy[woken]
             self.wakeups += len(woken)
         movers = self.routers[sw.state[self.routers] == State.EXPLORE]
         if len(movers) == 0:
             return Command(movers, np.zeros(0))
         force = self._forces(step.table, movers)
+        self.force_norm[movers] = np.hypot(force[:, 0], force[:, 1])
         v = self.velocity[movers]
         v += (force - p.damping * v) / p.mass * self.dt
         v = clamp_norm(v, sw.max_speed[movers])
@@ -161,12 +169,21 @@ class PotentialField(Controller):
             return
         sw, p = self.swarm, self.params
         self.velocity[movers[refused]] = 0.0
-        speed = np.hypot(*self.velocity[movers].T)
-        slow = speed < p.rest_fraction * sw.max_speed[movers]
-        self.rest_count[movers] = np.where(slow, self.rest_count[movers] + 1, 0)
-        rest = movers[self.rest_count[movers] >= p.rest_steps]
+        # at rest: over a window of rest_steps steps the router got no farther than a router creeping at
+        # rest_fraction v_max would (jitter in place counts as rest, drifting does not)
+        self.rest_count[movers] += 1
+        window = p.rest_steps * self.dt
+        drift = np.hypot(*(sw.xy[movers] - self.window_start[movers]).T)
+        full = self.rest_count[movers] >= p.rest_steps
+        v_rest = p.rest_fraction * sw.max_speed[movers]
+        # ... and the force on it would not wake it up again at once
+        calm = full & (drift < v_rest * window) & (self.force_norm[movers] <= p.damping * 2 * v_rest)
+        rest = movers[calm]
         sw.state[rest] = State.REFERENCE
         self.velocity[rest] = 0.0
+        again = movers[full & ~calm]
+        self.rest_count[again] = 0
+        self.window_start[again] = sw.xy[again]
 
     def report(self) -> dict[str, object]:
         """The force constants used and how often resting routers woke up."""
