@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import json
 import re
+import shutil
 import sys
 import zlib
 
@@ -58,6 +59,14 @@ def test_snapshot_png_svg_and_time(recorded, plain, tmp_path, capsys):
     assert "t = 5 s" in (tmp_path / "t5.svg").read_text()
 
 
+@pytest.mark.parametrize("run", ["recorded", "plain"])
+def test_svg_snapshots_of_a_run_are_byte_identical(run, request, tmp_path):
+    folder = request.getfixturevalue(run)
+    for name in ("a.svg", "b.svg"):
+        assert main(["snapshot", str(folder), "--out", str(tmp_path / name), "-q"]) == 0
+    assert (tmp_path / "a.svg").read_bytes() == (tmp_path / "b.svg").read_bytes()
+
+
 def test_animate_gif(recorded, tmp_path):
     out = tmp_path / "run.gif"
     assert main(["animate", str(recorded), "--out", str(out), "--max-frames", "5", "--dpi", "40", "-q"]) == 0
@@ -90,6 +99,13 @@ def test_replay_page_is_self_contained(recorded, tmp_path):
         (["replay", "{recorded}", "--out", "{tmp}/r.txt"], "--out: .* must end in .html"),
         (["animate", "{recorded}", "--out", "{tmp}/r.avi"], "--out: .* must end in .gif or .mp4"),
         (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--fps", "0"], "--fps"),
+        (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--fps", "1e9"],
+         r"--fps: 1e\+09 must be between 0.01 and 50 frames per second for GIF, e.g. 10$"),
+        (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--fps", "0.001"], "--fps: 0.001 must be between"),
+        (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--fps", "nan"], "--fps: nan must be between"),
+        (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--max-frames", "0"], "--max-frames: 0 must be >= 2"),
+        (["replay", "{recorded}", "--out", "{tmp}/r.html", "--every", "-1"], "--every: -1 must be >= 1"),
+        (["replay", "{recorded}", "--out", "{tmp}/r.html", "--max-frames", "1"], "--max-frames: 1 must be >= 2"),
         (["animate", "{recorded}", "--out", "{tmp}/r.gif", "--every", "0"], "--every"),
         (["snapshot", "{recorded}", "--out", "{tmp}/r.jpg"], "--out: .* must end in .png or .svg"),
         (["snapshot", "{plain}", "--out", "{tmp}/r.png", "--time", "3"], "--time: .* run it again with --record"),
@@ -103,6 +119,61 @@ def test_bad_input_is_one_line(argv, message, recorded, plain, tmp_path, capsys)
     assert main(argv) == 2
     assert re.search(message, _error(capsys))
     assert [p.name for p in tmp_path.iterdir()] == []
+
+
+def _damaged_recording(recorded, folder, meta: str):
+    folder.mkdir()
+    with np.load(recorded / "recording.npz") as data:
+        arrays = {k: data[k] for k in data.files}
+    np.savez_compressed(folder / "recording.npz", **{**arrays, "meta": np.array(meta)})
+    return folder
+
+
+@pytest.mark.parametrize("command", ["snapshot", "animate", "replay"])
+@pytest.mark.parametrize(("meta", "why"), [("{not json", "its meta is not valid JSON"),
+                                           ("[1, 2]", "its meta is a JSON list, not an object"),
+                                           ('{"format": "amronet-recording/1"}', "its meta lacks 'algorithm'")])
+def test_a_damaged_recording_is_one_line_naming_the_file(command, meta, why, recorded, tmp_path, capsys):
+    folder = _damaged_recording(recorded, tmp_path / "run", meta)
+    out = tmp_path / {"snapshot": "s.png", "animate": "a.gif", "replay": "r.html"}[command]
+    assert main([command, str(folder), "--out", str(out), "-q"]) == 2
+    err = _error(capsys)
+    assert f"{folder / 'recording.npz'} is damaged or was not written by amronet run --record ({why})" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "why"),
+    [
+        ("network.json", lambda d: {k: v for k, v in d.items() if k != "nodes"}, "no 'nodes'"),
+        ("network.json", lambda d: {**d, "nodes": [{"x": 1}]}, "a node or r_c is malformed: no 'y'"),
+        ("network.json", lambda d: {**d, "nodes": "many"}, "'nodes' is not a list"),
+        ("summary.json", lambda d: [d], "a JSON list, not an object"),
+        ("summary.json", lambda d: {k: v for k, v in d.items() if k != "seed"}, "no 'seed'"),
+        ("summary.json", None, "not valid JSON: Expecting value at line 1"),
+    ],
+)
+def test_a_damaged_run_folder_is_one_line_naming_the_file(name, content, why, plain, tmp_path, capsys):
+    folder = tmp_path / "run"
+    shutil.copytree(plain, folder)
+    path = folder / name
+    path.write_text("not json" if content is None else json.dumps(content(json.loads(path.read_text()))))
+    out = tmp_path / "s.png"
+    assert main(["snapshot", str(folder), "--out", str(out), "-q"]) == 2
+    err = _error(capsys)
+    assert f"{path} is damaged or was not written by amronet run ({why}); run it again" in err
+    assert not out.exists()
+
+
+def test_replay_ignores_a_summary_that_is_not_an_object(recorded, tmp_path):
+    folder = tmp_path / "run"
+    shutil.copytree(recorded, folder)
+    (folder / "summary.json").write_text('["stop_reason", "coverage"]')
+    (folder / "timeseries.csv").write_text("t,coverage,connected_coverage\n0.0,0.1\n")
+    assert main(["replay", str(folder), "--out", str(tmp_path / "r.html"), "-q"]) == 0
+    header = json.loads(re.search(r'id="amronet-header">(.*?)</script>', (tmp_path / "r.html").read_text(),
+                                  re.S).group(1))
+    assert header["summary"] == {} and len(header["timeseries"]["t"]) == header["frames"]
 
 
 def test_mp4_without_encoder(recorded, tmp_path, capsys, monkeypatch):

@@ -182,6 +182,8 @@ def test_figure_png_and_svg(open_32, tmp_path):
     svg = save_patterns_figure(list(open_32[8.0].values())[:2], (32.0, 32.0), 8.0, tmp_path / "p.svg")
     text = svg.read_text()
     assert text.count("r-strip: ") == 1 and "hexagonal: " in text
+    again = save_patterns_figure(list(open_32[8.0].values())[:2], (32.0, 32.0), 8.0, tmp_path / "q.svg")
+    assert again.read_bytes() == svg.read_bytes()  # no random clip-path ids, no date
     with pytest.raises(ValueError, match="png"):
         save_patterns_figure(open_32[4.0], (32.0, 32.0), 4.0, tmp_path / "p.jpg")
 

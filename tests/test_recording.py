@@ -157,3 +157,22 @@ def test_errors_name_the_problem(tmp_path):
     for every in (0, -3, 1.5):
         with pytest.raises(AmronetError, match="--record-every"):
             Recorder(every=every)
+
+
+def test_a_damaged_recording_names_the_file_and_what_is_wrong(spread):
+    sim, rec, _ = spread
+    arrays = rec.arrays(sim)
+    cases = [
+        ({"meta": np.array("{oops")}, r"rec\.npz is damaged or was not written by amronet run --record \(its meta "
+                                      r"is not valid JSON\); record the run again"),
+        ({"meta": np.array("3")}, r"its meta is a JSON int, not an object"),
+        ({"meta": np.array(json.dumps({"format": "amronet-recording/1", "algorithm": "x", "map": "m", "seed": 1}))},
+         r"its meta lacks 'r_c'"),
+        ({"meta": np.array(json.dumps({**json.loads(str(arrays["meta"])), "r_c": "wide"}))},
+         r"is damaged .*\(ValueError reading its arrays\)"),
+        ({"xy_quantum": np.zeros(3)}, r"is damaged .*\(TypeError reading its arrays\)"),
+        ({"state": np.zeros(3, np.uint8)}, r"arrays have inconsistent shapes"),
+    ]
+    for change, message in cases:
+        with pytest.raises(AmronetError, match=message):
+            Recording.from_arrays({**arrays, **change}, where="rec.npz")

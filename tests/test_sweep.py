@@ -51,14 +51,27 @@ def test_results_lists_and_exports_tidy_tables(swept, tmp_path, capsys):
     assert str(table.schema.field("nodes_total").type) == "int64"
 
 
+def test_results_limit(swept, capsys):
+    _, store, _ = swept
+    assert main(["results", str(store), "--limit", "3"]) == 0
+    assert "... and 5 more runs (--limit 0 shows all)" in capsys.readouterr().out
+    assert main(["results", str(store), "--limit", "0"]) == 0
+    assert "more runs" not in capsys.readouterr().out
+    assert main(["results", str(store), "--limit", "-1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == ("amronet: error: --limit: -1 must be >= 0 (the number of runs to list; 0 lists them all)")
+
+
 def test_plot_draws_mean_and_ci(swept, tmp_path, capsys):
     _, store, _ = swept
     out = tmp_path / "plot.png"
     assert main(["plot", str(store), "--x", "radio.r_c", "--y", "nodes_total", "--hue",
                  "algorithm.params.triangular", "--out", str(out)]) == 0
     assert Image.open(out).size[0] > 400 and "4 points from 8 runs" in capsys.readouterr().out
-    assert main(["plot", str(store), "--x", "algorithm.params.triangular", "--y", "coverage", "--out",
-                 str(tmp_path / "cat.svg")]) == 0
+    for name in ("cat.svg", "cat2.svg"):
+        assert main(["plot", str(store), "--x", "algorithm.params.triangular", "--y", "coverage", "--out",
+                     str(tmp_path / name)]) == 0
+    assert (tmp_path / "cat.svg").read_bytes() == (tmp_path / "cat2.svg").read_bytes()
     assert main(["plot", str(store), "--x", "radio.rc", "--y", "nodes_total", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "--x: no column 'radio.rc'" in err and "radio.r_c" in err and len(err.strip().splitlines()) == 1
@@ -173,3 +186,44 @@ def test_parquet_without_pyarrow_is_one_line(swept, tmp_path, capsys, monkeypatc
     err = capsys.readouterr().err
     assert "pip install 'amronet[cluster]'" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "pq").exists()
+
+
+def _die_on_seed_1(job):
+    """A sweep job that kills its worker process (like the out-of-memory killer) on seed 1."""
+    import os
+    import signal
+
+    from amronet.sweeps.worker import execute_job
+
+    if job["seed"] == 1:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return execute_job(job)
+
+
+def test_a_dead_worker_is_one_line_and_the_pool_can_run_again():
+    import os
+
+    from amronet.sweeps.executors import LocalExecutor, WorkerDiedError
+
+    with LocalExecutor(2) as ex:
+        with pytest.raises(WorkerDiedError, match=r"a worker process died \(killed, or out of memory\?\)"):
+            list(ex.imap_unordered(os._exit, [3, 3, 3]))
+        assert sorted(ex.imap_unordered(abs, [-1, -2])) == [(0, 1), (1, 2)]
+
+
+def test_a_sweep_whose_worker_dies_keeps_its_runs_and_resumes(tmp_path, capsys, monkeypatch):
+    import amronet.sweeps.engine as engine
+
+    path = write_sweep(tmp_path / "sweep.yaml", tiny_sweep(seeds=[0, 1, 2]))
+    store = tmp_path / "results.sqlite"
+    monkeypatch.setattr(engine, "execute_job", _die_on_seed_1)
+    assert main(["sweep", str(path), "--store", str(store), "--workers", "2", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("amronet: error: a worker process died") and len(err.splitlines()) == 1
+    assert f"the finished runs are kept in {str(store)!r}: run the same command again to resume" in err
+    with ResultStore(store) as st:
+        assert all(r["status"] == "done" and r["seed"] != 1 for r in st.runs())
+    monkeypatch.undo()
+    assert main(["sweep", str(path), "--store", str(store), "--workers", "2", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["runs"] == 6 and doc["failed"] == 0 and doc["already_in_store"] + doc["done_now"] == 6

@@ -43,6 +43,70 @@ def test_hash_is_of_the_resolved_scenario():
     assert scenario_hash(a) == scenario_hash(b) != scenario_hash(c)
 
 
+def _copy_builtin_map(folder, name="open-6x6"):
+    from importlib import resources
+
+    src = resources.files("amronet").joinpath("data", "maps")
+    folder.mkdir(exist_ok=True)
+    text = src.joinpath(f"{name}.yaml").read_bytes()
+    (folder / "m.yaml").write_bytes(text)  # byte for byte: the image keeps its name
+    image = yaml.safe_load(text)["image"]
+    (folder / image).write_bytes(src.joinpath(image).read_bytes())
+    return folder / "m.yaml"
+
+
+def test_editing_a_map_file_in_place_changes_the_key(tmp_path):
+    import os
+
+    from PIL import Image
+
+    from amronet.sweeps.identity import map_digest
+
+    path = _copy_builtin_map(tmp_path / "maps")
+    spec = tiny_sweep(radii=(1.0,), overrides={"sim.time_limit": 3.0, "map": str(path)})
+    first = sweep_from_spec(spec).points[0].hash
+    assert sweep_from_spec(spec).points[0].hash == first
+    path.write_text(path.read_text())  # the same bytes, a new mtime: the same run
+    assert sweep_from_spec(spec).points[0].hash == first
+    png = path.parent / "open-6x6.png"
+    img = Image.open(png)
+    img.putpixel((5, 5), 0)
+    img.save(png)
+    second = sweep_from_spec(spec).points[0].hash
+    assert second != first
+    meta = yaml.safe_load(path.read_text())
+    path.write_text(yaml.safe_dump({**meta, "occupied_thresh": 0.6}))
+    os.utime(path, ns=(1, 1))
+    third = sweep_from_spec(spec).points[0].hash
+    assert third not in (first, second)
+    # built-in maps: their shipped files are hashed, a name alone is not enough
+    assert map_digest("open-6x6") == map_digest(str(_copy_builtin_map(tmp_path / "copy")))
+    assert map_digest("open-6x6") != map_digest("office-32x32") != map_digest(str(tmp_path / "none.yaml"))
+
+
+def test_a_sweep_on_an_edited_map_runs_again(tmp_path, capsys):
+    import json
+
+    from amronet.sweeps import ResultStore
+
+    path = _copy_builtin_map(tmp_path / "maps")
+    sweep = write_sweep(tmp_path / "s.yaml", tiny_sweep(radii=(1.0,), seeds=1,
+                                                         overrides={"sim.time_limit": 3.0, "map": str(path)}))
+    store = tmp_path / "r.sqlite"
+
+    def run() -> tuple[int, int]:
+        assert main(["sweep", str(sweep), "--store", str(store), "--workers", "1", "--json", "-q"]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        return doc["already_in_store"], doc["done_now"]
+
+    assert run() == (0, 1)
+    assert run() == (1, 0)
+    path.write_text(path.read_text().replace("negate: 0", "negate: 0\n# edited"))
+    assert run() == (0, 1)
+    with ResultStore(store) as st:
+        assert len(st.runs()) == 2
+
+
 def test_relative_paths_are_taken_from_the_sweep_file(tmp_path):
     (tmp_path / "sub").mkdir()
     sc = load_scenario("self-spreading-6x6").to_dict()
@@ -67,6 +131,11 @@ def test_relative_paths_are_taken_from_the_sweep_file(tmp_path):
     (tiny_sweep(seeds=[1, 1]), "seeds"),
     (tiny_sweep(seeds="five"), "seeds"),
     (tiny_sweep(seeds=[1, 2], seed_start=3), "seed_start"),
+    (tiny_sweep(seeds=[2**64]), "seeds"),
+    (tiny_sweep(seeds=[0, 2**63]), "seeds"),
+    (tiny_sweep(seeds=2, seed_start=2**63 - 1), "seeds"),
+    (tiny_sweep(seeds=1, seed_start=2**63), "seed_start"),
+    (tiny_sweep(seeds=10**12), "seeds"),
     (tiny_sweep(seedz=3), "seedz"),
     (tiny_sweep(overrides={"sim.time_limt": 3}), "overrides.sim.time_limt"),
     (tiny_sweep(base="no-such-preset"), "base"),
@@ -84,6 +153,8 @@ BAD_FILES = {
     "unknown-key": "name: x\nbase: self-spreading-6x6\nseeds: 2\ngrdi: {radio.r_c: [1]}\n",
     "empty-grid": "name: x\nbase: self-spreading-6x6\nseeds: 2\ngrid: {}\n",
     "zero-seeds": "name: x\nbase: self-spreading-6x6\nseeds: 0\n",
+    "seed-too-big": "name: x\nbase: self-spreading-6x6\nseeds: [18446744073709551616]\n",
+    "seeds-past-the-top": "name: x\nbase: self-spreading-6x6\nseeds: 2\nseed_start: 9223372036854775807\n",
     "bad-override": "name: x\nbase: self-spreading-6x6\nseeds: 1\ngrid: {routers.count: [5, many]}\n",
     "not-yaml": "name: [x\n",
     "not-a-mapping": "- 1\n- 2\n",
@@ -103,6 +174,20 @@ def test_bad_sweep_file_is_one_line_and_leaves_the_store_untouched(tmp_path, cap
     err = capsys.readouterr().err
     assert err.startswith("amronet: error: ") and len(err.strip().splitlines()) == 1
     assert store.read_bytes() == before
+
+
+def test_the_largest_seed_runs_and_a_larger_one_creates_no_store(tmp_path, capsys):
+    top = tiny_sweep(seeds=1, seed_start=2**63 - 1, radii=(1.0,))
+    assert sweep_from_spec(top).seeds == [2**63 - 1]
+    store = tmp_path / "r.sqlite"
+    assert main(["sweep", str(write_sweep(tmp_path / "top.yaml", top)), "--store", str(store), "--workers", "1",
+                 "-q"]) == 0
+    bad = tmp_path / "big.yaml"
+    bad.write_text("name: x\nbase: self-spreading-6x6\nseeds: [18446744073709551616]\n")
+    assert main(["sweep", str(bad), "--store", str(tmp_path / "new.sqlite"), "--workers", "1", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("amronet: error: seeds: seed 18446744073709551616 is above the largest seed 2**63 - 1")
+    assert len(err.splitlines()) == 1 and not (tmp_path / "new.sqlite").exists()
 
 
 def test_missing_sweep_file(tmp_path, capsys):

@@ -125,6 +125,9 @@ def test_renderer_matches_the_snapshot_layout(spread):
     b = renderer.render(spread.frames - 1)
     assert a.shape == b.shape == _png(recording_snapshot(spread, 0, dpi=DPI)).shape
     assert np.abs(a.astype(int) - b).sum() > 0
+    labels = [t.get_text() for t in renderer.fig.legends[0].get_texts()]
+    assert labels.index("covered: within $r_c$ of any\nrouter or base (moving too)") + 1 == \
+        labels.index("reachable, uncovered")
 
 
 def test_pick_frames():
@@ -151,3 +154,12 @@ def test_mp4_without_encoder_is_a_one_line_error(spread, tmp_path, monkeypatch):
     assert not (tmp_path / "run.mp4").exists()
     with pytest.raises(AmronetError, match=r"must end in .gif or .mp4"):
         write_animation(spread, tmp_path / "run.avi")
+
+
+def test_fps_bounds(spread, tmp_path):
+    for fps, fmt in ((51, "gif"), (0.005, "gif"), (-1, "gif"), (float("inf"), "gif"), (121, "mp4")):
+        with pytest.raises(AmronetError, match=rf"--fps: .* frames per second for {fmt.upper()}"):
+            write_animation(spread, tmp_path / f"run.{fmt}", fps=fps)
+    assert list(tmp_path.iterdir()) == []
+    assert write_animation(spread, tmp_path / "run.gif", fps=50, max_frames=2, dpi=20) == 2
+    assert Image.open(tmp_path / "run.gif").info["duration"] == 20

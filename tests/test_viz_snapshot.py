@@ -110,6 +110,28 @@ def test_uncovered_shading(tmp_path, omap, nodes):
     assert _light_red(_read(all_covered)).sum() == 0
 
 
+def _legend(fig: Figure) -> list[str]:
+    return [t.get_text() for t in fig.legends[0].get_texts()]
+
+
+def test_legend_explains_covered_and_uncovered_ground(omap, nodes):
+    covered_label = "covered: within $r_c$ of any\nrouter or base (moving too)"
+    reachable = omap.free.copy()
+    half = np.zeros(omap.shape, bool)
+    half[:, :50] = True
+    labels = _legend(snapshot_figure(omap, dpi=DPI, covered=half, reachable=reachable, **nodes))
+    assert labels.index(covered_label) + 1 == labels.index("reachable, uncovered")
+    legend = snapshot_figure(omap, dpi=DPI, covered=half, **nodes).legends[0]
+    handle = next(h for h, t in zip(legend.legend_handles, legend.get_texts(), strict=True)
+                  if t.get_text() == covered_label)
+    assert tuple(handle.get_facecolor()[:3]) == (1.0, 1.0, 1.0)  # plain, like the covered ground
+    all_covered = _legend(snapshot_figure(omap, dpi=DPI, covered=np.ones(omap.shape, bool), **nodes))
+    assert covered_label in all_covered and "reachable, uncovered" not in all_covered
+    none_covered = _legend(snapshot_figure(omap, dpi=DPI, covered=np.zeros(omap.shape, bool), **nodes))
+    assert covered_label not in none_covered and "reachable, uncovered" in none_covered
+    assert covered_label not in _legend(snapshot_figure(omap, dpi=DPI, **nodes))  # no coverage given
+
+
 def test_unreachable_shading_and_draw_map(omap):
     reachable = omap.free.copy()
     reachable[:50, :] = False  # below the wall does not count
@@ -131,6 +153,11 @@ def test_svg_output(tmp_path, omap, nodes):
     assert text.lstrip().startswith("<?xml") and "<svg" in text
     map_svg = save_map_picture(omap, tmp_path / "m.svg", dpi=DPI)
     assert "<svg" in map_svg.read_text()
+    # byte-identical from one render to the next: no random clip-path ids, no date
+    assert save_snapshot(tmp_path / "s2.svg", omap, dpi=DPI, title="hello svg", **nodes).read_bytes() == \
+        path.read_bytes()
+    assert save_map_picture(omap, tmp_path / "m2.svg", dpi=DPI).read_bytes() == map_svg.read_bytes()
+    assert "<dc:date>" not in text
 
 
 def test_map_picture(tmp_path, omap):

@@ -123,7 +123,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
                                        executor=executor)
             if not args.quiet:
                 print(report["markdown"])
-                written = " ".join(sorted(f.name for f in out.iterdir() if f.name.startswith(name)))
+                files = sorted(f.name for f in out.iterdir() if f.name.startswith(name)) if out.is_dir() else []
+                written = " ".join(files) or "no figure files"
                 print(f"wrote {out}/: {written}; runs in {store}")
     return 0
 

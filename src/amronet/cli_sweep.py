@@ -96,6 +96,8 @@ def cmd_results(args: argparse.Namespace) -> int:
 
     if (args.export is None) != (args.out is None):
         raise AmronetError("--export: give both --export csv|parquet and --out DIR")
+    if args.limit < 0:
+        raise AmronetError(f"--limit: {args.limit} must be >= 0 (the number of runs to list; 0 lists them all)")
     with ResultStore(args.store, must_exist=True) as store:
         sweep_id = store.find_sweep(args.sweep) if args.sweep else None
         if args.export:

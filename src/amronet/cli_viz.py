@@ -68,6 +68,25 @@ def _frame_index(times: Any, time: float | None) -> int:
     return max(int(np.searchsorted(times, time + 1e-9, side="right")) - 1, 0)
 
 
+def _damaged(path: Path, why: str) -> AmronetError:
+    return AmronetError(f"{path} is damaged or was not written by amronet run ({why}); run it again")
+
+
+def _read_json_object(path: Path) -> dict[str, Any]:
+    """A JSON file of a run folder that must hold an object; one-line errors naming the file."""
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise _damaged(path, f"not valid JSON: {exc.msg} at line {exc.lineno}") from None
+    except UnicodeDecodeError:
+        raise _damaged(path, "not UTF-8 text") from None
+    except OSError as exc:
+        raise AmronetError(f"{path}: cannot read it ({exc.strerror or exc})") from None
+    if not isinstance(data, dict):
+        raise _damaged(path, f"a JSON {type(data).__name__}, not an object")
+    return data
+
+
 def _snapshot_from_network(folder: Path, dpi: float) -> Figure:
     """The final snapshot of a run folder without a recording, from ``network.json`` and the scenario."""
     import numpy as np
@@ -77,37 +96,54 @@ def _snapshot_from_network(folder: Path, dpi: float) -> Figure:
     from amronet.scenario import load_scenario
     from amronet.viz import snapshot_figure
 
-    try:
-        summary = json.loads((folder / "summary.json").read_text())
-        network = json.loads((folder / "network.json").read_text())
-    except FileNotFoundError:
+    if not (folder / "summary.json").is_file() or not (folder / "network.json").is_file():
         raise AmronetError(f"{folder} has neither recording.npz nor network.json and summary.json: give the "
-                           "--out folder of amronet run") from None
-    except json.JSONDecodeError as exc:
-        raise AmronetError(f"{folder}: a JSON file is damaged ({exc.msg}); run it again") from None
+                           "--out folder of amronet run")
+    summary = _read_json_object(folder / "summary.json")
+    network = _read_json_object(folder / "network.json")
+    if "scenario" not in summary:
+        raise _damaged(folder / "summary.json", "no 'scenario'")
     try:
         sc = load_scenario(summary["scenario"])
         world = build_world(sc)
     except (AmronetError, KeyError) as exc:
         raise AmronetError(f"{folder}: cannot rebuild the run's map ({exc}); run it again with --record") from None
-    nodes = network["nodes"]
-    xy = np.array([[n["x"], n["y"]] for n in nodes], dtype=float).reshape(-1, 2)
-    kind = np.array([n["kind"] for n in nodes], dtype=str)
-    r_c = float(network["r_c"])
-    s = summary
-    title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
-             f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")
-    return snapshot_figure(
-        world.omap, xy=xy, kind=kind, state=np.array([n["state"] for n in nodes], dtype=str),
-        status=np.array([n["status"] for n in nodes], dtype=np.int64), r_c=r_c,
-        links=make_medium(sc.radio.model, r_c).update(xy).pairs, covered=world.coverage.covered_mask(
-            xy[kind != "agent"], r_c), reachable=world.reachable, title=title, dpi=dpi,
-    )  # fmt: skip
+    if "nodes" not in network or "r_c" not in network:
+        raise _damaged(folder / "network.json", f"no {'nodes' if 'nodes' not in network else 'r_c'!r}")
+    if not isinstance(network["nodes"], list):
+        raise _damaged(folder / "network.json", "'nodes' is not a list")
+    try:
+        nodes = network["nodes"]
+        xy = np.array([[n["x"], n["y"]] for n in nodes], dtype=float).reshape(-1, 2)
+        kind = np.array([n["kind"] for n in nodes], dtype=str)
+        state = np.array([n["state"] for n in nodes], dtype=str)
+        status = np.array([n["status"] for n in nodes], dtype=np.int64)
+        r_c = float(network["r_c"])
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:
+        what = f"no {exc.args[0]!r}" if isinstance(exc, KeyError) else str(exc).splitlines()[0]
+        raise _damaged(folder / "network.json", f"a node or r_c is malformed: {what}") from None
+    try:
+        s = summary
+        title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
+                 f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")
+    except KeyError as exc:
+        raise _damaged(folder / "summary.json", f"no {exc.args[0]!r}") from None
+    except (TypeError, ValueError) as exc:
+        raise _damaged(folder / "summary.json", f"bad value: {exc}") from None
+    try:
+        return snapshot_figure(
+            world.omap, xy=xy, kind=kind, state=state, status=status, r_c=r_c,
+            links=make_medium(sc.radio.model, r_c).update(xy).pairs, covered=world.coverage.covered_mask(
+                xy[kind != "agent"], r_c), reachable=world.reachable, title=title, dpi=dpi,
+        )  # fmt: skip
+    except ValueError as exc:  # an unknown kind or state, a negative r_c...
+        raise _damaged(folder / "network.json", str(exc).splitlines()[0]) from None
 
 
 def _cmd_snapshot(args: argparse.Namespace) -> int:
     from amronet.recording import load_recording
     from amronet.results import write_file_atomically
+    from amronet.viz.decorations import save_figure
     from amronet.viz.recorded import recording_snapshot
 
     folder = _run_folder(args.run)
@@ -127,7 +163,7 @@ def _cmd_snapshot(args: argparse.Namespace) -> int:
         fig = _snapshot_from_network(folder, args.dpi)
         where = f"{folder}/network.json"
     fmt = out.suffix.lower().lstrip(".")
-    write_file_atomically(out, lambda tmp: fig.savefig(tmp, format=fmt, dpi=args.dpi, facecolor="white"))
+    write_file_atomically(out, lambda tmp: save_figure(fig, tmp, fmt, args.dpi, facecolor="white"))
     if not args.quiet:
         print(f"{where} -> {out}")
     return 0
@@ -185,7 +221,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     a = sub.add_parser("animate", help="animate a recorded run (GIF, or MP4 with imageio-ffmpeg)")
     a.add_argument("run", help="a run folder written with amronet run --record")
     a.add_argument("--out", required=True, help="animation to write (.gif or .mp4)")
-    a.add_argument("--fps", type=float, default=10.0, help="frames per second (default 10)")
+    a.add_argument("--fps", type=float, default=10.0, help="frames per second (default 10; at most 50 for GIF)")
     a.add_argument("--every", type=int, default=1, help="draw every N-th recorded frame (default 1)")
     a.add_argument("--max-frames", type=int, default=200, help="at most this many frames (default 200)")
     a.add_argument("--dpi", type=float, default=80)

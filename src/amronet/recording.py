@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,6 +48,7 @@ if TYPE_CHECKING:
 __all__ = ["FORMAT", "Recorder", "Recording", "decode_positions", "encode_positions", "load_recording"]
 
 FORMAT = "amronet-recording/1"
+_META_KEYS = ("algorithm", "map", "seed", "r_c")  # what the pictures read from ``meta``
 _NO_STATUS_U8 = 255
 _Q_MAX = 65535
 
@@ -284,12 +286,26 @@ class Recording:
         """Build a recording from the arrays of ``recording.npz``.
 
         Raises:
-            AmronetError: A required array is missing or the format is not ``amronet-recording/1``.
+            AmronetError: A required array is missing or damaged, or the format is not ``amronet-recording/1``.
         """
+        damaged = f"{where} is damaged or was not written by amronet run --record"
         try:
             meta = json.loads(str(data["meta"]))
-            if meta.get("format") != FORMAT:
-                raise AmronetError(f"{where}: format {meta.get('format')!r} is not {FORMAT}; record the run again")
+        except KeyError:
+            raise AmronetError(f"{where}: array 'meta' is missing; record the run again") from None
+        except (ValueError, TypeError):
+            raise AmronetError(f"{damaged} (its meta is not valid JSON); record the run again") from None
+        if not isinstance(meta, dict):
+            raise AmronetError(f"{damaged} (its meta is a JSON {type(meta).__name__}, not an object); "
+                               "record the run again")
+        if meta.get("format") != FORMAT:
+            raise AmronetError(f"{where}: format {meta.get('format')!r} is not {FORMAT}; record the run again")
+        missing = [k for k in _META_KEYS if k not in meta]
+        if missing:
+            raise AmronetError(f"{damaged} (its meta lacks {missing[0]!r}); record the run again")
+        try:
+            if not math.isfinite(float(meta["r_c"])):
+                raise ValueError("r_c")
             origin = np.asarray(data["xy_origin"], dtype=np.float64)
             quantum = float(data["xy_quantum"])
             delta = np.asarray(data["xy_delta"], dtype=np.uint16)
@@ -316,9 +332,12 @@ class Recording:
             )
         except KeyError as exc:
             raise AmronetError(f"{where}: array {exc.args[0]!r} is missing; record the run again") from None
-        f, n_all = rec.state.shape
-        if rec.xy.shape != (f, n_all, 2) or rec.kind.shape != (n_all,) or len(rec.t) != f or len(rec.n) != f:
+        except (ValueError, TypeError, IndexError) as exc:
+            raise AmronetError(f"{damaged} ({type(exc).__name__} reading its arrays); record the run again") from None
+        if (rec.state.ndim != 2 or rec.xy.shape != (*rec.state.shape, 2) or rec.kind.shape != rec.state.shape[1:]
+                or rec.t.shape != rec.state.shape[:1] or rec.n.shape != rec.state.shape[:1]):
             raise AmronetError(f"{where}: arrays have inconsistent shapes; record the run again")
+        f = rec.state.shape[0]
         if f == 0:
             raise AmronetError(f"{where}: holds no frame; record the run again")
         return rec

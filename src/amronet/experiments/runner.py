@@ -56,7 +56,8 @@ def run_jobs(
         executor: Where the jobs run (default: a local process pool with ``workers`` processes).
 
     Raises:
-        AmronetError: With a store, some runs failed (they are recorded; the next call retries them).
+        AmronetError: With a store, some runs failed (they are recorded; the next call retries them); or a
+            worker process died (:class:`~amronet.sweeps.executors.WorkerDiedError`).
     """
     if jobs:  # fail fast, in this process, on a scenario that cannot start
         from amronet.scenario import load_scenario

@@ -1,7 +1,7 @@
 """Sweeps: many seeded runs over a grid of parameters, on a laptop or a Dask cluster, into a result store.
 
 * :mod:`~amronet.sweeps.spec` — sweep files: base scenario, grid / points of overrides, seeds; validated.
-* :mod:`~amronet.sweeps.identity` — a run's identity: the resolved scenario's canonical JSON and its hash.
+* :mod:`~amronet.sweeps.identity` — a run's identity: the resolved scenario's canonical JSON and map content, hashed.
 * :mod:`~amronet.sweeps.store` — the SQLite result store (WAL; one transaction per finished run).
 * :mod:`~amronet.sweeps.executors` — a local process pool and a Dask executor behind one interface.
 * :mod:`~amronet.sweeps.engine` — run what is missing, record as it finishes, with a progress bar.

@@ -17,7 +17,7 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from amronet.sweeps.executors import Executor, LocalExecutor
+from amronet.sweeps.executors import Executor, LocalExecutor, WorkerDiedError
 from amronet.sweeps.spec import Sweep
 from amronet.sweeps.store import ResultStore
 from amronet.sweeps.worker import execute_job
@@ -97,6 +97,10 @@ def execute_into_store(
 
     Returns:
         ``(done, failed)`` among ``pending``.
+
+    Raises:
+        WorkerDiedError: A local worker process died (killed, out of memory); the runs recorded so far stay in the
+            store, so running the same command again resumes.
     """
     total = len(pending) if total is None else total
     jobs = [{"scenario": sc, "seed": seed} for _, seed, sc in pending]
@@ -105,17 +109,22 @@ def execute_into_store(
     with progress_bar(show_progress) as bar:
         task = bar.add_task(description, total=total, completed=total - len(pending), done=already[0],
                             failed=already[1], running=min(slots, len(pending)))
-        for k, outcome in executor.imap_unordered(execute_job, jobs):
-            h, seed, scenario = pending[k]
-            store.record(h, seed, scenario, outcome)
-            if outcome["status"] == "done":
-                done += 1
-            else:
-                failed += 1
-            bar.update(task, advance=1, done=already[0] + done, failed=already[1] + failed,
-                       running=min(slots, len(pending) - done - failed))
-            if on_outcome is not None:
-                on_outcome(h, seed, outcome)
+        try:
+            for k, outcome in executor.imap_unordered(execute_job, jobs):
+                h, seed, scenario = pending[k]
+                store.record(h, seed, scenario, outcome)
+                if outcome["status"] == "done":
+                    done += 1
+                else:
+                    failed += 1
+                bar.update(task, advance=1, done=already[0] + done, failed=already[1] + failed,
+                           running=min(slots, len(pending) - done - failed))
+                if on_outcome is not None:
+                    on_outcome(h, seed, outcome)
+        except WorkerDiedError:
+            raise WorkerDiedError(f"a worker process died (killed, or out of memory?); the finished runs are kept in "
+                             f"{str(store.path)!r}: run the same command again to resume (with fewer --workers if "
+                             "memory is short)") from None
     return done, failed
 
 
@@ -140,6 +149,7 @@ def run_sweep(
 
     Raises:
         StoreError: The store path is not an amronet store.
+        WorkerDiedError: A local worker process died; the finished runs are in the store, run again to resume.
     """
     start = time.perf_counter()
     own = executor is None

@@ -2,7 +2,8 @@
 
 Both take a picklable function and a list of picklable jobs and yield ``(index, result)`` as the jobs finish
 (:meth:`Executor.imap_unordered`). An exception raised by the function is re-raised in the caller (the sweep's
-worker function never raises for a failed run; see :mod:`amronet.sweeps.worker`).
+worker function never raises for a failed run; see :mod:`amronet.sweeps.worker`). A local worker process that
+dies (killed, out of memory) raises :class:`WorkerDiedError`, one line, instead of ``BrokenProcessPool``.
 
 * :class:`LocalExecutor` — ``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes; one worker
   runs the jobs in this process, one after another.
@@ -19,13 +20,22 @@ import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from amronet.errors import AmronetError
 
-__all__ = ["DaskExecutor", "Executor", "LocalExecutor", "default_workers", "make_executor"]
+__all__ = ["DaskExecutor", "Executor", "LocalExecutor", "WorkerDiedError", "default_workers", "make_executor"]
 
 CLUSTER_HINT = "pip install 'amronet[cluster]'"
+
+
+class WorkerDiedError(AmronetError):
+    """A worker process died while running jobs (killed, or out of memory); the pool cannot go on."""
+
+    def __init__(self, message: str = "a worker process died (killed, or out of memory?); run the command "
+                                      "again, with fewer --workers if memory is short") -> None:
+        super().__init__(message)
 
 
 def default_workers() -> int:
@@ -90,13 +100,18 @@ class LocalExecutor(Executor):
             return
         if self._pool is None:
             self._pool = ProcessPoolExecutor(max_workers=self.workers)
-        pending: dict[Future[Any], int] = {self._pool.submit(fn, job): k for k, job in enumerate(jobs)}
+        pending: dict[Future[Any], int] = {}
         try:
+            for k, job in enumerate(jobs):
+                pending[self._pool.submit(fn, job)] = k
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in sorted(done, key=pending.__getitem__):
                     k = pending.pop(fut)
                     yield k, fut.result()
+        except BrokenProcessPool:
+            self.close()  # a broken pool runs nothing more; the next call starts a fresh one
+            raise WorkerDiedError() from None
         finally:
             for fut in pending:
                 fut.cancel()

@@ -82,6 +82,7 @@ def save_plot(rows: list[dict[str, Any]], x: str, y: str, out: str | Path, hue: 
     from matplotlib.figure import Figure
 
     from amronet.results import write_file_atomically
+    from amronet.viz.decorations import save_figure
 
     out = Path(out)
     if out.suffix.lower() not in (".png", ".svg", ".pdf"):
@@ -114,5 +115,5 @@ def save_plot(rows: list[dict[str, Any]], x: str, y: str, out: str | Path, hue: 
         ax.legend(fontsize=8)
     fig.tight_layout()
     fmt = out.suffix.lower().lstrip(".")
-    write_file_atomically(out, lambda tmp: fig.savefig(tmp, format=fmt, dpi=120))
+    write_file_atomically(out, lambda tmp: save_figure(fig, tmp, fmt, 120))
     return groups

@@ -16,7 +16,8 @@ A sweep is one YAML file::
 
 Keys are the dotted paths of ``--set`` (:func:`amronet.scenario.apply_overrides`). Without ``grid`` and
 ``points`` the sweep has one point, the base. Every point is validated as a whole scenario before anything
-runs: unknown keys (in the sweep file or in a point), empty grids, a seed count of 0 or a bad value raise
+runs: unknown keys (in the sweep file or in a point), empty grids, a seed count of 0, a seed outside
+``[0, 2**63 - 1]`` (the range the result store's 64-bit integer column holds) or a bad value raise
 :class:`~amronet.errors.ScenarioError` with one line naming the field, and nothing is written.
 """
 
@@ -34,7 +35,12 @@ from amronet.errors import ScenarioError
 from amronet.scenario import Scenario, _to_scenario_error, load_scenario
 from amronet.sweeps.identity import resolve_scenario, scenario_hash
 
-__all__ = ["Point", "Sweep", "SweepSpec", "load_sweep", "sweep_from_spec"]
+__all__ = ["MAX_SEED", "MAX_SEEDS", "Point", "Sweep", "SweepSpec", "load_sweep", "sweep_from_spec"]
+
+MAX_SEED = 2**63 - 1
+"""The largest seed: the result store keeps seeds in a signed 64-bit SQLite integer."""
+MAX_SEEDS = 1_000_000
+"""The most seeds a sweep may give as a count (a larger count is a typo, and would not fit in memory)."""
 
 
 class SweepSpec(BaseModel):
@@ -71,11 +77,23 @@ class SweepSpec(BaseModel):
         if isinstance(seeds, int):
             if seeds < 1:
                 raise ValueError(f"@seeds@must be at least 1 (got {seeds}); it is the number of seeded runs per point")
+            if seeds > MAX_SEEDS:
+                raise ValueError(f"@seeds@{seeds} seeds per point is more than {MAX_SEEDS}; give a smaller count")
+            if self.seed_start > MAX_SEED:
+                raise ValueError(f"@seed_start@{self.seed_start} is above the largest seed 2**63 - 1 = {MAX_SEED}; "
+                                 "give a smaller seed_start")
+            if self.seed_start + seeds - 1 > MAX_SEED:
+                raise ValueError(f"@seeds@seed_start {self.seed_start} + {seeds} seeds runs past the largest seed "
+                                 f"2**63 - 1 = {MAX_SEED}; lower seed_start or the count")
         else:
             if not seeds:
                 raise ValueError("@seeds@is an empty list; give at least one seed")
             if any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in seeds):
                 raise ValueError("@seeds@a list of seeds must hold integers >= 0")
+            big = next((s for s in seeds if s > MAX_SEED), None)
+            if big is not None:
+                raise ValueError(f"@seeds@seed {big} is above the largest seed 2**63 - 1 = {MAX_SEED}; "
+                                 "give seeds in [0, 2**63 - 1]")
             if len(set(seeds)) != len(seeds):
                 raise ValueError("@seeds@lists a seed twice; give distinct seeds")
             if self.seed_start:

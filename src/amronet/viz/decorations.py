@@ -1,10 +1,17 @@
-"""Decorations shared by the pictures: the legend beside the map, legend handles and the scale bar."""
+"""Decorations shared by the pictures: the legend beside the map, legend handles, the scale bar, and saving.
+
+:func:`save_figure` is how every picture is written: an SVG (or PDF) of the same figure is byte-identical from
+one run to the next.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from pathlib import Path
+from typing import IO, Any
 
+import matplotlib as mpl
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
@@ -13,7 +20,7 @@ from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
 from amronet.world.occupancy import OccupancyMap
 
-__all__ = ["GAP", "add_legend", "add_scale_bar", "legend_patch", "marker_handle", "nice_length"]
+__all__ = ["GAP", "add_legend", "add_scale_bar", "legend_patch", "marker_handle", "nice_length", "save_figure"]
 
 GAP = 0.15
 """Gap in inches between the map's axes and the legend."""
@@ -67,3 +74,25 @@ def add_scale_bar(ax: Axes, omap: OccupancyMap) -> None:
     bar.patch.set_edgecolor("0.6")
     bar.set_zorder(8)
     ax.add_artist(bar)
+
+
+_NO_DATE: dict[str, dict[str, Any]] = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}
+
+
+def save_figure(fig: Figure, target: str | Path | IO[bytes], fmt: str, dpi: float, **kwargs: Any) -> None:
+    """Save ``fig`` as ``fmt`` (``png``, ``svg``, ``pdf``) so that the same figure gives the same bytes.
+
+    Matplotlib names an SVG's clip paths and glyphs by hashes salted at random and stamps SVGs and PDFs with
+    the time of writing; here the salt is fixed (``svg.hashsalt``) and the date left out.
+
+    Args:
+        fig: The figure.
+        target: Output file or binary stream.
+        fmt: The format.
+        dpi: Resolution of the PNG (and of the rasters inside an SVG or PDF).
+        **kwargs: More arguments of ``Figure.savefig`` (e.g. ``facecolor``).
+    """
+    if fmt in _NO_DATE:
+        kwargs.setdefault("metadata", _NO_DATE[fmt])
+    with mpl.rc_context({"svg.hashsalt": "amronet"}):
+        fig.savefig(target, format=fmt, dpi=dpi, **kwargs)

@@ -27,6 +27,7 @@ from matplotlib.patches import Patch, Rectangle
 from scipy import ndimage
 
 from amronet.patterns import PatternArea, Placement, as_area, pattern_links
+from amronet.viz.decorations import save_figure
 from amronet.viz.snapshot import MAP_COLOURS, draw_map
 from amronet.world.occupancy import OccupancyMap
 
@@ -175,5 +176,5 @@ def save_patterns_figure(
     if fmt not in ("png", "svg"):
         raise ValueError(f"path must end in .png or .svg, got {path.name!r}")
     fig = patterns_figure(placements, area, r, dpi=dpi)
-    fig.savefig(path, format=fmt, dpi=dpi, facecolor="white")
+    save_figure(fig, path, fmt, dpi, facecolor="white")
     return path

@@ -42,6 +42,10 @@ from amronet.viz.snapshot import (
 __all__ = ["FrameRenderer", "frame_title", "pick_frames", "recording_snapshot", "write_animation"]
 
 _DEPLOYED_CODES = np.array([s in _DEPLOYED for s in STATE_NAMES])
+# GIF frame delays are whole hundredths of a second in 16 bits (at most 655.35 s), and browsers play delays
+# under 20 ms at 100 ms: 0.01 to 50 frames per second. MP4 plays any rate; above 120 fps frames are wasted.
+_MIN_FPS = 0.01
+_MAX_FPS = {".gif": 50.0, ".mp4": 120.0}
 
 
 def frame_title(rec: Recording, f: int) -> str:
@@ -124,7 +128,8 @@ class FrameRenderer:
         if np.any(rec.kind == Kind.AGENT):
             handles.append(Line2D([], [], color="0.35", linewidth=1.0, label="agent trail"))
         free = rec.omap.free
-        shown = {"occupied": True, "unreachable": bool((free & ~rec.reachable).any()), "uncovered": True}
+        shown = {"occupied": True, "unreachable": bool((free & ~rec.reachable).any()), "covered": True,
+                 "uncovered": True}
         handles += [_map_patch(c) for c, show in shown.items() if show]
         for s in np.unique(rec.status)[: len(_PALETTE)]:
             handles.append(marker_handle("o", 7.0, _status_colours(np.array([s]))[0], f"BS {s}" if s >= 0 else
@@ -193,7 +198,8 @@ def write_animation(rec: Recording, path: str | Path, *, fps: float = 10.0, ever
     Args:
         rec: The recording.
         path: Output file, ``.gif`` or ``.mp4``.
-        fps: Frames per second of the animation.
+        fps: Frames per second of the animation: 0.01 to 50 for a GIF (its delays are in hundredths of a
+            second, and browsers slow delays under 20 ms down to 100 ms), 0.01 to 120 for an MP4.
         every: Draw every ``every``-th recorded frame.
         max_frames: Draw at most this many frames, spread evenly over the run (the last always included).
         dpi: Resolution.
@@ -202,15 +208,17 @@ def write_animation(rec: Recording, path: str | Path, *, fps: float = 10.0, ever
         The number of frames written.
 
     Raises:
-        AmronetError: The suffix is neither ``.gif`` nor ``.mp4``, ``fps`` is not positive, or MP4 is asked
-            for without ``imageio-ffmpeg``.
+        AmronetError: The suffix is neither ``.gif`` nor ``.mp4``, ``fps`` is outside 0.01-50 (GIF) or 0.01-120
+            (MP4), or MP4 is asked for without ``imageio-ffmpeg``.
     """
     path = Path(path)
     fmt = path.suffix.lower()
     if fmt not in (".gif", ".mp4"):
         raise AmronetError(f"--out: {path.name!r} must end in .gif or .mp4")
-    if not (math.isfinite(fps) and fps > 0):
-        raise AmronetError(f"--fps: {fps} must be a number > 0")
+    top = _MAX_FPS[fmt]
+    if not (math.isfinite(fps) and _MIN_FPS <= fps <= top):
+        raise AmronetError(f"--fps: {fps:g} must be between {_MIN_FPS:g} and {top:g} frames per second for "
+                           f"{fmt[1:].upper()}, e.g. 10")
     ffmpeg = _mp4_writer() if fmt == ".mp4" else None
     indices = pick_frames(rec.frames, every, max_frames)
     renderer = FrameRenderer(rec, dpi=dpi)

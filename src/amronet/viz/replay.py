@@ -56,11 +56,11 @@ def _timeseries(rec: Recording, folder: Path | None, idx: np.ndarray) -> dict[st
     """Coverage over time: ``timeseries.csv`` of the run folder, else the recording's own frames (raster)."""
     path = folder / "timeseries.csv" if folder is not None else None
     if path is not None and path.is_file():
-        with open(path, newline="") as fh:
-            rows = list(csv.DictReader(fh))
-        try:
+        try:  # a damaged file is ignored: the recording's own frames give the curve
+            with open(path, newline="") as fh:
+                rows = list(csv.DictReader(fh))
             return {key: [round(float(r[key]), 6) for r in rows] for key in ("t", "coverage", "connected_coverage")}
-        except (KeyError, ValueError):
+        except (KeyError, ValueError, TypeError, csv.Error):
             pass
     cov = [round(rec.coverage(int(f)), 6) for f in idx]
     return {"t": [float(rec.t[f]) for f in idx], "coverage": cov, "connected_coverage": []}
@@ -126,9 +126,11 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
     tint[rec.reachable] = (*MAP_COLOURS["uncovered"], 255)
     summary: dict[str, Any] = {}
     if folder is not None and (folder / "summary.json").is_file():
-        try:
+        try:  # optional: a damaged summary.json (not JSON, not an object) only leaves its numbers out
             summary = json.loads((folder / "summary.json").read_text())
-        except json.JSONDecodeError:
+        except ValueError:
+            summary = {}
+        if not isinstance(summary, dict):
             summary = {}
     meta = rec.meta
     title = f"{meta['algorithm']} on {meta['map']}, seed {meta['seed']}"

@@ -25,7 +25,7 @@ from matplotlib.image import AxesImage
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, marker_handle
+from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, marker_handle, save_figure
 from amronet.viz.validate import KINDS, STATES, check_mask, validate_nodes
 from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
@@ -54,6 +54,7 @@ _LABELS = {
     "unknown": "unknown",
     "unreachable": "free, unreachable",
     "uncovered": "reachable, uncovered",
+    "covered": "covered: within $r_c$ of any\nrouter or base (moving too)",
 }
 _CATEGORIES = ("free", "occupied", "unknown", "unreachable", "uncovered")
 _LUT = np.array([MAP_COLOURS[c] for c in _CATEGORIES], dtype=np.uint8)
@@ -156,8 +157,9 @@ def _new_figure(omap: OccupancyMap, right: float, dpi: float) -> tuple[Figure, A
 
 
 def _map_patch(category: str) -> Patch:
-    """Legend patch of one map cell category."""
-    return legend_patch(tuple(c / 255 for c in MAP_COLOURS[category]), _LABELS[category])
+    """Legend patch of one map cell category (``covered`` is free space drawn plain, like ``free``)."""
+    colour = MAP_COLOURS["free" if category == "covered" else category]
+    return legend_patch(tuple(c / 255 for c in colour), _LABELS[category])
 
 
 def _format_of(path: str | Path) -> str:
@@ -171,7 +173,7 @@ def _format_of(path: str | Path) -> str:
 def _save(fig: Figure, path: str | Path, dpi: float) -> Path:
     """Write ``fig`` as PNG or SVG according to the suffix of ``path``."""
     path = Path(path)
-    fig.savefig(path, format=_format_of(path), dpi=dpi, bbox_inches=None, facecolor="white")
+    save_figure(fig, path, _format_of(path), dpi, bbox_inches=None, facecolor="white")
     return path
 
 
@@ -320,6 +322,7 @@ def snapshot_figure(
         ("occupied", (cells == OCCUPIED).any()),
         ("unknown", (cells == UNKNOWN).any()),
         ("unreachable", reachable is not None and (free & ~reachable).any()),
+        ("covered", covered is not None and (counted & covered).any()),
         ("uncovered", covered is not None and (counted & ~covered).any()),
     ):
         if shown:
