@@ -235,3 +235,47 @@ def test_compiled_obstacle_forces_match_the_hits(m, seed):
     expected = sum_per_node(hits.row, hits.away * push[:, None], m)
     np.testing.assert_allclose(inverse_square_obstacle_forces(scans, heading, 0.14, 0.0125, 0.2), expected,
                                atol=1e-12)
+
+
+
+def _reference_decide(ctl: PotentialField, table):
+    """The potential field's decide as plain vector formulas (the laws of the module docstring): movers, velocity."""
+    from amronet.algorithms.forces import constrained_coverage_forces
+
+    sw, p = ctl.swarm, ctl.params
+
+    def force_on(who):
+        return constrained_coverage_forces(table, sw.xy, who, ctl.k_cover, ctl.k_degree, ctl.q_rc, ctl.force_cap,
+                                           p.connectivity_k) + ctl.obstacle_force[who]
+
+    state = sw.state[ctl.routers].copy()
+    resting = ctl.routers[state == State.REFERENCE]
+    wake = np.hypot(*force_on(resting).T) > p.damping * 2 * p.rest_fraction * sw.max_speed[resting]
+    state[np.isin(ctl.routers, resting[wake])] = State.EXPLORE
+    movers = ctl.routers[state == State.EXPLORE]
+    v = ctl.velocity[movers]
+    v = clamp_norm(v + (force_on(movers) - p.damping * v) / p.mass * ctl.dt, sw.max_speed[movers])
+    return movers, v, int(np.count_nonzero(wake))
+
+
+def test_compiled_potential_field_decide_follows_the_vector_formulas():
+    import copy
+
+    from amronet.algorithms.base import Readings, StepInput
+
+    sim = Simulation(scenario("potential-field", params={"obstacle_forces": False}), seed=4)
+    woken_seen = 0
+    for k in range(300):
+        probe = copy.deepcopy(sim)
+        ctl: PotentialField = probe.controller
+        if k % 2:  # every other step, let everybody rest first, so that the wake-up rule is exercised too
+            probe.swarm.state[ctl.routers] = State.REFERENCE
+        movers, velocity, woken = _reference_decide(ctl, probe.table)
+        command = ctl.decide(StepInput(k, probe.t, probe.dt, probe.table, Readings({})))
+        np.testing.assert_array_equal(command.movers, movers)
+        np.testing.assert_allclose(ctl.velocity[movers], velocity, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(command.speed, np.hypot(*velocity.T), rtol=1e-12, atol=1e-15)
+        woken_seen += woken
+        sim.step()
+    assert woken_seen > 0  # the wake-up rule woke some, and
+    assert woken_seen < 150 * 30  # left others resting

@@ -2,7 +2,8 @@
 
 The life of a step, in this order and nowhere else:
 
-1. **sense**  — the range rings of every moving robot are ray-cast against the map and the other robots;
+1. **sense**  — the range rings of every moving robot are ray-cast against the map and the other robots (skipped
+   when the controller reads no range readings);
 2. **decide** — the algorithm's controller reads those readings and the radio medium's neighbour table, and
    updates states, statuses and headings;
 3. **move**   — robots drive along their headings; every move is checked along its whole path;
@@ -134,6 +135,8 @@ class Simulation:
             self.phase_seconds[name] += dt
 
     def _sense(self) -> Readings:
+        if not self.controller.needs_range_readings:
+            return Readings({})
         sw = self.swarm
         mobile = sw.in_states(MOBILE_STATES)
         groups = {}

@@ -109,6 +109,14 @@ class Controller(ABC):
     def decide(self, step: StepInput) -> Command:
         """Update states and headings from local information and say who moves how fast."""
 
+    @property
+    def needs_range_readings(self) -> bool:
+        """``False`` when :meth:`decide` never reads ``step.readings`` (the sense phase then skips ray casting).
+
+        Sensing has no randomness, so skipping it changes nothing but the time a step takes.
+        """
+        return True
+
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: B027 - optional hook
         """Learn which of the requested moves the world refused (default: ignore)."""
 

@@ -103,6 +103,10 @@ class DSSA(Controller):
         self.stopped_by = {"oscillation": 0, "stability": 0}
 
     @property
+    def needs_range_readings(self) -> bool:  # noqa: D102
+        return self.params.obstacle_forces and self.params.obstacle_gain > 0
+
+    @property
     def settled(self) -> bool:  # noqa: D102
         return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
 

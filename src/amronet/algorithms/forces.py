@@ -23,8 +23,8 @@ import numpy as np
 from amronet.radio import NeighbourTable
 from amronet.sensing import beam_angles
 
-__all__ = ["Links", "ObstacleHits", "clamp_norm", "constrained_coverage_forces", "inverse_square_obstacle_forces",
-           "links_of", "obstacle_hits", "sum_per_node"]
+__all__ = ["Links", "ObstacleHits", "clamp_norm", "constrained_coverage_force", "constrained_coverage_forces",
+           "inverse_square_obstacle_forces", "links_of", "obstacle_hits", "sum_per_node"]
 
 
 @dataclass(frozen=True)
@@ -109,33 +109,38 @@ def clamp_norm(v: np.ndarray, limit: np.ndarray | float) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def constrained_coverage_force(i, indptr, indices, dist, xy, k_cover, k_degree, q_rc, cap, k_conn):  # pragma: no cover
+    """Net link force ``(fx, fy)`` on robot ``i`` (compiled; see :func:`constrained_coverage_forces`)."""
+    start, stop = indptr[i], indptr[i + 1]
+    critical = stop - start <= k_conn
+    fx = 0.0
+    fy = 0.0
+    for e in range(start, stop):
+        j = indices[e]
+        d = dist[e]
+        if d > 1e-12:
+            ux = (xy[i, 0] - xy[j, 0]) / d
+            uy = (xy[i, 1] - xy[j, 1]) / d
+        else:  # same convention as links_of
+            d = 1e-12
+            a = 0.618 * abs(i - j)
+            sgn = 1.0 if i > j else -1.0
+            ux = np.cos(a) * sgn
+            uy = np.sin(a) * sgn
+        mag = min(k_cover / (d * d), cap)
+        if critical:
+            slack = q_rc - d
+            mag -= cap if slack <= 0.0 else min(k_degree / (slack * slack), cap)
+        fx += mag * ux
+        fy += mag * uy
+    return fx, fy
+
+
+@numba.njit(cache=True)
 def _constrained_coverage(who, indptr, indices, dist, xy, k_cover, k_degree, q_rc, cap, k_conn, out):  # pragma: no cov
     for m in range(len(who)):
-        i = who[m]
-        start, stop = indptr[i], indptr[i + 1]
-        critical = stop - start <= k_conn
-        fx = 0.0
-        fy = 0.0
-        for e in range(start, stop):
-            j = indices[e]
-            d = dist[e]
-            if d > 1e-12:
-                ux = (xy[i, 0] - xy[j, 0]) / d
-                uy = (xy[i, 1] - xy[j, 1]) / d
-            else:  # same convention as links_of
-                d = 1e-12
-                a = 0.618 * abs(i - j)
-                sgn = 1.0 if i > j else -1.0
-                ux = np.cos(a) * sgn
-                uy = np.sin(a) * sgn
-            mag = min(k_cover / (d * d), cap)
-            if critical:
-                slack = q_rc - d
-                mag -= cap if slack <= 0.0 else min(k_degree / (slack * slack), cap)
-            fx += mag * ux
-            fy += mag * uy
-        out[m, 0] = fx
-        out[m, 1] = fy
+        out[m, 0], out[m, 1] = constrained_coverage_force(who[m], indptr, indices, dist, xy, k_cover, k_degree, q_rc,
+                                                          cap, k_conn)
 
 
 def constrained_coverage_forces(table: NeighbourTable, xy: np.ndarray, who: np.ndarray, k_cover: float,

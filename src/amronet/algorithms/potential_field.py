@@ -43,12 +43,12 @@ from __future__ import annotations
 
 from typing import Annotated
 
+import numba
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
 from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
-from amronet.algorithms.forces import clamp_norm, constrained_coverage_forces, inverse_square_obstacle_forces
-from amronet.radio import NeighbourTable
+from amronet.algorithms.forces import constrained_coverage_force, inverse_square_obstacle_forces
 from amronet.robots import Kind, State
 
 __all__ = ["PotentialField", "PotentialFieldParams"]
@@ -122,15 +122,12 @@ class PotentialField(Controller):
         self.wakeups = 0
 
     @property
+    def needs_range_readings(self) -> bool:  # noqa: D102
+        return self.params.obstacle_forces
+
+    @property
     def settled(self) -> bool:  # noqa: D102
         return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
-
-    def _forces(self, table: NeighbourTable, who: np.ndarray) -> np.ndarray:
-        """Net force of links (and cached obstacle forces) on robots ``who``, ``(len(who), 2)``."""
-        p = self.params
-        force = constrained_coverage_forces(table, self.swarm.xy, who, self.k_cover, self.k_degree, self.q_rc,
-                                            self.force_cap, p.connectivity_k)
-        return force + self.obstacle_force[who]
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params
@@ -141,51 +138,95 @@ class PotentialField(Controller):
             scans = step.readings.of(sensed, model)
             self.obstacle_force[sensed] = inverse_square_obstacle_forces(
                 scans, sw.heading[sensed], sw.models[model].sensor_range, self.k_obstacle, self.force_cap)
-        resting = self.routers[state == State.REFERENCE]
-        v_rest = p.rest_fraction * sw.max_speed
-        if len(resting):
-            f = self._forces(step.table, resting)
-            wake = np.hypot(f[:, 0], f[:, 1]) > p.damping * 2 * v_rest[resting]
-            woken = resting[wake]
-            sw.state[woken] = State.EXPLORE
-            self.rest_count[woken] = 0
-            self.window_start[woken] = sw.xy[woken]
-            self.wakeups += len(woken)
-        movers = self.routers[sw.state[self.routers] == State.EXPLORE]
-        if len(movers) == 0:
-            return Command(movers, np.zeros(0))
-        force = self._forces(step.table, movers)
-        self.force_norm[movers] = np.hypot(force[:, 0], force[:, 1])
-        v = self.velocity[movers]
-        v += (force - p.damping * v) / p.mass * self.dt
-        v = clamp_norm(v, sw.max_speed[movers])
-        self.velocity[movers] = v
-        speed = np.hypot(v[:, 0], v[:, 1])
-        sw.heading[movers] = np.where(speed > 0, np.arctan2(v[:, 1], v[:, 0]), sw.heading[movers])
-        return Command(movers, speed)
+        table = step.table
+        movers = np.empty(len(self.routers), dtype=np.int64)
+        speed = np.empty(len(self.routers))
+        n_movers, woken = _wake_and_accelerate(
+            self.routers, sw.state, table.indptr, table.indices, table.dist, sw.xy, self.obstacle_force,
+            self.velocity, sw.heading, sw.max_speed, self.rest_count, self.window_start, self.force_norm,
+            self.k_cover, self.k_degree, self.q_rc, self.force_cap, p.connectivity_k, p.damping, p.mass, self.dt,
+            p.rest_fraction, int(State.EXPLORE), int(State.REFERENCE), movers, speed)
+        self.wakeups += woken
+        return Command(movers[:n_movers], speed[:n_movers])
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
         if len(movers) == 0:
             return
-        sw, p = self.swarm, self.params
-        self.velocity[movers[refused]] = 0.0
-        # at rest: over a window of rest_steps steps the router got no farther than a router creeping at
-        # rest_fraction v_max would (jitter in place counts as rest, drifting does not)
-        self.rest_count[movers] += 1
-        window = p.rest_steps * self.dt
-        drift = np.hypot(*(sw.xy[movers] - self.window_start[movers]).T)
-        full = self.rest_count[movers] >= p.rest_steps
-        v_rest = p.rest_fraction * sw.max_speed[movers]
-        # ... and the force on it would not wake it up again at once
-        calm = full & (drift < v_rest * window) & (self.force_norm[movers] <= p.damping * 2 * v_rest)
-        rest = movers[calm]
-        sw.state[rest] = State.REFERENCE
-        self.velocity[rest] = 0.0
-        again = movers[full & ~calm]
-        self.rest_count[again] = 0
-        self.window_start[again] = sw.xy[again]
+        p = self.params
+        _come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), self.swarm.state,
+                      self.swarm.xy, self.swarm.max_speed, self.velocity, self.rest_count, self.window_start,
+                      self.force_norm, p.rest_steps, self.dt, p.rest_fraction, p.damping, int(State.REFERENCE))
 
     def report(self) -> dict[str, object]:
         """The force constants used and how often resting routers woke up."""
         return {"k_cover": self.k_cover, "k_degree": self.k_degree, "k_obstacle": self.k_obstacle,
                 "wakeups": self.wakeups}
+
+
+# -- compiled kernels: one pass over the routers per phase (30 robots are all overhead in NumPy) -----------------
+@numba.njit(cache=True)
+def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
+                         rest_count, window_start, force_norm, k_cover, k_degree, q_rc, cap, k_conn, damping, mass,
+                         dt, rest_fraction, explore, reference, movers, speed):  # pragma: no cover - numba
+    """Wake resting routers that feel a force, then accelerate every moving router; returns (movers, woken).
+
+    A router's force depends only on positions and the neighbour table, so one pass in router order gives the
+    same result as waking everybody first and then moving everybody.
+    """
+    n_movers = 0
+    woken = 0
+    for i in routers:
+        if state[i] != explore and state[i] != reference:
+            continue
+        fx, fy = constrained_coverage_force(i, indptr, indices, dist, xy, k_cover, k_degree, q_rc, cap, k_conn)
+        fx += obstacle_force[i, 0]
+        fy += obstacle_force[i, 1]
+        norm = np.hypot(fx, fy)
+        if state[i] == reference:
+            if norm <= damping * 2.0 * rest_fraction * max_speed[i]:
+                continue
+            state[i] = explore
+            rest_count[i] = 0
+            window_start[i, 0] = xy[i, 0]
+            window_start[i, 1] = xy[i, 1]
+            woken += 1
+        force_norm[i] = norm
+        vx = velocity[i, 0] + (fx - damping * velocity[i, 0]) / mass * dt
+        vy = velocity[i, 1] + (fy - damping * velocity[i, 1]) / mass * dt
+        scale = min(1.0, max_speed[i] / max(np.hypot(vx, vy), 1e-300))
+        vx *= scale
+        vy *= scale
+        velocity[i, 0] = vx
+        velocity[i, 1] = vy
+        s = np.hypot(vx, vy)
+        if s > 0.0:
+            heading[i] = np.arctan2(vy, vx)
+        movers[n_movers] = i
+        speed[n_movers] = s
+        n_movers += 1
+    return n_movers, woken
+
+
+@numba.njit(cache=True)
+def _come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, window_start, force_norm, rest_steps,
+                  dt, rest_fraction, damping, reference):  # pragma: no cover - numba
+    """The rest rule after a move (see the module docstring)."""
+    window = rest_steps * dt
+    for m in range(len(movers)):
+        i = movers[m]
+        if refused[m]:
+            velocity[i, 0] = 0.0
+            velocity[i, 1] = 0.0
+        rest_count[i] += 1
+        if rest_count[i] < rest_steps:
+            continue
+        v_rest = rest_fraction * max_speed[i]
+        drift = np.hypot(xy[i, 0] - window_start[i, 0], xy[i, 1] - window_start[i, 1])
+        if drift < v_rest * window and force_norm[i] <= damping * 2.0 * v_rest:
+            state[i] = reference
+            velocity[i, 0] = 0.0
+            velocity[i, 1] = 0.0
+        else:
+            rest_count[i] = 0
+            window_start[i, 0] = xy[i, 0]
+            window_start[i, 1] = xy[i, 1]
