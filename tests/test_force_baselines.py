@@ -250,7 +250,8 @@ def _reference_decide(ctl: PotentialField, table):
 
     state = sw.state[ctl.routers].copy()
     resting = ctl.routers[state == State.REFERENCE]
-    wake = np.hypot(*force_on(resting).T) > p.damping * 2 * p.rest_fraction * sw.max_speed[resting]
+    change = force_on(resting) - ctl.held_force[resting]
+    wake = np.hypot(*change.T) > p.damping * 2 * p.rest_fraction * sw.max_speed[resting]
     state[np.isin(ctl.routers, resting[wake])] = State.EXPLORE
     movers = ctl.routers[state == State.EXPLORE]
     v = ctl.velocity[movers]
@@ -270,6 +271,7 @@ def test_compiled_potential_field_decide_follows_the_vector_formulas():
         ctl: PotentialField = probe.controller
         if k % 2:  # every other step, let everybody rest first, so that the wake-up rule is exercised too
             probe.swarm.state[ctl.routers] = State.REFERENCE
+            ctl.held_force[ctl.routers] = np.random.default_rng(k).normal(0, 0.01, (len(ctl.routers), 2))
         movers, velocity, woken = _reference_decide(ctl, probe.table)
         command = ctl.decide(StepInput(k, probe.t, probe.dt, probe.table, Readings({})))
         np.testing.assert_array_equal(command.movers, movers)
@@ -279,3 +281,19 @@ def test_compiled_potential_field_decide_follows_the_vector_formulas():
         sim.step()
     assert woken_seen > 0  # the wake-up rule woke some, and
     assert woken_seen < 150 * 30  # left others resting
+
+
+def test_a_router_pushed_into_a_wall_comes_to_rest_held_by_it():
+    # Howard's field (K = 0) pushes the lone router away from the base node, 0.5 m from the east wall: the wall
+    # stops it while it is still in range, so the push never fades; the wall takes it up and the router rests
+    sc = scenario("potential-field", params={"connectivity_k": 0, "obstacle_forces": False}, count=1,
+                  region=(0.4, 0.4), base=(2.5, 0.0), time_limit=120.0)
+    sim = Simulation(sc, seed=1)
+    ctl: PotentialField = sim.controller
+    router = ctl.routers[0]
+    sim.swarm.xy[router] = (2.7, 0.05)  # between the base node and the wall
+    sim.table = sim.medium.update(sim.swarm.xy)
+    result = sim.run()
+    assert result.summary["stop_reason"] == "settled"
+    assert sim.swarm.xy[router, 0] > 2.9  # against the wall at x = 3
+    assert np.hypot(*ctl.held_force[router]) > 0.02  # and still pushed into it

@@ -31,12 +31,14 @@ was not at hand; see ``docs/baselines.md``):
   ``K_obstacle / d^2`` (``K_obstacle = K_cover`` by default), when ``obstacle_forces`` is on (paper's
   experiment 2).
 
-Convergence ("coming to rest"): a router rests (state *reference*) when two things hold. First, over a window
-of ``rest_steps`` steps it got no farther from where the window started than a router creeping at
-``rest_fraction v_max`` would (jitter in place counts as rest, drifting does not). Second, the force on it is
-below the wake-up threshold. A resting router wakes up (state *explore*) when the force on it would drive it
-faster than twice that creeping speed. The run has converged when every router rests
-(:attr:`PotentialField.settled`).
+Convergence ("coming to rest"): a router rests (state *reference*) when, over a window of ``rest_steps`` steps,
+it got no farther from where the window started than a router creeping at ``rest_fraction v_max`` would (jitter
+in place counts as rest, drifting does not), and either the force on it would drive it at no more than twice
+that speed, or its last move was refused: a wall (or another body) holds it and takes up the force. It rests
+under the force it feels at that moment, the *held* force (about zero, or the push a wall takes up), and wakes
+up (state *explore*) when the force on it differs from the held force by more than that threshold: when its
+neighbourhood changed. The run has converged when every router rests (:attr:`PotentialField.settled`).
+Without the held force a router pinned against the outer wall could never rest.
 """
 
 from __future__ import annotations
@@ -71,8 +73,9 @@ class PotentialFieldParams(BaseModel):
         obstacle_forces: Add forces from obstacle points seen by the range sensors.
         k_obstacle: Override ``K_obstacle`` (default ``K_cover``).
         rest_fraction: Mean speed over a window below which a router counts as at rest, as a fraction of its
-            maximum speed.
-        rest_steps: Length of that window in steps.
+            maximum speed (our choice: 0.05). A router rests only under a force that would drive it at no more
+            than twice that speed (or when a wall holds it), and wakes up when the force changes by as much.
+        rest_steps: Length of that window in steps (our choice: 20).
         force_cap_factor: Cap of a single force, in units of ``nu v_max`` (the force that holds full speed).
     """
 
@@ -118,7 +121,8 @@ class PotentialField(Controller):
         self.obstacle_force = np.zeros((n, 2))
         self.rest_count = np.zeros(n, dtype=np.int64)
         self.window_start = sw.xy.copy()
-        self.force_norm = np.zeros(n)
+        self.force = np.zeros((n, 2))
+        self.held_force = np.zeros((n, 2))
         self.wakeups = 0
 
     @property
@@ -143,9 +147,10 @@ class PotentialField(Controller):
         speed = np.empty(len(self.routers))
         n_movers, woken = _wake_and_accelerate(
             self.routers, sw.state, table.indptr, table.indices, table.dist, sw.xy, self.obstacle_force,
-            self.velocity, sw.heading, sw.max_speed, self.rest_count, self.window_start, self.force_norm,
-            self.k_cover, self.k_degree, self.q_rc, self.force_cap, p.connectivity_k, p.damping, p.mass, self.dt,
-            p.rest_fraction, int(State.EXPLORE), int(State.REFERENCE), movers, speed)
+            self.velocity, sw.heading, sw.max_speed, self.rest_count, self.window_start, self.force,
+            self.held_force, self.k_cover, self.k_degree, self.q_rc, self.force_cap,
+            p.connectivity_k, p.damping, p.mass, self.dt, p.rest_fraction, int(State.EXPLORE), int(State.REFERENCE),
+            movers, speed)
         self.wakeups += woken
         return Command(movers[:n_movers], speed[:n_movers])
 
@@ -155,7 +160,8 @@ class PotentialField(Controller):
         p = self.params
         _come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), self.swarm.state,
                       self.swarm.xy, self.swarm.max_speed, self.velocity, self.rest_count, self.window_start,
-                      self.force_norm, p.rest_steps, self.dt, p.rest_fraction, p.damping, int(State.REFERENCE))
+                      self.force, self.held_force, p.rest_steps, self.dt, p.rest_fraction, p.damping,
+                      int(State.REFERENCE))
 
     def report(self) -> dict[str, object]:
         """The force constants used and how often resting routers woke up."""
@@ -166,8 +172,9 @@ class PotentialField(Controller):
 # -- compiled kernels: one pass over the routers per phase (30 robots are all overhead in NumPy) -----------------
 @numba.njit(cache=True)
 def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
-                         rest_count, window_start, force_norm, k_cover, k_degree, q_rc, cap, k_conn, damping, mass,
-                         dt, rest_fraction, explore, reference, movers, speed):  # pragma: no cover - numba
+                         rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap,
+                         k_conn, damping, mass, dt, rest_fraction, explore, reference, movers,
+                         speed):  # pragma: no cover - numba
     """Wake resting routers that feel a force, then accelerate every moving router; returns (movers, woken).
 
     A router's force depends only on positions and the neighbour table, so one pass in router order gives the
@@ -181,16 +188,17 @@ def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_for
         fx, fy = constrained_coverage_force(i, indptr, indices, dist, xy, k_cover, k_degree, q_rc, cap, k_conn)
         fx += obstacle_force[i, 0]
         fy += obstacle_force[i, 1]
-        norm = np.hypot(fx, fy)
         if state[i] == reference:
-            if norm <= damping * 2.0 * rest_fraction * max_speed[i]:
+            change = np.hypot(fx - held_force[i, 0], fy - held_force[i, 1])
+            if change <= damping * 2.0 * rest_fraction * max_speed[i]:
                 continue
             state[i] = explore
             rest_count[i] = 0
             window_start[i, 0] = xy[i, 0]
             window_start[i, 1] = xy[i, 1]
             woken += 1
-        force_norm[i] = norm
+        force[i, 0] = fx
+        force[i, 1] = fy
         vx = velocity[i, 0] + (fx - damping * velocity[i, 0]) / mass * dt
         vy = velocity[i, 1] + (fy - damping * velocity[i, 1]) / mass * dt
         scale = min(1.0, max_speed[i] / max(np.hypot(vx, vy), 1e-300))
@@ -208,8 +216,8 @@ def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_for
 
 
 @numba.njit(cache=True)
-def _come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, window_start, force_norm, rest_steps,
-                  dt, rest_fraction, damping, reference):  # pragma: no cover - numba
+def _come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, window_start, force, held_force,
+                  rest_steps, dt, rest_fraction, damping, reference):  # pragma: no cover - numba
     """The rest rule after a move (see the module docstring)."""
     window = rest_steps * dt
     for m in range(len(movers)):
@@ -222,10 +230,15 @@ def _come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, w
             continue
         v_rest = rest_fraction * max_speed[i]
         drift = np.hypot(xy[i, 0] - window_start[i, 0], xy[i, 1] - window_start[i, 1])
-        if drift < v_rest * window and force_norm[i] <= damping * 2.0 * v_rest:
+        calm = np.hypot(force[i, 0], force[i, 1]) <= damping * 2.0 * v_rest
+        if drift < v_rest * window and (calm or refused[m]):
             state[i] = reference
             velocity[i, 0] = 0.0
             velocity[i, 1] = 0.0
+            # it rests under the force it feels now: about none, or the push a wall takes up; it wakes up when
+            # that force changes
+            held_force[i, 0] = force[i, 0]
+            held_force[i, 1] = force[i, 1]
         else:
             rest_count[i] = 0
             window_start[i, 0] = xy[i, 0]
