@@ -8,6 +8,7 @@ discs, tested exactly.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -21,9 +22,12 @@ from amronet.world.space import clearance
 __all__ = ["beam_angles", "range_scan"]
 
 
+@functools.cache
 def beam_angles(n_beams: int) -> np.ndarray:
-    """Angles of ``n_beams`` evenly spaced beams relative to the heading, beam 0 straight ahead."""
-    return np.arange(n_beams) * (2.0 * np.pi / n_beams)
+    """Angles of ``n_beams`` evenly spaced beams relative to the heading, beam 0 straight ahead (read-only)."""
+    angles = np.arange(n_beams) * (2.0 * np.pi / n_beams)
+    angles.setflags(write=False)
+    return angles
 
 
 @njit(cache=True)
