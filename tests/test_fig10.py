@@ -30,6 +30,10 @@ def test_fig10_and_fig11_small(tmp_path):
         assert curves["coverage"][:, -1].mean() > curves["coverage"][:, 0].mean()  # everybody spreads
     text = (out / "fig10_claims.md").read_text()
     assert "| claim (paper) |" in text and "slightly lower" in text
+    # self-spreading never disconnects a router: both of its runs count as connected, DSSA's (spread apart) not
+    by_algorithm = {e["algorithm"]: e for e in f10["table"]}
+    assert by_algorithm["self-spreading"]["runs_all_connected"] == 2
+    assert by_algorithm["dssa"]["runs_all_connected"] < 2
     assert Image.open(out / "fig10.png").size[0] > 800
 
     # Fig. 11 finds the Fig. 10 table next to it and compares final coverage
