@@ -181,3 +181,35 @@ def test_mp4_without_encoder(recorded, tmp_path, capsys, monkeypatch):
     assert main(["animate", str(recorded), "--out", str(tmp_path / "r.mp4")]) == 2
     assert "needs an encoder: pip install 'amronet[video]'" in _error(capsys)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["animate", "--out", "{tmp}/r.avi"], "--out: .* must end in .gif or .mp4"),
+        (["animate", "--out", "{tmp}/r.gif", "--fps", "0"], "--fps: 0 must be between"),
+        (["animate", "--out", "{tmp}/r.mp4", "--fps", "200"], "--fps: 200 must be between 0.01 and 120"),
+        (["animate", "--out", "{tmp}/r.gif", "--every", "0"], "--every: 0 must be >= 1"),
+        (["animate", "--out", "{tmp}/r.gif", "--max-frames", "1"], "--max-frames: 1 must be >= 2"),
+        (["animate", "--out", "{tmp}/r.gif", "--dpi", "0"], "--dpi"),
+        (["replay", "--out", "{tmp}/r.txt"], "--out: .* must end in .html"),
+        (["replay", "--out", "{tmp}/r.html", "--every", "0"], "--every: 0 must be >= 1"),
+        (["replay", "--out", "{tmp}/r.html", "--max-frames", "1"], "--max-frames: 1 must be >= 2"),
+    ],
+)
+def test_cheap_options_are_checked_before_the_recording_is_loaded(argv, message, tmp_path, capsys, monkeypatch):
+    import amronet.recording
+
+    def never(*args, **kwargs):
+        raise AssertionError("the recording was loaded before the options were checked")
+
+    monkeypatch.setattr(amronet.recording, "load_recording", never)
+    folder = tmp_path / "run"
+    folder.mkdir()
+    (folder / "recording.npz").write_bytes(b"not a recording")
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = [argv[0], str(folder), *(a.format(tmp=out) for a in argv[1:])]
+    assert main(argv) == 2
+    assert re.search(message, _error(capsys))
+    assert list(out.iterdir()) == []

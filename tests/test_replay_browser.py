@@ -54,6 +54,28 @@ def page_file(tmp_path_factory) -> Path:
     return runs / "replay.html"
 
 
+_BS = ", ".join(f"{{x: {x}, y: {y}}}" for y in (-2.5, 2.5) for x in (-2.5, -1.5, -0.5, 0.5, 1.5))
+MANY_BS = f"""name: many-bs
+description: "10 base stations along two edges of the open field, one router"
+map: open-6x6
+algorithm: {{name: self-spreading, params: {{triangular: local}}}}
+radio: {{model: unit-disk, r_c: 1.0}}
+base_stations: [{_BS}]
+routers: {{count: 1}}
+sim: {{dt: 0.1, time_limit: 5.0, record_every: 10}}
+"""
+
+
+@pytest.fixture(scope="module")
+def many_bs_file(tmp_path_factory) -> Path:
+    """A replay of 10 base stations (more than the 8 status colours) and a single router."""
+    runs = tmp_path_factory.mktemp("replay-many")
+    (runs / "many.yaml").write_text(MANY_BS)
+    assert main(["run", str(runs / "many.yaml"), "--seed", "1", "-q", "--out", str(runs / "a"), "--record"]) == 0
+    assert main(["replay", str(runs / "a"), "--out", str(runs / "replay.html"), "-q"]) == 0
+    return runs / "replay.html"
+
+
 @pytest.fixture(scope="module")
 def browser():
     try:
@@ -173,3 +195,38 @@ def test_chart_click_seeks(page):
     page.mouse.click(box["x"] + box["width"] * 0.5, box["y"] + box["height"] / 2)
     page.wait_for_function("window.amronetReplay.frame > 20 && window.amronetReplay.frame < 40")
     assert page.problems == []
+
+
+def test_scale_bar_is_below_the_map_to_scale(page):
+    view = page.locator("#view").bounding_box()
+    bar = page.locator("#scalebar-bar").bounding_box()
+    label = page.locator("#scalebar-label").bounding_box()
+    for box in (bar, label):  # outside the canvas: below it, so it hides no node
+        assert box["y"] >= view["y"] + view["height"] - 0.5
+        assert view["x"] - 0.5 <= box["x"] and box["x"] + box["width"] <= view["x"] + view["width"] + 0.5
+    assert abs(bar["x"] + bar["width"] - (view["x"] + view["width"])) <= 1  # right-aligned with the map
+    chart = page.locator("#chart").bounding_box()
+    assert label["y"] + label["height"] <= chart["y"] + 0.5
+    metres = float(page.locator("#scalebar-label").inner_text().removesuffix(" m"))
+    (x0, _), (x1, _) = page.evaluate(f"[window.amronetReplay.worldToPage(0, 0), "
+                                     f"window.amronetReplay.worldToPage({metres}, 0)]")
+    assert abs(bar["width"] - (x1 - x0)) <= 1
+    assert page.problems == []
+
+
+def test_one_router_is_singular_and_repeated_colours_are_summed_up(browser, many_bs_file):
+    pg = browser.new_page(viewport={"width": 1280, "height": 900})
+    errors: list[str] = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.goto(many_bs_file.as_uri())
+    pg.wait_for_function("window.amronetReplay && window.amronetReplay.ready && window.amronetReplay.draws > 0",
+                         timeout=30_000)
+    numbers = pg.locator("#numbers").inner_text()
+    assert "10 nodes" in numbers and "1 router moving" in numbers  # frame 0: the router still explores
+    assert "11 robots" in pg.locator("#title").inner_text()
+    legend = pg.locator("#legend").inner_text()
+    assert "no base station yet" in legend and "base station 6" in legend
+    assert "base station 7" not in legend and "base station 9" not in legend  # their colours repeat
+    assert "… 3 more base stations (colours repeat)" in legend
+    assert errors == []
+    pg.close()

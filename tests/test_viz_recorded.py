@@ -163,3 +163,56 @@ def test_fps_bounds(spread, tmp_path):
     assert list(tmp_path.iterdir()) == []
     assert write_animation(spread, tmp_path / "run.gif", fps=50, max_frames=2, dpi=20) == 2
     assert Image.open(tmp_path / "run.gif").info["duration"] == 20
+
+
+def test_renderer_draws_the_static_parts_once_and_matches_a_full_draw(agents, monkeypatch):
+    renderer = FrameRenderer(agents, dpi=DPI)
+    fig = renderer.fig
+    drawn = {"legend": 0, "xaxis": 0}
+    for name, artist in (("legend", fig.legends[0]), ("xaxis", renderer.ax.xaxis)):
+        draw = artist.draw
+
+        def counting(*args, _draw=draw, _name=name, **kwargs):
+            drawn[_name] += 1
+            return _draw(*args, **kwargs)
+
+        monkeypatch.setattr(artist, "draw", counting)
+    f = agents.frames // 2
+    blitted = [renderer.render(g) for g in (0, agents.frames - 1, f)][-1].astype(int)
+    assert drawn == {"legend": 0, "xaxis": 0}  # only what changes is drawn per frame
+    # the same figure drawn in full, every artist at once, shows the same picture
+    for artist in renderer._animated:
+        artist.set_animated(False)
+    fig.canvas.draw()
+    full = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int)
+    assert blitted.shape == full.shape
+    differ = np.abs(blitted - full).max(axis=-1) > 40
+    assert differ.mean() < 0.002  # the uncovered tint is averaged by a different filter: edges may differ a bit
+    assert "coverage" in renderer.title.get_text() and f"t = {agents.t[f]:g} s" in renderer.title.get_text()
+
+
+def test_renderer_tint_marks_uncovered_ground(spread):
+    renderer = FrameRenderer(spread, dpi=DPI)
+    img = renderer.render(0).astype(int)
+    light_red = np.all(np.abs(img - np.array(MAP_COLOURS["uncovered"])) <= 8, axis=-1)
+    assert light_red.sum() > 1000  # at t = 0 almost nothing is covered
+    plain = FrameRenderer(spread, dpi=DPI, layers=("disks", "links", "trails")).render(0).astype(int)
+    assert np.all(np.abs(plain - np.array(MAP_COLOURS["uncovered"])) <= 8, axis=-1).sum() < 0.01 * light_red.sum()
+
+
+def test_gif_shares_one_palette_and_stores_only_changes(spread, tmp_path):
+    path = tmp_path / "run.gif"
+    assert write_animation(spread, path, max_frames=12, dpi=DPI) == 12
+    # the same frames, each quantized on its own and stored whole (how GIFs were written before)
+    frames = list(FrameRenderer(spread, dpi=DPI).frames(pick_frames(spread.frames, 1, 12)))
+    images = [Image.fromarray(rgb).quantize(colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+              for rgb in frames]
+    whole = io.BytesIO()
+    images[0].save(whole, format="GIF", save_all=True, append_images=images[1:], duration=100, loop=0,
+                   optimize=False, disposal=1)
+    assert path.stat().st_size < 0.6 * len(whole.getvalue())
+    im = Image.open(path)
+    for k in (0, 5, 11):  # and each frame still shows its picture
+        im.seek(k)
+        shown = np.asarray(im.convert("RGB"), dtype=int)
+        assert np.mean(np.abs(shown - frames[k]).max(axis=-1) > 40) < 0.002

@@ -7,9 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
+from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 from PIL import Image
 
 from amronet.viz import MAP_COLOURS, draw_map, save_map_picture, save_snapshot, snapshot_figure
+from amronet.viz.decorations import nice_length
+from amronet.viz.snapshot import link_style
 from amronet.world import OCCUPIED, UNKNOWN, OccupancyMap
 
 DPI = 60
@@ -80,6 +83,41 @@ def test_layout_does_not_depend_on_content(omap, nodes):
     with_nodes = snapshot_figure(omap, dpi=DPI, **nodes)
     without = snapshot_figure(omap, dpi=DPI, **_empty_nodes(nodes["r_c"]))
     assert np.allclose(with_nodes.axes[0].get_position().extents, without.axes[0].get_position().extents)
+
+
+def _scale_bar(fig: Figure) -> AnchoredSizeBar:
+    bars = [a for a in fig.axes[0].artists if isinstance(a, AnchoredSizeBar)]
+    assert len(bars) == 1
+    return bars[0]
+
+
+def assert_scale_bar_outside_the_map(fig: Figure) -> None:
+    """The scale bar covers neither the map nor the axis labels nor the legend, and lies inside the figure."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    bar = _scale_bar(fig).get_window_extent(renderer)
+    assert bar.width > 0 and bar.height > 0
+    assert not bar.overlaps(ax.get_window_extent(renderer))  # the map's data area
+    texts = [*ax.get_xticklabels(), *ax.get_yticklabels(), ax.xaxis.label, ax.yaxis.label, ax.title]
+    for text in texts:
+        if text.get_text():
+            assert not bar.overlaps(text.get_window_extent(renderer)), text.get_text()
+    assert not bar.overlaps(fig.legends[0].get_window_extent(renderer))
+    assert fig.bbox.contains(bar.x0, bar.y0) and fig.bbox.contains(bar.x1, bar.y1)
+
+
+@pytest.mark.parametrize("shape", [(100, 100), (40, 200), (200, 40), (10, 10)])
+def test_scale_bar_is_outside_the_map(omap, nodes, shape):
+    square = snapshot_figure(omap, dpi=DPI, **nodes)
+    assert_scale_bar_outside_the_map(square)
+    # its length is to scale: a fifth of the map's width, rounded, in data units
+    fig = snapshot_figure(OccupancyMap("m", 0.05, (0.0, 0.0), np.zeros(shape, np.int8)), dpi=DPI,
+                          **_empty_nodes(0.5))
+    assert_scale_bar_outside_the_map(fig)
+    bar = _scale_bar(fig).get_window_extent(fig.canvas.get_renderer())
+    (x0, _), (x1, _) = fig.axes[0].transData.transform([(0, 0), (nice_length(shape[1] * 0.05), 0)])
+    assert bar.width >= x1 - x0 - 1
 
 
 def test_nodes_are_drawn_where_they_are(tmp_path, omap, nodes):
@@ -196,3 +234,26 @@ def test_bad_suffix_raises(tmp_path, omap, nodes):
         save_snapshot(tmp_path / "x.jpg", omap, **nodes)
     with pytest.raises(ValueError, match=r"^path "):
         save_map_picture(omap, tmp_path / "x.pdf")
+
+
+def test_links_thin_out_when_there_are_many(omap):
+    few_width, few_colour = link_style(50)
+    assert (few_width, few_colour[3]) == (0.6, 0.8)
+    styles = [link_style(n) for n in (300, 1_000, 5_000, 20_000, 10**7)]
+    widths, alphas = [w for w, _ in styles], [c[3] for _, c in styles]
+    assert widths == sorted(widths, reverse=True) and alphas == sorted(alphas, reverse=True)
+    assert widths[0] == 0.6 and widths[3] <= 0.15 + 1e-9 and alphas[3] <= 0.2 + 1e-9
+    assert widths[-1] > 0 and alphas[-1] > 0  # never invisible
+
+    # a dense swarm (3 000 nodes, ~17 000 links): the snapshot draws them thin and faint
+    rng = np.random.default_rng(1)
+    xy = rng.uniform(0.05, 4.95, (3000, 2))
+    i, j = np.triu_indices(len(xy), 1)
+    near = np.hypot(*(xy[i] - xy[j]).T) <= 0.2
+    links = np.column_stack([i[near], j[near]])
+    assert len(links) > 10_000
+    n = len(xy)
+    fig = snapshot_figure(omap, dpi=DPI, xy=xy, kind=np.full(n, "router"), state=np.full(n, "reference"),
+                          status=np.zeros(n, int), links=links, r_c=0.2)
+    coll = next(c for c in fig.axes[0].collections if c.get_zorder() == 2)
+    assert coll.get_linewidth()[0] <= 0.2 and coll.get_edgecolor()[0][3] <= 0.25

@@ -172,13 +172,13 @@ def _cmd_snapshot(args: argparse.Namespace) -> int:
 def _cmd_animate(args: argparse.Namespace) -> int:
     from amronet.recording import load_recording
     from amronet.results import write_file_atomically
-    from amronet.viz.recorded import write_animation
+    from amronet.viz.recorded import check_animation_options, write_animation
 
-    rec = load_recording(_run_folder(args.run))
+    folder = _run_folder(args.run)
     out = Path(args.out)
-    if out.suffix.lower() not in (".gif", ".mp4"):
-        raise AmronetError(f"--out: {args.out!r} must end in .gif or .mp4")
+    check_animation_options(out, args.fps, args.every, args.max_frames)  # before the recording is loaded
     _check_dpi(args.dpi)
+    rec = load_recording(folder)
     count = [0]
 
     def write(tmp: Path) -> None:
@@ -194,13 +194,15 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 def _cmd_replay(args: argparse.Namespace) -> int:
     from amronet.recording import load_recording
     from amronet.results import write_file_atomically
+    from amronet.viz.recorded import check_frame_options
     from amronet.viz.replay import replay_html
 
     folder = _run_folder(args.run)
-    rec = load_recording(folder)
     out = Path(args.out)
     if out.suffix.lower() not in (".html", ".htm"):
         raise AmronetError(f"--out: {args.out!r} must end in .html")
+    check_frame_options(args.every, args.max_frames)  # before the recording is loaded
+    rec = load_recording(folder)
     page = replay_html(rec, folder, every=args.every, max_frames=args.max_frames)
     write_file_atomically(out, lambda tmp: tmp.write_bytes(page))
     if not args.quiet:

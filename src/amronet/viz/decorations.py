@@ -25,6 +25,9 @@ __all__ = ["GAP", "add_legend", "add_scale_bar", "legend_patch", "marker_handle"
 GAP = 0.15
 """Gap in inches between the map's axes and the legend."""
 
+_SCALE_BAR_DROP = 0.27
+"""Inches from the bottom of the map's axes down to the top of the scale bar: below the x tick labels."""
+
 
 def add_legend(fig: Figure, ax: Axes, handles: Sequence[Patch | Line2D]) -> None:
     """Place a legend of ``handles`` outside the axes, to the right of its top edge."""
@@ -62,18 +65,29 @@ def legend_patch(face: object, label: str, edge: object = "0.3") -> Patch:
     return Patch(facecolor=face, edgecolor=edge, linewidth=0.5, label=label)
 
 
-def add_scale_bar(ax: Axes, omap: OccupancyMap) -> None:
-    """Add a scale bar of a round length, about a fifth of the map's width, in the lower right corner."""
-    w, h = omap.size_m
-    length = nice_length(w)
+def add_scale_bar(ax: Axes, omap: OccupancyMap) -> AnchoredSizeBar:
+    """Add a scale bar of a round length, about a fifth of the map's width, below the map's lower right corner.
+
+    The bar sits outside the axes, under the x tick labels and level with the x axis label, so it never hides
+    a node; its length is still in data units (``ax.transData``), so it matches the map's scale.
+
+    Returns:
+        The scale bar artist (an ``AnchoredSizeBar`` added to ``ax``).
+    """
+    length = nice_length(omap.size_m[0])
+    fig = ax.get_figure()
+    _, y0, x1, _ = ax.get_position().extents
+    fig_w, fig_h = fig.get_size_inches()
     bar = AnchoredSizeBar(
-        ax.transData, length, f"{length:g} m", loc="lower right", pad=0.4, borderpad=0.6, sep=3,
-        frameon=True, size_vertical=h / 200, fontproperties={"size": 8},
+        ax.transData, length, f"{length:g} m", loc="upper right", pad=0.0, borderpad=0.0, sep=2,
+        frameon=False, size_vertical=0, fontproperties={"size": 8},
+        bbox_to_anchor=(x1 * fig_w, y0 * fig_h - _SCALE_BAR_DROP), bbox_transform=fig.dpi_scale_trans,
     )  # fmt: skip
-    bar.patch.set_alpha(0.75)
-    bar.patch.set_edgecolor("0.6")
+    bar.size_bar.get_children()[0].set_linewidth(2.5)  # a zero-height rectangle: only its edge shows
+    bar.set_clip_on(False)
     bar.set_zorder(8)
     ax.add_artist(bar)
+    return bar
 
 
 _NO_DATE: dict[str, dict[str, Any]] = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}

@@ -34,6 +34,7 @@ __all__ = [
     "MAP_COLOURS",
     "STATES",
     "draw_map",
+    "link_style",
     "save_map_picture",
     "save_snapshot",
     "snapshot_figure",
@@ -73,6 +74,8 @@ _NO_STATUS = (0.55, 0.55, 0.55, 1.0)
 # tab10 without red and grey: red fills would mimic the "uncovered" tint, grey means "no status".
 _PALETTE = np.asarray(mpl.colormaps["tab10"].colors, dtype=float)[[0, 1, 2, 4, 5, 8, 9, 6]]
 _LINK_COLOUR = (0.45, 0.45, 0.45, 0.8)
+_LINK_WIDTH = 0.6
+_FEW_LINKS = 300  # up to this many links keep the full style; beyond, width and alpha shrink
 _DISK_FACE_ALPHA = 0.05
 _DISK_EDGE_ALPHA = 0.4
 
@@ -211,6 +214,32 @@ def _status_colours(status: np.ndarray) -> np.ndarray:
     return out
 
 
+def link_style(count: int) -> tuple[float, tuple[float, float, float, float]]:
+    """Line width (points) and RGBA colour of ``count`` links, thinner and fainter the more there are.
+
+    Up to 300 links are drawn 0.6 pt wide at alpha 0.8; beyond, both shrink with the square root of the count
+    (to at least 0.15 pt and alpha 0.2), so thousands of links stay a light web instead of a grey mat that
+    hides the nodes.
+    """
+    k = math.sqrt(_FEW_LINKS / max(count, _FEW_LINKS))
+    return max(_LINK_WIDTH * k, 0.15), (*_LINK_COLOUR[:3], max(_LINK_COLOUR[3] * k, 0.2))
+
+
+def status_handles(groups: np.ndarray) -> list[Line2D]:
+    """Legend handles of the statuses ``groups`` (sorted): one colour each while the palette lasts.
+
+    Colours repeat after ``len(_PALETTE)`` base stations, so the statuses beyond are summed up in one
+    ``"... k more BS"`` entry instead of listing repeated colours.
+    """
+    handles = []
+    for s in groups[: len(_PALETTE)]:
+        label = f"BS {s}" if s >= 0 else "no BS yet"
+        handles.append(marker_handle("o", 7.0, _status_colours(np.array([s]))[0], label, edge="none"))
+    if len(groups) > len(_PALETTE):
+        handles.append(Line2D([], [], linestyle="none", label=f"... {len(groups) - len(_PALETTE)} more BS"))
+    return handles
+
+
 def _draw_nodes(ax: Axes, xy: np.ndarray, state: np.ndarray, colours: np.ndarray) -> list[Patch | Line2D]:
     """Scatter the nodes, one call per state present; return legend handles of those states."""
     shrink = float(np.clip(math.sqrt(300 / max(len(xy), 1)), 0.35, 1.0))
@@ -305,7 +334,8 @@ def snapshot_figure(
         )
         ax.add_collection(disks)
     if len(links):
-        ax.add_collection(LineCollection(xy[links], colors=[_LINK_COLOUR], linewidths=0.6, zorder=2))
+        width, colour = link_style(len(links))
+        ax.add_collection(LineCollection(xy[links], colors=[colour], linewidths=width, zorder=2))
 
     trail_handle = _draw_trails(ax, trails, colours, len(xy))
     handles = _draw_nodes(ax, xy, state, colours)
@@ -327,12 +357,7 @@ def snapshot_figure(
     ):
         if shown:
             handles.append(_map_patch(category))
-    groups = np.unique(status)
-    for s in groups[: len(_PALETTE)]:
-        label = f"BS {s}" if s >= 0 else "no BS yet"
-        handles.append(marker_handle("o", 7.0, _status_colours(np.array([s]))[0], label, edge="none"))
-    if len(groups) > len(_PALETTE):
-        handles.append(Line2D([], [], linestyle="none", label=f"... {len(groups) - len(_PALETTE)} more BS"))
+    handles += status_handles(np.unique(status))
     add_legend(fig, ax, handles)
     add_scale_bar(ax, omap)
 
@@ -369,7 +394,7 @@ def save_snapshot(
     ``r_c``; links are thin grey lines; nodes are markers by state (base: large square, reference: filled
     circle, triangle-settled: filled triangle, triangle: hollow triangle, explore: small hollow circle,
     agent: star), coloured by ``status`` (tab10 without its red and grey, which would mimic the uncovered
-    tint and "no status"; grey for -1). A legend sits right of the map, a scale bar in its lower right corner.
+    tint and "no status"; grey for -1). A legend sits right of the map, a scale bar below its lower right corner.
     Disks, links and each state's markers are one collection each, so thousands of nodes draw quickly.
 
     Args:
