@@ -1,10 +1,18 @@
-"""The Dask executor against a real scheduler and two workers, each its own process on 127.0.0.1."""
+"""The Dask executor against a real scheduler and two workers, each its own process on 127.0.0.1.
+
+``distributed`` is imported, not ``importorskip``-ed: the dev install (``.[dev,cluster]``) has it, and these
+tests must fail rather than silently skip when it is missing.
+"""
 
 import json
+import os
+import signal
+import sqlite3
 import subprocess
 import sys
 import time
 
+import distributed  # noqa: F401 - the cluster extra is part of the dev install: fail, never skip, without it
 import pytest
 
 from amronet.cli import main
@@ -12,12 +20,9 @@ from amronet.experiments.runner import run_jobs
 from amronet.sweeps import DaskExecutor, LocalExecutor, run_sweep, sweep_from_spec
 from sweep_helpers import same_store_content, tiny_sweep, write_sweep
 
-pytest.importorskip("distributed")
 
-
-@pytest.fixture(scope="module")
-def scheduler(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("dask")
+def start_cluster(tmp, workers=2):
+    """A scheduler and ``workers`` one-thread workers, each its own process; returns ``(address, procs)``."""
     info = tmp / "scheduler.json"
     common = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "cwd": tmp}
     procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
@@ -29,7 +34,7 @@ def scheduler(tmp_path_factory):
             time.sleep(0.05)
         time.sleep(0.2)
         address = json.loads(info.read_text())["address"]
-        for k in range(2):
+        for k in range(workers):
             procs.append(subprocess.Popen(
                 [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1", "--nworkers", "1",
                  "--no-nanny", "--no-dashboard", "--host", "127.0.0.1", "--name", f"w{k}", "--death-timeout", "60",
@@ -37,17 +42,32 @@ def scheduler(tmp_path_factory):
         from distributed import Client
 
         with Client(address, timeout="30s") as client:
-            client.wait_for_workers(2, timeout=60)
+            client.wait_for_workers(workers, timeout=60)
+    except BaseException:
+        stop_cluster(procs)
+        raise
+    return address, procs
+
+
+def stop_cluster(procs):
+    for proc in reversed(procs):
+        if proc.poll() is None:
+            proc.terminate()
+    for proc in reversed(procs):
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+@pytest.fixture(scope="module")
+def scheduler(tmp_path_factory):
+    address, procs = start_cluster(tmp_path_factory.mktemp("dask"))
+    try:
         yield address
     finally:
-        for proc in reversed(procs):
-            proc.terminate()
-        for proc in reversed(procs):
-            try:
-                proc.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        stop_cluster(procs)
 
 
 def test_sweep_on_dask_equals_the_local_pool(scheduler, tmp_path):
@@ -81,3 +101,45 @@ def test_without_dask_the_scheduler_option_is_one_line(tmp_path, capsys, monkeyp
     err = capsys.readouterr().err
     assert "pip install 'amronet[cluster]'" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "r.sqlite").exists()
+
+
+def _runs_in(store):
+    try:
+        con = sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=0.2)
+        try:
+            return con.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return 0
+
+
+def test_losing_the_scheduler_mid_sweep_is_one_line_and_keeps_the_finished_runs(tmp_path):
+    address, procs = start_cluster(tmp_path, workers=2)
+    spec = {"name": "lost", "base": "self-spreading-6x6", "overrides": {"sim.time_limit": 150.0},
+            "grid": {"radio.r_c": [0.8, 1.0, 1.2]}, "seeds": 10}
+    path = write_sweep(tmp_path / "sweep.yaml", spec)
+    store = tmp_path / "lost.sqlite"
+    cmd = [sys.executable, "-m", "amronet.cli", "sweep", str(path), "--store", str(store), "--scheduler", address,
+           "-q"]
+    sweep = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while _runs_in(store) < 2 and sweep.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert sweep.poll() is None, "the sweep should still be running when the scheduler goes"
+        os.kill(procs[0].pid, signal.SIGKILL)  # the scheduler, like a lost node
+        _, err = sweep.communicate(timeout=120)
+    finally:
+        if sweep.poll() is None:
+            sweep.kill()
+            sweep.wait()
+        stop_cluster(procs)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("amronet: error: lost the Dask cluster (") and "Traceback" not in err
+    assert f"the finished runs are in {str(store)!r}: run the same command again to resume" in lines[0]
+    assert sweep.returncode == 2
+    kept = _runs_in(store)
+    assert 2 <= kept < 30
+    assert main(["sweep", str(path), "--store", str(store), "--workers", "2", "--json", "-q"]) == 0

@@ -82,3 +82,48 @@ def test_plan_unknown_map_and_bad_radius():
         plan("no-such-map", [(1.0, 1.0)], r_c=8.0, agents_per_base=1, runs=1)
     with pytest.raises(AmronetError, match="--rc"):
         plan("office-32x32", [(1.0, 1.0)], r_c=-1.0, agents_per_base=1, runs=1)
+
+
+def _fail_one_run(store):
+    from amronet import __version__
+
+    with ResultStore(store) as st:
+        run = st.runs()[0]
+        h, seed = run["scenario_hash"], run["seed"]
+        scenario = st.load(h, seed)["summary"]["scenario"]
+        st.record(h, seed, scenario, {"status": "failed", "error": "boom", "summary": None, "timeseries": None,
+                                      "wall_time_s": 0.0, "host": "test", "amronet_version": __version__})
+    return seed
+
+
+def test_plan_retries_failed_runs_only_with_retry_failed(tmp_path, capsys):
+    store = tmp_path / "plan.sqlite"
+    args = ["plan", "--map", "office-32x32", "--base", "1,1", "--rc", "8", "--agents", "1", "--runs", "2",
+            "--workers", "1", "--store", str(store), "--json"]
+    assert main(args) == 0
+    first = json.loads(capsys.readouterr().out)["agent_assisted"]["runs"]
+    seed = _fail_one_run(store)
+    assert main(args) == 0
+    runs = json.loads(capsys.readouterr().out)["agent_assisted"]["runs"]
+    assert [r["status"] for r in runs if r["seed"] == seed] == ["failed"]
+    p = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=1, runs=2, workers=1, store=store)
+    assert any("1 of 2 runs failed (--retry-failed runs them again): boom" in w for w in p.warnings)
+    assert main([*args, "--retry-failed"]) == 0
+    assert json.loads(capsys.readouterr().out)["agent_assisted"]["runs"] == first
+
+
+def test_plan_json_gives_the_picture_only_with_out(tmp_path, capsys):
+    args = ["plan", "--map", "office-32x32", "--base", "1,1", "--rc", "8", "--agents", "1", "--runs", "1",
+            "--workers", "1", "--json"]
+    assert main(args) == 0
+    assert json.loads(capsys.readouterr().out)["picture"] is None
+    assert main([*args, "--out", str(tmp_path / "plan")]) == 0
+    picture = json.loads(capsys.readouterr().out)["picture"]
+    assert picture == str(tmp_path / "plan" / "typical.png") and Image.open(picture).size[0] > 400
+
+
+def test_plan_help_says_the_picture_needs_out(capsys):
+    with pytest.raises(SystemExit):
+        main(["plan", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "the picture is written only with --out" in text and "--retry-failed" in text

@@ -2,6 +2,7 @@ import sqlite3
 
 import pytest
 
+from amronet.errors import ScenarioError
 from amronet.sweeps import LocalExecutor, ResultStore, StoreError, run_sweep, sweep_from_spec
 from amronet.sweeps.worker import execute_job
 from sweep_helpers import same_store_content, tiny_sweep
@@ -67,8 +68,12 @@ def test_folder_and_missing_store(tmp_path):
 
 
 def test_failed_runs_are_recorded_and_retried_only_when_asked(tmp_path):
-    # x = 2.999 puts the base station inside the field's wall: the scenario validates, the run raises
-    sweep = sweep_from_spec(tiny_sweep(radii=(1.0,), points=[{"base_stations.0.x": 2.999}], seeds=2))
+    # x = 2.999 puts the base station inside the field's wall: the fields validate, the run raises (a sweep
+    # refuses such a point up front; check_start=False lets it through to exercise failed runs)
+    spec = tiny_sweep(radii=(1.0,), points=[{"base_stations.0.x": 2.999}], seeds=2)
+    with pytest.raises(ScenarioError, match=r"^points\[0\]\.base_stations\[0\]: \(2.999, 0\) is inside"):
+        sweep_from_spec(spec)
+    sweep = sweep_from_spec(spec, check_start=False)
     store = tmp_path / "r.sqlite"
     first = run_sweep(sweep, store, LocalExecutor(1), show_progress=False)
     assert (first.total, first.done, first.failed) == (4, 2, 2)

@@ -227,3 +227,95 @@ def test_a_sweep_whose_worker_dies_keeps_its_runs_and_resumes(tmp_path, capsys, 
     assert main(["sweep", str(path), "--store", str(store), "--workers", "2", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["runs"] == 6 and doc["failed"] == 0 and doc["already_in_store"] + doc["done_now"] == 6
+
+
+def test_plot_without_out_writes_a_default_file_in_the_current_folder(swept, tmp_path, capsys, monkeypatch):
+    _, store, _ = swept
+    monkeypatch.chdir(tmp_path)
+    capsys.readouterr()
+    assert main(["plot", str(store), "--x", "radio.r_c", "--y", "nodes_total", "--hue", "algorithm"]) == 0
+    name = "plot-nodes_total-vs-radio.r_c-by-algorithm.png"
+    assert capsys.readouterr().out.startswith(f"wrote {name}: nodes_total vs radio.r_c by algorithm")
+    assert Image.open(tmp_path / name).size[0] > 400
+    assert main(["plot", str(store), "--x", "radio.r_c", "--y", "coverage"]) == 0
+    assert (tmp_path / "plot-coverage-vs-radio.r_c.png").is_file()
+
+
+def test_results_and_plot_name_the_positional_store(tmp_path, capsys):
+    notes = tmp_path / "notes.txt"
+    notes.write_text("not a store\n")
+    assert main(["results", str(tmp_path / "none.sqlite")]) == 2
+    assert main(["plot", str(notes), "--x", "a", "--y", "b"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("amronet: error: STORE: no result store at")
+    assert err[1].startswith("amronet: error: STORE: ") and "not a SQLite database" in err[1]
+    assert "--store" not in err[1]
+
+
+@pytest.mark.parametrize("extra", [[], ["--json"]])
+def test_results_into_a_closed_pipe_stops_quietly(swept, extra):
+    import subprocess
+    import sys
+
+    _, store, _ = swept
+    proc = subprocess.Popen([sys.executable, "-m", "amronet.cli", "results", str(store), "--limit", "0", *extra],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # like `| head -1` once it has its line
+    err = proc.stderr.read().decode()
+    assert proc.wait() == 1 and err == ""
+
+
+def test_workers_with_a_scheduler_is_one_line(tmp_path, capsys):
+    path = write_sweep(tmp_path / "s.yaml", tiny_sweep())
+    assert main(["sweep", str(path), "--store", str(tmp_path / "r.sqlite"), "--workers", "2", "--scheduler",
+                 "tcp://127.0.0.1:1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("amronet: error: --workers: ") and "--scheduler" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "r.sqlite").exists()
+
+
+def test_run_jobs_retries_failed_runs_unless_told_not_to(tmp_path):
+    jobs = _jobs()
+    bad = {**jobs[1], "scenario": {**jobs[1]["scenario"], "base_stations": [{"x": 2.999, "y": 0}]}}
+    store = tmp_path / "r.sqlite"
+    with pytest.raises(AmronetError, match="1 of 3 runs failed"):
+        run_jobs([jobs[0], bad, jobs[2]], workers=1, show_progress=False, store=store)
+    with ResultStore(store) as st:
+        stamps = {(r["scenario_hash"], r["seed"]): r["finished_at"] for r in st.runs()}
+    with pytest.raises(AmronetError, match=r"1 of 3 runs failed .*retry them with retry_failed"):
+        run_jobs([jobs[0], bad, jobs[2]], workers=1, show_progress=False, store=store, retry_failed=False)
+    with ResultStore(store) as st:
+        assert {(r["scenario_hash"], r["seed"]): r["finished_at"] for r in st.runs()} == stamps  # not run again
+    with pytest.raises(AmronetError, match="1 of 3 runs failed"):
+        run_jobs([jobs[0], bad, jobs[2]], workers=1, show_progress=False, store=store, retry_failed=True)
+
+
+class _LosesTheCluster:
+    """An executor whose cluster goes away after the first job."""
+
+    slots = 1
+
+    def imap_unordered(self, fn, jobs):
+        from amronet.sweeps.executors import ClusterLostError
+
+        yield 0, fn(jobs[0])
+        raise ClusterLostError("scheduler-connection-lost")
+
+    def describe(self):
+        return "a vanishing cluster"
+
+    def close(self):
+        pass
+
+
+def test_a_lost_cluster_is_one_error_that_keeps_the_finished_runs(tmp_path):
+    from amronet.sweeps import run_sweep, sweep_from_spec
+    from amronet.sweeps.executors import ClusterLostError
+
+    store = tmp_path / "r.sqlite"
+    with pytest.raises(ClusterLostError) as info:
+        run_sweep(sweep_from_spec(tiny_sweep()), store, _LosesTheCluster(), show_progress=False)
+    assert str(info.value) == (f"lost the Dask cluster (scheduler-connection-lost); the finished runs are in "
+                               f"{str(store)!r}: run the same command again to resume")
+    with ResultStore(store) as st:
+        assert len(st.runs()) == 1

@@ -113,7 +113,10 @@ def test_relative_paths_are_taken_from_the_sweep_file(tmp_path):
     (tmp_path / "sub" / "sc.yaml").write_text(yaml.safe_dump(sc))
     sweep = load_sweep(write_sweep(tmp_path / "s.yaml", {"name": "rel", "base": "sub/sc.yaml", "seeds": 1}))
     assert sweep.points[0].scenario["map"] == "open-6x6"
-    inline = {**sc, "map": "maps/m.yaml"}  # the map is loaded when a run starts; here its path is resolved
+    inline = {**sc, "map": "maps/m.yaml"}
+    with pytest.raises(ScenarioError, match=r"^base: map: map file .*maps/m.yaml' not found"):
+        load_sweep(write_sweep(tmp_path / "t.yaml", {"name": "inline", "base": inline, "seeds": 1}))
+    _copy_builtin_map(tmp_path / "maps")  # the map is loaded before anything runs, from the sweep file's folder
     sweep = load_sweep(write_sweep(tmp_path / "t.yaml", {"name": "inline", "base": inline, "seeds": 1}))
     assert sweep.points[0].scenario["map"] == str(tmp_path / "maps" / "m.yaml")
 
@@ -149,6 +152,66 @@ def test_bad_sweeps_name_the_field(spec, field):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.parametrize(("extra", "start"), [
+    ({"grid": {"map": ["open-6x6", "nosuchmap"]}},
+     "grid.map: 'nosuchmap' is neither a built-in map name (open-6x6, "),
+    ({"points": [{"radio.r_c": 1.0}, {"map": "/nonexistent/map.yaml"}]},
+     "points[1].map: map file '/nonexistent/map.yaml' not found"),
+    ({"overrides": {"map": "/nonexistent/map.yaml"}}, "overrides.map: map file '/nonexistent/map.yaml' not found"),
+    ({"base": {**load_scenario("self-spreading-6x6").to_dict(), "map": "nosuchmap"}, "grid": None},
+     "base: map: 'nosuchmap' is neither a built-in map name"),
+    ({"points": [{"base_stations": [{"x": 100, "y": 100}]}]},
+     "points[0].base_stations[0]: (100, 100) is outside the map [-3, 3] x [-3, 3]; move it inside (at point 2: "),
+    ({"grid": {"radio.r_c": [1.0], "base_stations.0.x": [0.0, 100]}},
+     "grid.base_stations[0]: (100, 0) is outside the map"),
+    ({"grid": {"map": ["open-6x6", "office-32x32"]}},
+     "grid: point 1 (map = 'office-32x32'): base_stations[0]: (0, 0) is inside an obstacle"),
+    ({"grid": {"routers.count": [30, 3000]}},
+     "grid: point 1 (routers.count = 3000): base_stations[0].region: could place only"),
+    ({"overrides": {"sim.time_limit": 3.0, "base_stations.0.x": 100}},
+     "overrides.base_stations[0]: (100, 0) is outside the map"),
+])
+def test_points_that_cannot_start_are_caught_before_running(extra, start):
+    spec = {k: v for k, v in tiny_sweep(seeds=1, **extra).items() if v is not None}
+    with pytest.raises(ScenarioError) as info:
+        sweep_from_spec(spec)
+    assert str(info.value).startswith(start), str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_each_distinct_start_is_set_up_once(monkeypatch):
+    import amronet.sweeps.check as check
+
+    started = []
+    real = check._start
+    monkeypatch.setattr(check, "_start", lambda sc, seed, maps: (started.append(sc["radio"]["r_c"]),
+                                                                 real(sc, seed, maps)))
+    sweep_from_spec(tiny_sweep(grid={"radio.r_c": [0.8, 1.0], "sim.time_limit": [1.0, 2.0, 3.0]}, seeds=3))
+    assert started == [0.8, 1.0]
+
+
+def test_sweeping_the_algorithm_drops_the_base_params(tmp_path, capsys):
+    import json
+
+    spec = tiny_sweep(radii=(1.0,), seeds=1, grid={"algorithm.name": ["self-spreading", "dssa"]},
+                      points=[{"algorithm.name": "dssa", "algorithm.params.obstacle_forces": False},
+                              {"algorithm.params.triangular": "global"}])
+    sweep = sweep_from_spec(spec)
+    algos = [p.scenario["algorithm"] for p in sweep.points]
+    assert [a["name"] for a in algos] == ["self-spreading", "dssa", "dssa", "self-spreading"]
+    assert algos[0]["params"]["triangular"] == "local" and algos[3]["params"]["triangular"] == "global"
+    assert "triangular" not in algos[1]["params"] and algos[1]["params"]["obstacle_forces"] is True
+    assert algos[2]["params"]["obstacle_forces"] is False
+    # the sweep's fixed overrides switch the algorithm the same way
+    fixed = sweep_from_spec(tiny_sweep(seeds=1, overrides={"sim.time_limit": 3.0, "algorithm.name": "dssa"}))
+    assert all(p.scenario["algorithm"]["name"] == "dssa" for p in fixed.points)
+    path = write_sweep(tmp_path / "algo.yaml", tiny_sweep(radii=(1.0,), seeds=1,
+                                                          grid={"algorithm.name": ["self-spreading", "dssa"]}))
+    assert main(["sweep", str(path), "--store", str(tmp_path / "r.sqlite"), "--workers", "1", "--json", "-q"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert [(p["algorithm.name"], p["done"]) for p in doc["points"]] == [("self-spreading", 1), ("dssa", 1)]
+
+
 BAD_FILES = {
     "unknown-key": "name: x\nbase: self-spreading-6x6\nseeds: 2\ngrdi: {radio.r_c: [1]}\n",
     "empty-grid": "name: x\nbase: self-spreading-6x6\nseeds: 2\ngrid: {}\n",
@@ -158,6 +221,17 @@ BAD_FILES = {
     "bad-override": "name: x\nbase: self-spreading-6x6\nseeds: 1\ngrid: {routers.count: [5, many]}\n",
     "not-yaml": "name: [x\n",
     "not-a-mapping": "- 1\n- 2\n",
+    "missing-map-file": "name: x\nbase: self-spreading-6x6\nseeds: 1\npoints: [{map: /nonexistent/map.yaml}]\n",
+    "unknown-map-name": "name: x\nbase: self-spreading-6x6\nseeds: 1\ngrid: {map: [open-6x6, nosuchmap]}\n",
+    "base-station-off-the-map": "name: x\nbase: self-spreading-6x6\nseeds: 1\n"
+                                "points: [{base_stations: [{x: 100, y: 100}]}]\n",
+    "empty": "",
+}
+BAD_FILE_ERRORS = {
+    "missing-map-file": "points[0].map: map file '/nonexistent/map.yaml' not found",
+    "unknown-map-name": "grid.map: 'nosuchmap' is neither a built-in map name",
+    "base-station-off-the-map": "points[0].base_stations[0]: (100, 100) is outside the map",
+    "empty": "sweep: '{bad}' is empty",
 }
 
 
@@ -173,7 +247,11 @@ def test_bad_sweep_file_is_one_line_and_leaves_the_store_untouched(tmp_path, cap
     assert main(["sweep", str(bad), "--store", str(store), "--workers", "1", "-q"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("amronet: error: ") and len(err.strip().splitlines()) == 1
+    if case in BAD_FILE_ERRORS:
+        assert err.startswith("amronet: error: " + BAD_FILE_ERRORS[case].format(bad=bad)), err
     assert store.read_bytes() == before
+    assert main(["sweep", str(bad), "--store", str(tmp_path / "new.sqlite"), "--workers", "1", "-q"]) == 2
+    assert not (tmp_path / "new.sqlite").exists()
 
 
 def test_the_largest_seed_runs_and_a_larger_one_creates_no_store(tmp_path, capsys):

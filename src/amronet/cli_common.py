@@ -29,7 +29,7 @@ def parse_base(text: str) -> tuple[float, float]:
 def add_executor_arguments(parser: argparse.ArgumentParser) -> None:
     """Add ``--workers``, ``--scheduler`` and ``--cluster``: where the runs of a command execute."""
     parser.add_argument("--workers", type=int, help="local worker processes, or LocalCluster workers "
-                                                    "(default: all cores)")
+                                                    "(default: all cores; not with --scheduler)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="run on a running Dask scheduler, e.g. tcp://host:8786")
     parser.add_argument("--cluster", metavar="KIND", help="start a Dask cluster here: local (a LocalCluster)")
 
@@ -38,7 +38,8 @@ def make_executor_from_args(args: argparse.Namespace) -> Any:
     """The executor (a context manager) that :func:`add_executor_arguments`'s options ask for.
 
     Raises:
-        AmronetError: ``--workers`` below 1 (or a bad scheduler / cluster, from the executor).
+        AmronetError: ``--workers`` below 1, or with ``--scheduler`` (or a bad scheduler / cluster, from the
+            executor).
     """
     from amronet.sweeps import make_executor
 

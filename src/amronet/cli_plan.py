@@ -1,9 +1,11 @@
 """The ``amronet plan`` subcommand: how many routers to carry (see :mod:`amronet.planning`).
 
 ``amronet plan --map depot --base 1.0,2.0 [--base X,Y ...] --rc 4 --agents 3 [--runs 20] [--confidence 0.95]
-[--store results.sqlite] [--out DIR] [--json]`` prints the paper's estimate, the static patterns placed on the
-map and the distribution of routers used by agent-assisted deployment over ``--runs`` seeded runs, with the
-recommendation. ``--out DIR`` writes ``plan.json``, ``plan.md`` and ``typical.png``.
+[--store results.sqlite [--retry-failed]] [--out DIR] [--json]`` prints the paper's estimate, the static patterns
+placed on the map and the distribution of routers used by agent-assisted deployment over ``--runs`` seeded runs,
+with the recommendation. ``--out DIR`` writes ``plan.json``, ``plan.md`` and ``typical.png`` (the picture is
+only ever written with ``--out``; ``--json`` then gives its path as ``picture``). Runs ``--store`` holds as
+failed are run again only with ``--retry-failed``, as with ``amronet sweep``.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import argparse
 import json
 import math
 import sys
+from pathlib import Path
 
 from amronet.cli_common import add_executor_arguments, make_executor_from_args, parse_base
 from amronet.errors import AmronetError
@@ -31,11 +34,15 @@ def cmd_plan(args: argparse.Namespace) -> int:
     with make_executor_from_args(args) as executor:
         p = plan(args.map, bases, r_c=args.rc, agents_per_base=args.agents, runs=args.runs,
                  confidence=args.confidence, explorer=args.explorer, time_limit=args.time_limit, seed=args.seed,
-                 store=args.store, executor=executor, show_progress=not args.quiet and not args.json)
+                 store=args.store, executor=executor, show_progress=not args.quiet and not args.json,
+                 retry_failed=args.retry_failed)
+    picture = None
     if args.out:
         write_plan(p, args.out)
+        if p.typical_seed is not None:
+            picture = str(Path(args.out) / "typical.png")
     if args.json:
-        print(json.dumps(p.to_dict(), indent=2))
+        print(json.dumps({**p.to_dict(), "picture": picture}, indent=2))
     elif not args.quiet:
         print(p.markdown(picture=None), end="")
         if args.out:
@@ -62,8 +69,13 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--time-limit", type=float, default=6000.0, help="simulated seconds per run at most")
     p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--store", help="keep the runs in this result store (and reuse them next time)")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="run again the runs --store holds as failed (otherwise they stay failed, as with sweep)")
     add_executor_arguments(p)
-    p.add_argument("--out", metavar="DIR", help="write plan.json, plan.md and typical.png (replaced atomically)")
-    p.add_argument("--json", action="store_true", help="print the plan as JSON")
+    p.add_argument("--out", metavar="DIR", help="write plan.json, plan.md and typical.png, the picture of a typical "
+                                                "run (replaced atomically); the picture is written only with --out")
+    p.add_argument("--json", action="store_true",
+                   help="print the plan as JSON (no picture: add --out DIR for typical.png; its path is then the "
+                        "JSON's picture field, null otherwise)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but warnings")
     p.set_defaults(func=cmd_plan)

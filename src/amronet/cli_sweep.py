@@ -5,11 +5,13 @@
   and prints a table per point. Exit status 1 when runs of the sweep are recorded as failed.
 * ``amronet results results.sqlite [--sweep NAME] [--export csv|parquet --out DIR]`` lists sweeps and runs, or
   writes the tidy tables.
-* ``amronet plot results.sqlite --x radio.r_c --y nodes_total [--hue algorithm.name] --out plot.png`` draws the
-  mean and 95 % confidence interval.
+* ``amronet plot results.sqlite --x radio.r_c --y nodes_total [--hue algorithm.name] [--out plot.png]`` draws the
+  mean and 95 % confidence interval (by default into ``plot-Y-vs-X[-by-HUE].png`` in the current folder).
 
-Bad input (a sweep file, a store that is not a store, an unknown column) prints one line and exits with 2,
-leaving the store as it was.
+Bad input (a sweep file, a point whose map or base stations cannot start, a store that is not a store, an
+unknown column, ``--workers`` with ``--scheduler``) prints one line and exits with 2, leaving the store as it
+was. A worker process that dies or a Dask cluster that goes away mid-sweep is one line too (exit 2); the runs
+that finished are in the store, and the same command resumes.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -24,7 +27,7 @@ from typing import Any
 from amronet.cli_common import add_executor_arguments, make_executor_from_args
 from amronet.errors import AmronetError
 
-__all__ = ["add_parsers", "cmd_plot", "cmd_results", "cmd_sweep"]
+__all__ = ["add_parsers", "cmd_plot", "cmd_results", "cmd_sweep", "default_plot_name"]
 
 
 def _console() -> Any:
@@ -98,7 +101,7 @@ def cmd_results(args: argparse.Namespace) -> int:
         raise AmronetError("--export: give both --export csv|parquet and --out DIR")
     if args.limit < 0:
         raise AmronetError(f"--limit: {args.limit} must be >= 0 (the number of runs to list; 0 lists them all)")
-    with ResultStore(args.store, must_exist=True) as store:
+    with ResultStore(args.store, must_exist=True, option="STORE") as store:
         sweep_id = store.find_sweep(args.sweep) if args.sweep else None
         if args.export:
             counts = export_tables(store, args.export, args.out, sweep_id)
@@ -134,22 +137,29 @@ def cmd_results(args: argparse.Namespace) -> int:
     return 0
 
 
+def default_plot_name(x: str, y: str, hue: str | None = None) -> str:
+    """The picture ``amronet plot`` writes without ``--out``: ``plot-Y-vs-X[-by-HUE].png`` in the current folder."""
+    parts = [y, "vs", x, *(["by", hue] if hue else [])]
+    return "plot-" + "-".join(re.sub(r"[^A-Za-z0-9._]+", "_", p) for p in parts) + ".png"
+
+
 def cmd_plot(args: argparse.Namespace) -> int:
     """Run ``amronet plot`` (see the module docstring)."""
     from amronet.sweeps import ResultStore
     from amronet.sweeps.plot import save_plot
     from amronet.sweeps.tables import run_rows
 
-    with ResultStore(args.store, must_exist=True) as store:
+    with ResultStore(args.store, must_exist=True, option="STORE") as store:
         sweep_id = store.find_sweep(args.sweep) if args.sweep else None
         if sweep_id is None:
             sweeps = store.sweeps()
             if len(sweeps) == 1:
                 sweep_id = sweeps[0]["id"]
         rows = run_rows(store, sweep_id)
-    groups = save_plot(rows, args.x, args.y, args.out, hue=args.hue, title=args.title)
+    out = args.out or default_plot_name(args.x, args.y, args.hue)
+    groups = save_plot(rows, args.x, args.y, out, hue=args.hue, title=args.title)
     points = sum(len(v) for v in groups.values())
-    print(f"wrote {args.out}: {args.y} vs {args.x}" + (f" by {args.hue}" if args.hue else "")
+    print(f"wrote {out}: {args.y} vs {args.x}" + (f" by {args.hue}" if args.hue else "")
           + f", {points} points from {sum(r['status'] == 'done' for r in rows)} runs")
     return 0
 
@@ -167,7 +177,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_sweep)
 
     r = subparsers.add_parser("results", help="list the sweeps and runs of a result store, or export them")
-    r.add_argument("store", help="result store (SQLite file)")
+    r.add_argument("store", metavar="STORE", help="result store (SQLite file)")
     r.add_argument("--sweep", help="only this sweep (name or id)")
     r.add_argument("--failed", action="store_true", help="only failed runs, with their errors")
     r.add_argument("--limit", type=int, default=20, help="runs to list (default 20; 0 for all)")
@@ -177,11 +187,12 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     r.set_defaults(func=cmd_results)
 
     g = subparsers.add_parser("plot", help="plot a metric (mean, 95 %% CI) against a parameter from a result store")
-    g.add_argument("store", help="result store (SQLite file)")
+    g.add_argument("store", metavar="STORE", help="result store (SQLite file)")
     g.add_argument("--x", required=True, help="x axis: an override key (radio.r_c), a label or a summary field")
     g.add_argument("--y", required=True, help="y axis: a summary field, e.g. nodes_total or coverage")
     g.add_argument("--hue", help="one line per value of this key, e.g. algorithm.name")
     g.add_argument("--sweep", help="only this sweep (name or id); its labels become columns too")
     g.add_argument("--title", help="title of the plot")
-    g.add_argument("--out", required=True, help="picture to write (.png, .svg or .pdf)")
+    g.add_argument("--out", help="picture to write (.png, .svg or .pdf; default plot-Y-vs-X[-by-HUE].png in the "
+                                 "current folder)")
     g.set_defaults(func=cmd_plot)

@@ -159,6 +159,7 @@ def plan(
     workers: int | None = None,
     executor: Any = None,
     show_progress: bool = False,
+    retry_failed: bool = False,
 ) -> Plan:
     """Plan a deployment (see the module docstring).
 
@@ -177,6 +178,8 @@ def plan(
         workers: Local worker processes (when no ``executor``).
         executor: An :class:`~amronet.sweeps.executors.Executor` (e.g. Dask).
         show_progress: Draw the sweep's progress bar.
+        retry_failed: Run again the runs that ``store`` holds as failed (otherwise they stay failed, as with
+            ``amronet sweep``, and the plan warns about them).
 
     Raises:
         AmronetError: Bad input, with one line naming the option.
@@ -214,7 +217,8 @@ def plan(
                              "seeds": runs, "seed_start": seed})
     with tempfile.TemporaryDirectory(prefix="amronet-plan-") as tmp:
         store_path = Path(store) if store is not None else Path(tmp) / "results.sqlite"
-        run_sweep(sweep, store_path, executor or LocalExecutor(workers), show_progress=show_progress)
+        run_sweep(sweep, store_path, executor or LocalExecutor(workers), retry_failed=retry_failed,
+                  show_progress=show_progress)
         point = sweep.points[0]
         with ResultStore(store_path, must_exist=True) as st:
             outcomes = {s: st.load(point.hash, s, timeseries=False) for s in sweep.seeds}
@@ -230,7 +234,8 @@ def plan(
     warnings = []
     failed = [r for r in rows if r["status"] == "failed"]
     if failed:
-        warnings.append(f"{len(failed)} of {runs} runs failed: {failed[0]['error']}")
+        retry = " (--retry-failed runs them again)" if store is not None else ""
+        warnings.append(f"{len(failed)} of {runs} runs failed{retry}: {failed[0]['error']}")
     short = [r for r in rows if r["status"] == "done" and r["stop_reason"] != "coverage_target"]
     if short:
         warnings.append(f"{len(short)} of {runs} runs did not reach {100 * target:g} % coverage within "

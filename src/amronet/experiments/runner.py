@@ -43,6 +43,7 @@ def run_jobs(
     on_result: Callable[[int, dict[str, Any]], None] | None = None,
     store: str | Path | None = None,
     executor: Executor | None = None,
+    retry_failed: bool = True,
 ) -> list[dict[str, Any]]:
     """Run jobs, in parallel when ``workers > 1``; results in job order.
 
@@ -54,10 +55,13 @@ def run_jobs(
         on_result: Called with ``(index, result)`` as each job finishes (or is loaded from the store).
         store: Result store (SQLite path) to load finished runs from and commit new ones to.
         executor: Where the jobs run (default: a local process pool with ``workers`` processes).
+        retry_failed: With a store, run again the runs it holds as failed (``amronet reproduce`` does, as it has
+            no ``--retry-failed`` yet); ``False`` leaves them failed, as ``amronet sweep`` does without
+            ``--retry-failed``, and raises for them.
 
     Raises:
-        AmronetError: With a store, some runs failed (they are recorded; the next call retries them); or a
-            worker process died (:class:`~amronet.sweeps.executors.WorkerDiedError`).
+        AmronetError: With a store, some runs failed (they are recorded; a call with ``retry_failed`` retries
+            them); or a worker process died (:class:`~amronet.sweeps.executors.WorkerDiedError`).
     """
     if jobs:  # fail fast, in this process, on a scenario that cannot start
         from amronet.scenario import load_scenario
@@ -68,7 +72,7 @@ def run_jobs(
     executor = executor or LocalExecutor(workers or default_workers())
     try:
         if store is not None:
-            return _run_with_store(jobs, Path(store), executor, description, show_progress, on_result)
+            return _run_with_store(jobs, Path(store), executor, description, show_progress, on_result, retry_failed)
         return _run_plain(jobs, executor, description, show_progress, on_result)
     finally:
         if own:
@@ -92,8 +96,8 @@ def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_p
 
 
 def _run_with_store(jobs: Sequence[Job], store_path: Path, executor: Executor, description: str,
-                    show_progress: bool, on_result: Callable[[int, dict[str, Any]], None] | None
-                    ) -> list[dict[str, Any]]:
+                    show_progress: bool, on_result: Callable[[int, dict[str, Any]], None] | None,
+                    retry_failed: bool = True) -> list[dict[str, Any]]:
     from amronet.errors import AmronetError
     from amronet.scenario import load_scenario
     from amronet.sweeps.engine import execute_into_store, pending_runs
@@ -130,11 +134,15 @@ def _run_with_store(jobs: Sequence[Job], store_path: Path, executor: Executor, d
                                                                                                       strict=True))]
         store.add_sweep(description, spec, links)
         runs = [(h, int(job["seed"]), sc) for (h, sc), job in zip(keys, jobs, strict=True)]
-        pending = pending_runs(store, runs, retry_failed=True)
+        pending = pending_runs(store, runs, retry_failed=retry_failed)
         waiting = {(h, s) for h, s, _ in pending}
+        stored_failed = set()
         for (h, s), ks in by_key.items():
             if (h, s) not in waiting:
                 loaded = store.load(h, s)
+                if loaded["status"] != "done":
+                    stored_failed.add((h, s))
+                    continue
                 for k in ks:
                     deliver(k, loaded)
 
@@ -146,10 +154,13 @@ def _run_with_store(jobs: Sequence[Job], store_path: Path, executor: Executor, d
 
         _, failed = execute_into_store(store, pending, executor, description=description,
                                        show_progress=show_progress, total=len(by_key), on_outcome=arrived,
-                                       already=(len(by_key) - len(pending), 0))
-        if failed:
+                                       already=(len(by_key) - len(pending) - len(stored_failed),
+                                                len(stored_failed)))
+        if failed or stored_failed:
+            bad = waiting | stored_failed
             errors = [r["error"] for r in store.runs() if r["status"] == "failed" and (r["scenario_hash"],
-                                                                                       r["seed"]) in waiting]
-            raise AmronetError(f"{description}: {failed} of {len(by_key)} runs failed (recorded in "
-                               f"{str(store_path)!r}; run again to retry them); first error: {errors[0]}")
+                                                                                       r["seed"]) in bad]
+            retry = "run again to retry them" if retry_failed else "retry them with retry_failed (--retry-failed)"
+            raise AmronetError(f"{description}: {failed + len(stored_failed)} of {len(by_key)} runs failed "
+                               f"(recorded in {str(store_path)!r}; {retry}); first error: {errors[0]}")
     return [r for r in results if r is not None]

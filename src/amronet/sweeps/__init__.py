@@ -1,6 +1,7 @@
 """Sweeps: many seeded runs over a grid of parameters, on a laptop or a Dask cluster, into a result store.
 
 * :mod:`~amronet.sweeps.spec` — sweep files: base scenario, grid / points of overrides, seeds; validated.
+* :mod:`~amronet.sweeps.check` — every distinct start of a sweep set up once (maps, base stations) before it runs.
 * :mod:`~amronet.sweeps.identity` — a run's identity: the resolved scenario's canonical JSON and map content, hashed.
 * :mod:`~amronet.sweeps.store` — the SQLite result store (WAL; one transaction per finished run).
 * :mod:`~amronet.sweeps.executors` — a local process pool and a Dask executor behind one interface.
@@ -19,12 +20,20 @@ Example:
 """
 
 from amronet.sweeps.engine import SweepReport, execute_into_store, pending_runs, run_sweep
-from amronet.sweeps.executors import DaskExecutor, Executor, LocalExecutor, default_workers, make_executor
+from amronet.sweeps.executors import (
+    ClusterLostError,
+    DaskExecutor,
+    Executor,
+    LocalExecutor,
+    default_workers,
+    make_executor,
+)
 from amronet.sweeps.identity import canonical_json, resolve_scenario, scenario_hash
 from amronet.sweeps.spec import Point, Sweep, SweepSpec, load_sweep, sweep_from_spec
 from amronet.sweeps.store import ResultStore, StoreError
 
 __all__ = [
+    "ClusterLostError",
     "DaskExecutor",
     "Executor",
     "LocalExecutor",

@@ -17,7 +17,7 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from amronet.sweeps.executors import Executor, LocalExecutor, WorkerDiedError
+from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, WorkerDiedError
 from amronet.sweeps.spec import Sweep
 from amronet.sweeps.store import ResultStore
 from amronet.sweeps.worker import execute_job
@@ -101,6 +101,7 @@ def execute_into_store(
     Raises:
         WorkerDiedError: A local worker process died (killed, out of memory); the runs recorded so far stay in the
             store, so running the same command again resumes.
+        ClusterLostError: The Dask scheduler connection was lost or workers died under a job; likewise.
     """
     total = len(pending) if total is None else total
     jobs = [{"scenario": sc, "seed": seed} for _, seed, sc in pending]
@@ -125,6 +126,10 @@ def execute_into_store(
             raise WorkerDiedError(f"a worker process died (killed, or out of memory?); the finished runs are kept in "
                              f"{str(store.path)!r}: run the same command again to resume (with fewer --workers if "
                              "memory is short)") from None
+        except ClusterLostError as exc:
+            raise ClusterLostError(exc.cause,
+                f"lost the Dask cluster ({exc.cause}); the finished runs are in {str(store.path)!r}: run the same "
+                "command again to resume") from None
     return done, failed
 
 
@@ -150,6 +155,7 @@ def run_sweep(
     Raises:
         StoreError: The store path is not an amronet store.
         WorkerDiedError: A local worker process died; the finished runs are in the store, run again to resume.
+        ClusterLostError: The Dask cluster was lost; likewise.
     """
     start = time.perf_counter()
     own = executor is None

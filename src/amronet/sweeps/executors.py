@@ -9,13 +9,17 @@ dies (killed, out of memory) raises :class:`WorkerDiedError`, one line, instead 
   runs the jobs in this process, one after another.
 * :class:`DaskExecutor` — a ``distributed.Client`` on an existing scheduler (``tcp://host:8786``; any cluster:
   ``dask scheduler`` + ``dask worker`` by hand, SLURM/PBS through ``dask-jobqueue``, Kubernetes...) or on a
-  ``LocalCluster`` it starts. Dask is optional: ``pip install 'amronet[cluster]'``.
+  ``LocalCluster`` it starts. Dask is optional: ``pip install 'amronet[cluster]'``. Losing the scheduler, or
+  workers dying under a job, raises :class:`ClusterLostError`, one line, instead of Dask's own exceptions.
 
 :func:`make_executor` picks one from command-line style options.
 """
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
+import importlib
 import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
@@ -25,7 +29,8 @@ from typing import Any
 
 from amronet.errors import AmronetError
 
-__all__ = ["DaskExecutor", "Executor", "LocalExecutor", "WorkerDiedError", "default_workers", "make_executor"]
+__all__ = ["ClusterLostError", "DaskExecutor", "Executor", "LocalExecutor", "WorkerDiedError", "default_workers",
+           "make_executor"]
 
 CLUSTER_HINT = "pip install 'amronet[cluster]'"
 
@@ -36,6 +41,60 @@ class WorkerDiedError(AmronetError):
     def __init__(self, message: str = "a worker process died (killed, or out of memory?); run the command "
                                       "again, with fewer --workers if memory is short") -> None:
         super().__init__(message)
+
+
+class ClusterLostError(AmronetError):
+    """The Dask scheduler or its workers went away while jobs ran (connection lost, workers killed)."""
+
+    def __init__(self, cause: str = "the scheduler connection was lost", message: str | None = None) -> None:
+        self.cause = cause
+        super().__init__(message or f"lost the Dask cluster ({cause}); run the command again once the cluster is "
+                                    "back")
+
+    def __reduce__(self) -> tuple[type, tuple[str, str]]:
+        return type(self), (self.cause, str(self))
+
+
+def _lost_cluster_errors(distributed: Any) -> tuple[type[BaseException], ...]:
+    """What ``distributed`` raises when the scheduler or the workers go away under a running computation."""
+    from concurrent.futures import CancelledError as FuturesCancelledError
+
+    errors: list[type[BaseException]] = [FuturesCancelledError, asyncio.CancelledError, OSError, TimeoutError]
+    for module, name in (("distributed", "KilledWorker"), ("distributed.client", "FutureCancelledError"),
+                         ("distributed.comm.core", "CommClosedError")):
+        try:
+            errors.append(getattr(importlib.import_module(module), name))
+        except (ImportError, AttributeError):
+            continue
+    return tuple(errors)
+
+
+def _cause(exc: BaseException) -> str:
+    """Why the cluster was lost, in a few words (without Dask's task keys)."""
+    reason = getattr(exc, "reason", None)
+    if isinstance(reason, str) and reason:
+        return reason  # FutureCancelledError: e.g. scheduler-connection-lost
+    if type(exc).__name__ == "KilledWorker":
+        return "workers died while running a job (out of memory?)"
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+_DASK_LOGGERS = ("distributed.client", "distributed.core", "distributed.utils", "distributed.comm",
+                 "distributed.batched", "tornado.application", "asyncio")
+
+
+class _QuietWhenLost(logging.Filter):
+    """Drop Dask's logging about a lost scheduler: :class:`ClusterLostError` says it in one line instead.
+
+    Drops the client's "Failed to reconnect to scheduler" line; once ``lost``, every record (the tracebacks of the
+    client's cancelled reconnection as it closes).
+    """
+
+    lost = False
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not self.lost and not str(record.msg).startswith("Failed to reconnect to scheduler")
 
 
 def default_workers() -> int:
@@ -148,6 +207,9 @@ class DaskExecutor(Executor):
         distributed = _distributed()
         self.scheduler = scheduler
         self.cluster = None
+        self._quiet = _QuietWhenLost()
+        for name in _DASK_LOGGERS:
+            logging.getLogger(name).addFilter(self._quiet)
         try:
             if scheduler is None:
                 self.cluster = distributed.LocalCluster(
@@ -157,6 +219,7 @@ class DaskExecutor(Executor):
             else:
                 self.client = distributed.Client(scheduler, timeout=f"{timeout}s")
         except (OSError, TimeoutError) as exc:
+            self._unquiet()
             if self.cluster is not None:
                 self.cluster.close()
             where = scheduler or "a LocalCluster"
@@ -165,43 +228,76 @@ class DaskExecutor(Executor):
     @property
     def slots(self) -> int:  # noqa: D102
         try:
-            info = self.client.scheduler_info(n_workers=-1)
-        except TypeError:  # older distributed
-            info = self.client.scheduler_info()
+            try:
+                info = self.client.scheduler_info(n_workers=-1)
+            except TypeError:  # older distributed
+                info = self.client.scheduler_info()
+        except _lost_cluster_errors(_distributed()) as exc:
+            raise ClusterLostError(_cause(exc)) from None
         return max(1, sum(int(w.get("nthreads", 1)) for w in info.get("workers", {}).values()))
 
     def describe(self) -> str:  # noqa: D102
         where = self.scheduler or "a LocalCluster"
         return f"Dask on {where}, {self.slots} worker thread{'s' if self.slots != 1 else ''}"
 
-    def imap_unordered(self, fn: Callable[[Any], Any], jobs: Sequence[Any]) -> Iterator[tuple[int, Any]]:  # noqa: D102
+    def imap_unordered(self, fn: Callable[[Any], Any], jobs: Sequence[Any]) -> Iterator[tuple[int, Any]]:
+        """Run ``fn(job)`` on the cluster for every job; yield ``(index, result)`` as they finish.
+
+        Raises:
+            ClusterLostError: The scheduler connection was lost, or workers died under a job (``KilledWorker``).
+        """
         distributed = _distributed()
-        futures = self.client.map(fn, list(jobs), pure=False)
-        index = {fut.key: k for k, fut in enumerate(futures)}
+        lost = _lost_cluster_errors(distributed)
+        futures: list[Any] = []
         try:
+            futures = self.client.map(fn, list(jobs), pure=False)
+            index = {fut.key: k for k, fut in enumerate(futures)}
             for fut in distributed.as_completed(futures):
                 k = index[fut.key]
                 result = fut.result()
                 fut.release()
                 yield k, result
+        except lost as exc:
+            self._quiet.lost = True
+            raise ClusterLostError(_cause(exc)) from None
         finally:
-            self.client.cancel([f for f in futures if not f.done()])
+            if not self._quiet.lost:
+                with contextlib.suppress(*lost):
+                    self.client.cancel([f for f in futures if not f.done()])
 
-    def close(self) -> None:  # noqa: D102
-        self.client.close()
+    def _unquiet(self) -> None:
+        for name in _DASK_LOGGERS:
+            logging.getLogger(name).removeFilter(self._quiet)
+
+    def close(self) -> None:
+        """Close the client (and the ``LocalCluster`` started here).
+
+        After the cluster was lost the client is closed without waiting long, and Dask's loggers stay quiet about
+        it for the rest of the process (its background thread may still log the cancelled reconnection).
+        """
+        if self._quiet.lost:
+            with contextlib.suppress(Exception):
+                self.client.close(timeout=2)
+        else:
+            self.client.close()
         if self.cluster is not None:
             self.cluster.close()
+        if not self._quiet.lost:
+            self._unquiet()
 
 
 def make_executor(workers: int | None = None, scheduler: str | None = None, cluster: str | None = None) -> Executor:
     """The executor the options ask for: ``--scheduler ADDRESS``, ``--cluster local`` or a local pool.
 
     Raises:
-        AmronetError: Both ``scheduler`` and ``cluster``, an unknown ``cluster``, Dask missing, or an
-            unreachable scheduler.
+        AmronetError: Both ``scheduler`` and ``cluster``, ``workers`` with ``scheduler``, an unknown ``cluster``,
+            Dask missing, or an unreachable scheduler.
     """
     if scheduler is not None and cluster is not None:
         raise AmronetError("--scheduler: give either --scheduler ADDRESS or --cluster local, not both")
+    if scheduler is not None and workers is not None:
+        raise AmronetError("--workers: the workers of --scheduler are the ones started with that scheduler; "
+                           "drop --workers (or use --cluster local --workers N)")
     if cluster is not None:
         if cluster != "local":
             raise AmronetError(f"--cluster: only 'local' (a Dask LocalCluster) is built in, got {cluster!r}; "

@@ -32,6 +32,7 @@ from typing import Any
 
 import yaml
 
+from amronet.errors import MapError
 from amronet.scenario import Scenario
 
 __all__ = ["canonical_json", "map_digest", "resolve_scenario", "scenario_hash"]
@@ -52,6 +53,9 @@ def _resolved_map(scenario: Scenario) -> str:
         return ref
     path = Path(ref)
     looks_like_path = ref.endswith((".yaml", ".yml")) or "/" in ref
+    if not looks_like_path and not path.is_file():
+        raise MapError("map", f"{ref!r} is neither a built-in map name ({', '.join(BUILTIN_MAPS)}; amronet maps "
+                              "list) nor a map file; give one of those names or the path of a ROS map_server YAML")
     if looks_like_path and scenario.base_dir and not path.is_absolute():
         path = Path(scenario.base_dir) / path
     return str(path.resolve())
@@ -65,6 +69,9 @@ def resolve_scenario(scenario: Scenario) -> dict[str, Any]:
 
     Returns:
         A JSON-compatible dict.
+
+    Raises:
+        MapError: The map is neither a built-in map's name nor a file path (field ``map``).
     """
     data = scenario.to_dict()
     data["algorithm"]["params"] = scenario.algorithm_params().model_dump(mode="json")

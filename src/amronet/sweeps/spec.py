@@ -18,7 +18,17 @@ Keys are the dotted paths of ``--set`` (:func:`amronet.scenario.apply_overrides`
 ``points`` the sweep has one point, the base. Every point is validated as a whole scenario before anything
 runs: unknown keys (in the sweep file or in a point), empty grids, a seed count of 0, a seed outside
 ``[0, 2**63 - 1]`` (the range the result store's 64-bit integer column holds) or a bad value raise
-:class:`~amronet.errors.ScenarioError` with one line naming the field, and nothing is written.
+:class:`~amronet.errors.ScenarioError` with one line naming the field, and nothing is written. Then every
+distinct start is set up once (:func:`~amronet.sweeps.check.check_points`): a map that is neither a built-in
+name nor a file, a base station off the map or in a wall, or robots that do not fit their start region is the
+same one-line error, naming the sweep key (``grid``, ``points[i]``, ``overrides`` or ``base``) and the point.
+
+Switching the algorithm: when the overrides of a point (its own or the sweep's ``overrides``) set
+``algorithm.name`` to another algorithm than the base's, the base's ``algorithm.params`` are dropped first,
+since they belong to the base's algorithm; the new algorithm starts from its defaults, and ``algorithm.params``
+or ``algorithm.params.KEY`` given in the overrides apply on top. So ``grid: {algorithm.name: [self-spreading,
+dssa]}`` over a self-spreading base keeps the base's parameters for self-spreading and runs DSSA with its own
+defaults.
 """
 
 from __future__ import annotations
@@ -33,6 +43,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictInt, ValidationError, m
 
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario, _to_scenario_error, load_scenario
+from amronet.sweeps.check import check_points, owner_key
 from amronet.sweeps.identity import resolve_scenario, scenario_hash
 
 __all__ = ["MAX_SEED", "MAX_SEEDS", "Point", "Sweep", "SweepSpec", "load_sweep", "sweep_from_spec"]
@@ -169,34 +180,39 @@ def _base_scenario(spec: SweepSpec, base_dir: str | None) -> Scenario:
         raise ScenarioError(f"base: {exc.field}" if exc.field else "base", exc.message) from None
 
 
-def _owner(field: str, keys: list[str]) -> str | None:
-    for key in keys:
-        if field == key or field.startswith(key + ".") or field.startswith(key + "[") or key.startswith(field + "."):
-            return key
-    return None
+def _algorithm_rule(base: Scenario, merged: dict[str, Any]) -> dict[str, Any]:
+    """``merged`` with the base's ``algorithm.params`` dropped first when it switches to another algorithm."""
+    name = merged.get("algorithm.name")
+    if name is None or name == base.algorithm.name or isinstance(merged.get("algorithm"), dict):
+        return merged
+    return {"algorithm.params": {}, **merged}
 
 
 def _point(base: Scenario, fixed: dict[str, Any], overrides: dict[str, Any], where: str, index: int) -> Point:
     try:
-        sc = base.with_overrides({**fixed, **overrides}) if fixed or overrides else base
+        merged = _algorithm_rule(base, {**fixed, **overrides})
+        sc = base.with_overrides(merged) if merged else base
         resolved = resolve_scenario(sc)
     except ScenarioError as exc:
-        key = _owner(exc.field, list(overrides))
+        key = owner_key(exc.field, list(overrides))
         if key is not None:
             value = f" (at {key} = {overrides[key]!r})" if key != exc.field else ""
             raise ScenarioError(f"{where}.{exc.field}" if where else exc.field, exc.message + value) from None
-        key = _owner(exc.field, list(fixed))
+        key = owner_key(exc.field, list(fixed))
         raise ScenarioError(f"overrides.{exc.field}" if key is not None else f"base: {exc.field}",
                             exc.message) from None
     return Point(index=index, overrides=dict(overrides), scenario=resolved, hash=scenario_hash(resolved))
 
 
-def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | None = None) -> Sweep:
+def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | None = None,
+                    check_start: bool = True) -> Sweep:
     """Validate a sweep given as a spec or a mapping and expand its points.
 
     Args:
         spec: The sweep.
         base_dir: Folder that a relative ``base`` path and an inline base's relative map path are taken from.
+        check_start: Also set up every distinct start once (:func:`~amronet.sweeps.check.check_points`: the
+            maps load, the base stations and robots fit); ``False`` checks the fields only.
 
     Raises:
         ScenarioError: The sweep or one of its points is invalid; one line naming the field.
@@ -210,7 +226,7 @@ def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | Non
             raise _to_scenario_error(exc, model=SweepSpec) from None
     folder = str(Path(base_dir).resolve()) if base_dir is not None else None
     base = _base_scenario(spec, folder)
-    _point(base, spec.overrides, {}, "", -1)  # the fixed overrides alone, so their errors name them
+    fixed = _point(base, spec.overrides, {}, "", -1)  # the fixed overrides alone, so their errors name them
     combos: list[tuple[dict[str, Any], str]] = []
     if spec.grid:
         keys = list(spec.grid)
@@ -221,6 +237,9 @@ def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | Non
     if not combos:
         combos.append(({}, ""))
     points = [_point(base, spec.overrides, o, where, k) for k, (o, where) in enumerate(combos)]
+    if check_start:
+        check_points([(p, where) for p, (_, where) in zip(points, combos, strict=True)], fixed, spec.overrides,
+                     spec.seed_list()[0])
     keys = list(dict.fromkeys(k for o, _ in combos for k in o))
     return Sweep(spec=spec, points=points, seeds=spec.seed_list(), keys=keys)
 
@@ -250,4 +269,6 @@ def load_sweep(source: str | Path | dict[str, Any]) -> Sweep:
         line = getattr(getattr(exc, "problem_mark", None), "line", None)
         where = f" at line {line + 1}" if line is not None else ""
         raise ScenarioError("sweep", f"{str(path)!r} is not valid YAML{where}; fix the syntax") from None
+    if data is None:
+        raise ScenarioError("sweep", f"{str(path)!r} is empty; give name, base and seeds (and grid or points)")
     return sweep_from_spec(data, base_dir=path.resolve().parent)

@@ -111,8 +111,13 @@ def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
 
-def check_store_path(path: Path, must_exist: bool = False) -> bool:
+def check_store_path(path: Path, must_exist: bool = False, option: str = "--store") -> bool:
     """Check that ``path`` is an amronet store or can become one, without opening it.
+
+    Args:
+        path: The store's file.
+        must_exist: Refuse a path with no store.
+        option: How errors name the path: the ``--store`` option, or ``STORE`` where it is a positional argument.
 
     Returns:
         ``True`` when the store already exists (a non-empty file).
@@ -123,23 +128,23 @@ def check_store_path(path: Path, must_exist: bool = False) -> bool:
     """
     shown = str(path)
     if path.is_dir():
-        raise StoreError(f"--store: {shown!r} is a folder; give a file name such as results.sqlite")
+        raise StoreError(f"{option}: {shown!r} is a folder; give a file name such as results.sqlite")
     if not path.exists() or path.stat().st_size == 0:
         wal = Path(f"{path}-wal")
         if wal.exists() and wal.stat().st_size > 0:
             return True  # created, then killed before the first checkpoint: SQLite recovers it from the WAL
         if must_exist:
-            raise StoreError(f"store: no result store at {shown!r}; run `amronet sweep ... --store {shown}` first")
+            raise StoreError(f"{option}: no result store at {shown!r}; run `amronet sweep ... --store {shown}` first")
         return False
     try:
         with open(path, "rb") as fh:
             head = fh.read(100)
     except OSError as exc:
-        raise StoreError(f"--store: cannot read {shown!r}: {exc.strerror}") from None
+        raise StoreError(f"{option}: cannot read {shown!r}: {exc.strerror}") from None
     if len(head) < 100 or head[:16] != _MAGIC:
-        raise StoreError(f"--store: {shown!r} is not a SQLite database; give a new file name or an amronet store")
+        raise StoreError(f"{option}: {shown!r} is not a SQLite database; give a new file name or an amronet store")
     if int.from_bytes(head[68:72], "big") != APPLICATION_ID:
-        raise StoreError(f"--store: {shown!r} is a SQLite database but not an amronet result store; "
+        raise StoreError(f"{option}: {shown!r} is a SQLite database but not an amronet result store; "
                          "give a new file name")
     return True
 
@@ -150,20 +155,22 @@ class ResultStore:
     Args:
         path: The SQLite file; created (with its folder) unless ``must_exist``.
         must_exist: Refuse to create a new store (for reading).
+        option: How errors name the path (``--store``, or ``STORE`` for ``amronet results`` and ``plot``).
 
     Raises:
         StoreError: See :func:`check_store_path`; or the file is damaged or from a newer amronet.
     """
 
-    def __init__(self, path: str | Path, must_exist: bool = False) -> None:
+    def __init__(self, path: str | Path, must_exist: bool = False, option: str = "--store") -> None:
         self.path = Path(path)
-        exists = check_store_path(self.path, must_exist=must_exist)
+        self.option = option
+        exists = check_store_path(self.path, must_exist=must_exist, option=option)
         try:
             if not exists:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
             self.conn = sqlite3.connect(self.path, isolation_level=None, timeout=60.0)
         except (OSError, sqlite3.Error) as exc:
-            raise StoreError(f"--store: cannot open {str(self.path)!r}: {exc}") from None
+            raise StoreError(f"{option}: cannot open {str(self.path)!r}: {exc}") from None
         try:
             self.conn.execute("PRAGMA busy_timeout = 60000")
             if not exists:
@@ -172,14 +179,14 @@ class ResultStore:
             else:
                 version = self.conn.execute("PRAGMA user_version").fetchone()[0]
                 if version > SCHEMA_VERSION:
-                    raise StoreError(f"--store: {str(self.path)!r} was written by a newer amronet "
+                    raise StoreError(f"{option}: {str(self.path)!r} was written by a newer amronet "
                                      f"(schema {version}); upgrade amronet")
             self.conn.execute("PRAGMA journal_mode = WAL")
             self.conn.execute("PRAGMA synchronous = FULL")
             self._ts_columns = [r[1] for r in self.conn.execute("PRAGMA table_info(timeseries)")]
         except sqlite3.DatabaseError as exc:
             self.conn.close()
-            raise StoreError(f"--store: {str(self.path)!r} is damaged or not a result store: {exc}") from None
+            raise StoreError(f"{option}: {str(self.path)!r} is damaged or not a result store: {exc}") from None
 
     # -- plumbing --------------------------------------------------------------------------------------------
     def close(self) -> None:
