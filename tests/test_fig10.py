@@ -67,6 +67,26 @@ def test_reproduce_fig10_quick_on_a_dask_local_cluster_resumes_from_the_store(tm
     assert [line.rsplit(",", 1)[0] for line in again.splitlines()] == strip
 
 
+def test_reproduce_retries_failed_runs_only_with_retry_failed(tmp_path, capsys):
+    import sqlite3
+
+    from amronet.cli import main
+
+    out = tmp_path / "fig10"
+    args = ["reproduce", "fig10", "--quick", "--out", str(out), "-q", "--workers", "1"]
+    assert main(args) == 0
+    with sqlite3.connect(out / "results.sqlite") as db:  # as if one run had crashed
+        db.execute("UPDATE runs SET status = 'failed', error = 'boom' WHERE (scenario_hash, seed) = "
+                   "(SELECT scenario_hash, seed FROM runs ORDER BY seed LIMIT 1)")
+    capsys.readouterr()
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "--retry-failed" in err and "boom" in err
+    assert main([*args, "--retry-failed"]) == 0
+    with sqlite3.connect(out / "results.sqlite") as db:
+        assert db.execute("SELECT count(*) FROM runs WHERE status != 'done'").fetchone() == (0,)
+
+
 def test_outputs_get_the_usual_permissions(tmp_path):
     import stat
 

@@ -274,7 +274,7 @@ def test_workers_with_a_scheduler_is_one_line(tmp_path, capsys):
     assert len(err.strip().splitlines()) == 1 and not (tmp_path / "r.sqlite").exists()
 
 
-def test_run_jobs_retries_failed_runs_unless_told_not_to(tmp_path):
+def test_run_jobs_retries_failed_runs_only_when_told_to(tmp_path):
     jobs = _jobs()
     bad = {**jobs[1], "scenario": {**jobs[1]["scenario"], "base_stations": [{"x": 2.999, "y": 0}]}}
     store = tmp_path / "r.sqlite"

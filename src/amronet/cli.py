@@ -47,8 +47,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if not quiet:
         print(f"{s['algorithm']} on {s['map']} (seed {s['seed']}, r_c = {s['r_c']:g} m): "
               f"{s['stop_reason']} after {s['sim_time_s']:g} s simulated, {s['wall_time_s']:.1f} s wall")
-        print(f"  nodes: {s['nodes_total']} ({s['routers_deployed']} deployed routers of {s['routers_total']}, "
-              f"{s['nodes_total'] - s['routers_deployed']} base nodes); states {s['states']}")
+        bases = s['nodes_total'] - s['routers_deployed']
+        print(f"  nodes: {s['nodes_total']} (routers deployed: {s['routers_deployed']} of {s['routers_total']}, "
+              f"base nodes: {bases}); states {s['states']}")
         print(f"  coverage {100 * s['coverage']:.2f} %, connected coverage {100 * s['connected_coverage']:.2f} % "
               f"of {s['reachable_area_m2']:.1f} m² reachable ({s['coverage_method']})")
         print(f"  wrote {args.out}/: summary.json timeseries.csv network.json"
@@ -121,7 +122,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
             store = Path(args.store) if args.store else out / "results.sqlite"
             report = FIGURES[name].run(out, quick=args.quick, workers=args.workers, show_progress=not args.quiet,
                                        explorer=args.explorer, time_limit=args.time_limit, store=store,
-                                       executor=executor)
+                                       executor=executor, retry_failed=args.retry_failed or None)
             if not args.quiet:
                 print(report["markdown"])
                 files = sorted(f.name for f in out.iterdir() if f.name.startswith(name)) if out.is_dir() else []
@@ -183,6 +184,8 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("--time-limit", type=float, default=None,
                     help="simulated seconds per run at most (default: the figure's own, 6000 for fig5 and fig7)")
     rp.add_argument("--quick", action="store_true", help="a small subset, for a smoke test")
+    rp.add_argument("--retry-failed", action="store_true",
+                    help="run again the runs the store holds as failed (otherwise the figure stops at them)")
     add_executor_arguments(rp)
     rp.add_argument("-q", "--quiet", action="store_true")
     rp.set_defaults(func=_cmd_reproduce)

@@ -63,6 +63,7 @@ def run_coverage_over_time(
     baseline_dir: Path | None = None,
     store: Path | None = None,
     executor: Executor | None = None,
+    retry_failed: bool = False,
 ) -> dict[str, Any]:
     """Run Fig. 10 or Fig. 11 and write its files to ``out_dir``.
 
@@ -83,6 +84,7 @@ def run_coverage_over_time(
             sibling folder ``fig10`` of ``out_dir``, when it has a table).
         store: Result store (SQLite) that finished runs are kept in and loaded from.
         executor: Where the runs execute (default: a local process pool with ``workers`` processes).
+        retry_failed: Run again the runs the store holds as failed (otherwise they stay failed and this raises).
     """
     if figure not in MAPS:
         raise ValueError(f"figure must be one of {sorted(MAPS)}, not {figure!r}")
@@ -96,7 +98,7 @@ def run_coverage_over_time(
             jobs.append({"scenario": scenario, "seed": seed * 100_000 + k, "timeseries": True,
                          "labels": {"figure": figure, "map": map_name, "algorithm": algorithm, "run": k}})
     results = run_jobs(jobs, workers=workers, description=figure, show_progress=show_progress, store=store,
-                       executor=executor)
+                       executor=executor, retry_failed=retry_failed)
 
     grid = np.arange(0.0, time_limit + 1e-9, 1.0)
     series: dict[str, dict[str, np.ndarray]] = {a: {"coverage": [], "connected_coverage": []} for a in algorithms}

@@ -52,6 +52,7 @@ def run_fig5(
     seed: int = 0,
     store: str | Path | None = None,
     executor: Executor | None = None,
+    retry_failed: bool = False,
 ) -> dict[str, Any]:
     """Run the Fig. 5 experiment and write ``fig5_runs.csv``, ``fig5.png`` and ``fig5_claims.md`` to ``out_dir``.
 
@@ -67,7 +68,7 @@ def run_fig5(
                     jobs.append({"scenario": agent_scenario(map_name, r, (loc,), n_a, explorer, time_limit),
                                  "seed": seed * 100_000 + len(jobs), "labels": labels})
     results = run_jobs(jobs, workers=workers, description="fig5", show_progress=show_progress, store=store,
-                       executor=executor)
+                       executor=executor, retry_failed=retry_failed)
     rows = []
     for res in results:
         s = res["summary"]

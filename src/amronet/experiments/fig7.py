@@ -36,6 +36,7 @@ def run_fig7(
     seed: int = 0,
     store: str | Path | None = None,
     executor: Executor | None = None,
+    retry_failed: bool = False,
 ) -> dict[str, Any]:
     """Run the Fig. 7 experiment and write ``fig7_runs.csv``, ``fig7.png`` and ``fig7_claims.md`` to ``out_dir``."""
     jobs = []
@@ -46,7 +47,7 @@ def run_fig7(
                 jobs.append({"scenario": agent_scenario(map_name, r_c, CORNERS[:n], n_a, explorer, time_limit),
                              "seed": seed * 100_000 + 50_000 + len(jobs), "labels": labels})
     results = run_jobs(jobs, workers=workers, description="fig7", show_progress=show_progress, store=store,
-                       executor=executor)
+                       executor=executor, retry_failed=retry_failed)
     rows = []
     for res in results:
         s = res["summary"]

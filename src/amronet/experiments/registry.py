@@ -6,9 +6,9 @@ one, add one line to :data:`FIGURES`::
     "fig12": Figure("amronet.experiments.fig12:run_fig12", quick={"runs": 2}),
 
 ``amronet reproduce`` passes the options the function accepts among ``workers``, ``show_progress``,
-``explorer``, ``time_limit``, ``store`` and ``executor`` (others, and options not given, are left out, so a
-figure need not take them all), and ``quick`` with ``--quick``. ``amronet reproduce all`` runs every figure in
-the order of :data:`FIGURES`.
+``explorer``, ``time_limit``, ``store``, ``executor`` and ``retry_failed`` (others, and options not given, are
+left out, so a figure need not take them all), and ``quick`` with ``--quick``. ``amronet reproduce all`` runs
+every figure in the order of :data:`FIGURES`.
 """
 
 from __future__ import annotations

@@ -43,7 +43,7 @@ def run_jobs(
     on_result: Callable[[int, dict[str, Any]], None] | None = None,
     store: str | Path | None = None,
     executor: Executor | None = None,
-    retry_failed: bool = True,
+    retry_failed: bool = False,
 ) -> list[dict[str, Any]]:
     """Run jobs, in parallel when ``workers > 1``; results in job order.
 
@@ -55,9 +55,8 @@ def run_jobs(
         on_result: Called with ``(index, result)`` as each job finishes (or is loaded from the store).
         store: Result store (SQLite path) to load finished runs from and commit new ones to.
         executor: Where the jobs run (default: a local process pool with ``workers`` processes).
-        retry_failed: With a store, run again the runs it holds as failed (``amronet reproduce`` does, as it has
-            no ``--retry-failed`` yet); ``False`` leaves them failed, as ``amronet sweep`` does without
-            ``--retry-failed``, and raises for them.
+        retry_failed: With a store, run again the runs it holds as failed (``--retry-failed`` of ``amronet
+            reproduce`` and ``amronet sweep``); ``False`` leaves them failed and raises for them.
 
     Raises:
         AmronetError: With a store, some runs failed (they are recorded; a call with ``retry_failed`` retries
