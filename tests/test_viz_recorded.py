@@ -16,8 +16,9 @@ from amronet.recording import Recorder, Recording
 from amronet.robots import Kind, State
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
+from amronet.viz.nodestyle import PALETTE
 from amronet.viz.recorded import FrameRenderer, pick_frames, recording_snapshot, write_animation
-from amronet.viz.snapshot import _PALETTE, MAP_COLOURS
+from amronet.viz.snapshot import MAP_COLOURS
 
 DPI = 60
 SVG = "{http://www.w3.org/2000/svg}"
@@ -57,7 +58,7 @@ def test_snapshot_png_shows_routers_in_their_status_colour(spread):
     fig = recording_snapshot(spread, f, dpi=DPI)
     img = _png(fig)
     fr = spread.frame(f)
-    blue = np.rint(255 * _PALETTE[0])
+    blue = np.rint(255 * PALETTE[0])
     base = np.flatnonzero(fr["kind"] == Kind.BASE)[0]
     r, c = _pixel(fig, fr["xy"][base])
     assert np.abs(img[r, c] - blue).max() <= 12  # the base station's square, status 0

@@ -12,7 +12,7 @@ from PIL import Image
 
 from amronet.viz import MAP_COLOURS, draw_map, save_map_picture, save_snapshot, snapshot_figure
 from amronet.viz.decorations import nice_length
-from amronet.viz.snapshot import link_style
+from amronet.viz.nodestyle import link_style
 from amronet.world import OCCUPIED, UNKNOWN, OccupancyMap
 
 DPI = 60

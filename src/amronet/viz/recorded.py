@@ -30,21 +30,17 @@ from amronet.errors import AmronetError
 from amronet.recording import Recording
 from amronet.robots import STATE_NAMES, Kind, State
 from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, marker_handle
-from amronet.viz.snapshot import (
-    _DEPLOYED,
-    _DISK_EDGE_ALPHA,
-    _DISK_FACE_ALPHA,
-    _LINK_COLOUR,
-    _STYLE,
-    MAP_COLOURS,
-    _map_patch,
-    _new_figure,
-    _status_colours,
-    draw_map,
+from amronet.viz.nodestyle import (
+    DEPLOYED,
+    DISK_EDGE_ALPHA,
+    DISK_FACE_ALPHA,
+    LINK_COLOUR,
+    STYLE,
     link_style,
-    snapshot_figure,
+    status_colours,
     status_handles,
 )
+from amronet.viz.snapshot import MAP_COLOURS, _map_patch, _new_figure, draw_map, snapshot_figure
 
 __all__ = [
     "FrameRenderer",
@@ -56,7 +52,7 @@ __all__ = [
     "write_animation",
 ]
 
-_DEPLOYED_CODES = np.array([s in _DEPLOYED for s in STATE_NAMES])
+_DEPLOYED_CODES = np.array([s in DEPLOYED for s in STATE_NAMES])
 # GIF frame delays are whole hundredths of a second in 16 bits (at most 655.35 s), and browsers play delays
 # under 20 ms at 100 ms: 0.01 to 50 frames per second. MP4 plays any rate; above 120 fps frames are wasted.
 _MIN_FPS = 0.01
@@ -180,7 +176,7 @@ class FrameRenderer:
         self.disks = EllipseCollection(d, d, 0.0, units="xy", offsets=np.zeros((0, 2)), offset_transform=ax.transData,
                                        linewidths=0.5, zorder=1.5)
         ax.add_collection(self.disks)
-        self.links = LineCollection([], colors=[_LINK_COLOUR], linewidths=0.6, zorder=2)
+        self.links = LineCollection([], colors=[LINK_COLOUR], linewidths=0.6, zorder=2)
         ax.add_collection(self.links)
         self.trails = LineCollection([], linewidths=0.7, alpha=0.55, zorder=2.5)
         ax.add_collection(self.trails)
@@ -188,14 +184,14 @@ class FrameRenderer:
         self.markers: dict[int, tuple[PathCollection, bool]] = {}
         present = np.unique(rec.state)
         handles = []
-        for name, (marker, size, filled, z, label) in _STYLE.items():
+        for name, (marker, size, filled, z, label) in STYLE.items():
             code = STATE_NAMES.index(name)
             coll = ax.scatter([], [], s=size * shrink, marker=marker, linewidths=0.4 if filled else 1.0, zorder=z)
             self.markers[code] = (coll, filled)
             if code in present:
                 handles.append(marker_handle(marker, math.sqrt(size), "0.45" if filled else "none", label))
         handles.append(legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {rec.r_c:g} m", edge="0.4"))
-        handles.append(Line2D([], [], color=_LINK_COLOUR, linewidth=1.0, label="link"))
+        handles.append(Line2D([], [], color=LINK_COLOUR, linewidth=1.0, label="link"))
         if np.any(rec.kind == Kind.AGENT):
             handles.append(Line2D([], [], color="0.35", linewidth=1.0, label="agent trail"))
         free = rec.omap.free
@@ -236,7 +232,7 @@ class FrameRenderer:
         rec = self.rec
         fr = rec.frame(f)
         xy, state, status = fr["xy"], fr["state"], fr["status"].astype(np.int64)
-        colours = _status_colours(status)
+        colours = status_colours(status)
         covered = rec.covered(f)
         if "uncovered" in self.layers:
             holes = (self._counted & ~covered).astype(np.float32)
@@ -247,7 +243,7 @@ class FrameRenderer:
         deployed = _DEPLOYED_CODES[state] | (fr["kind"] == Kind.BASE)
         if "disks" in self.layers:
             face, edge = colours[deployed].copy(), colours[deployed].copy()
-            face[:, 3], edge[:, 3] = _DISK_FACE_ALPHA, _DISK_EDGE_ALPHA
+            face[:, 3], edge[:, 3] = DISK_FACE_ALPHA, DISK_EDGE_ALPHA
             self.disks.set_offsets(xy[deployed] if deployed.any() else np.zeros((0, 2)))
             self.disks.set_facecolor(face)
             self.disks.set_edgecolor(edge)

@@ -29,8 +29,9 @@ from PIL import Image
 
 from amronet.recording import Recording
 from amronet.robots import KIND_NAMES, STATE_NAMES
+from amronet.viz.nodestyle import NO_STATUS, PALETTE
 from amronet.viz.recorded import pick_frames
-from amronet.viz.snapshot import _LUT, _NO_STATUS, _PALETTE, MAP_COLOURS, _map_image
+from amronet.viz.snapshot import _LUT, MAP_COLOURS, _map_image
 
 __all__ = ["TEMPLATE", "replay_html", "replay_payload"]
 
@@ -155,8 +156,8 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
         "status_none": 255 if arrays["status"]["dtype"] == "uint8" else -1,
         "state_names": list(STATE_NAMES),
         "kind_names": list(KIND_NAMES),
-        "palette": [_hex(c) for c in _PALETTE],
-        "no_status": _hex(_NO_STATUS),
+        "palette": [_hex(c) for c in PALETTE],
+        "no_status": _hex(NO_STATUS),
         "map_colours": {k: "#{:02x}{:02x}{:02x}".format(*v) for k, v in MAP_COLOURS.items()},
         "map_png": _png_b64(base),
         "reach_png": _png_b64(tint),

@@ -11,11 +11,9 @@ Example:
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from pathlib import Path
 
-import matplotlib as mpl
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -25,7 +23,18 @@ from matplotlib.image import AxesImage
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, marker_handle, save_figure
+from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, save_figure
+from amronet.viz.nodestyle import (
+    DEPLOYED,
+    DISK_EDGE_ALPHA,
+    DISK_FACE_ALPHA,
+    LINK_COLOUR,
+    draw_nodes,
+    draw_trails,
+    link_style,
+    status_colours,
+    status_handles,
+)
 from amronet.viz.validate import KINDS, STATES, check_mask, validate_nodes
 from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
@@ -59,25 +68,6 @@ _LABELS = {
 }
 _CATEGORIES = ("free", "occupied", "unknown", "unreachable", "uncovered")
 _LUT = np.array([MAP_COLOURS[c] for c in _CATEGORIES], dtype=np.uint8)
-
-# marker, base size (pt^2), filled, z-order, legend label; drawn in this order.
-_STYLE: dict[str, tuple[str, float, bool, float, str]] = {
-    "explore": ("o", 14.0, False, 3.0, "explore"),
-    "reference": ("o", 30.0, True, 4.0, "reference"),
-    "triangle-settled": ("^", 42.0, True, 4.0, "triangle (settled)"),
-    "triangle": ("^", 42.0, False, 5.0, "triangle (moving)"),
-    "base": ("s", 110.0, True, 6.0, "base station"),
-    "agent": ("*", 150.0, True, 7.0, "agent"),
-}
-_DEPLOYED = ("base", "reference", "triangle-settled")
-_NO_STATUS = (0.55, 0.55, 0.55, 1.0)
-# tab10 without red and grey: red fills would mimic the "uncovered" tint, grey means "no status".
-_PALETTE = np.asarray(mpl.colormaps["tab10"].colors, dtype=float)[[0, 1, 2, 4, 5, 8, 9, 6]]
-_LINK_COLOUR = (0.45, 0.45, 0.45, 0.8)
-_LINK_WIDTH = 0.6
-_FEW_LINKS = 300  # up to this many links keep the full style; beyond, width and alpha shrink
-_DISK_FACE_ALPHA = 0.05
-_DISK_EDGE_ALPHA = 0.4
 
 # Fixed layout, in inches.
 _AX_LONG_SIDE = 6.0
@@ -205,84 +195,6 @@ def save_map_picture(omap: OccupancyMap, path: str | Path, *, dpi: float = 150) 
     return _save(fig, path, dpi)
 
 
-def _status_colours(status: np.ndarray) -> np.ndarray:
-    """RGBA colours ``(N, 4)``: tab10 (less red and grey) by ``status``, grey where it is negative."""
-    out = np.empty((status.size, 4))
-    out[:, :3] = _PALETTE[np.mod(status, len(_PALETTE))]
-    out[:, 3] = 1.0
-    out[status < 0] = _NO_STATUS
-    return out
-
-
-def link_style(count: int) -> tuple[float, tuple[float, float, float, float]]:
-    """Line width (points) and RGBA colour of ``count`` links, thinner and fainter the more there are.
-
-    Up to 300 links are drawn 0.6 pt wide at alpha 0.8; beyond, both shrink with the square root of the count
-    (to at least 0.15 pt and alpha 0.2), so thousands of links stay a light web instead of a grey mat that
-    hides the nodes.
-    """
-    k = math.sqrt(_FEW_LINKS / max(count, _FEW_LINKS))
-    return max(_LINK_WIDTH * k, 0.15), (*_LINK_COLOUR[:3], max(_LINK_COLOUR[3] * k, 0.2))
-
-
-def status_handles(groups: np.ndarray) -> list[Line2D]:
-    """Legend handles of the statuses ``groups`` (sorted): one colour each while the palette lasts.
-
-    Colours repeat after ``len(_PALETTE)`` base stations, so the statuses beyond are summed up in one
-    ``"... k more BS"`` entry instead of listing repeated colours.
-    """
-    handles = []
-    for s in groups[: len(_PALETTE)]:
-        label = f"BS {s}" if s >= 0 else "no BS yet"
-        handles.append(marker_handle("o", 7.0, _status_colours(np.array([s]))[0], label, edge="none"))
-    if len(groups) > len(_PALETTE):
-        handles.append(Line2D([], [], linestyle="none", label=f"... {len(groups) - len(_PALETTE)} more BS"))
-    return handles
-
-
-def _draw_nodes(ax: Axes, xy: np.ndarray, state: np.ndarray, colours: np.ndarray) -> list[Patch | Line2D]:
-    """Scatter the nodes, one call per state present; return legend handles of those states."""
-    shrink = float(np.clip(math.sqrt(300 / max(len(xy), 1)), 0.35, 1.0))
-    handles: list[Patch | Line2D] = []
-    for st, (marker, size, filled, z, label) in _STYLE.items():
-        sel = state == st
-        if not sel.any():
-            continue
-        x, y = xy[sel].T
-        if filled:
-            ec = "black" if st in ("base", "agent") else "0.15"
-            ax.scatter(
-                x, y, s=size * shrink, marker=marker, c=colours[sel], edgecolors=ec, linewidths=0.4, zorder=z
-            )
-        else:
-            ax.scatter(
-                x, y, s=size * shrink, marker=marker, facecolors="none", edgecolors=colours[sel],
-                linewidths=1.0, zorder=z,
-            )  # fmt: skip
-        handles.append(marker_handle(marker, math.sqrt(size), "0.45" if filled else "none", label))
-    return handles
-
-
-def _draw_trails(
-    ax: Axes, trails: Mapping[int, np.ndarray] | None, colours: np.ndarray, n: int
-) -> Line2D | None:
-    """Draw each node's trail as one polyline in its status colour (one collection); return a legend handle."""
-    if not trails:
-        return None
-    segments, seg_colours = [], []
-    for i, path in trails.items():
-        path = np.asarray(path, dtype=float).reshape(-1, 2)
-        if not 0 <= int(i) < n:
-            raise ValueError(f"trails: node index {i} is not one of xy's {n} rows")
-        if len(path) >= 2:
-            segments.append(path)
-            seg_colours.append(colours[int(i)])
-    if not segments:
-        return None
-    ax.add_collection(LineCollection(segments, colors=seg_colours, linewidths=0.7, alpha=0.55, zorder=2.5))
-    return Line2D([], [], color="0.35", linewidth=1.0, label="agent trail")
-
-
 def snapshot_figure(
     omap: OccupancyMap,
     *,
@@ -311,14 +223,14 @@ def snapshot_figure(
     covered = check_mask("covered", covered, omap.shape)
     fig, ax = _new_figure(omap, right=2.2, dpi=dpi)
     draw_map(ax, omap, reachable=reachable, covered=covered)
-    colours = _status_colours(status)
+    colours = status_colours(status)
 
-    deployed = np.isin(state, _DEPLOYED) | (kind == "base")
+    deployed = np.isin(state, DEPLOYED) | (kind == "base")
     if deployed.any():
         face = colours[deployed].copy()
-        face[:, 3] = _DISK_FACE_ALPHA
+        face[:, 3] = DISK_FACE_ALPHA
         edge = colours[deployed].copy()
-        edge[:, 3] = _DISK_EDGE_ALPHA
+        edge[:, 3] = DISK_EDGE_ALPHA
         d = 2.0 * r_c
         disks = EllipseCollection(
             d,
@@ -337,14 +249,14 @@ def snapshot_figure(
         width, colour = link_style(len(links))
         ax.add_collection(LineCollection(xy[links], colors=[colour], linewidths=width, zorder=2))
 
-    trail_handle = _draw_trails(ax, trails, colours, len(xy))
-    handles = _draw_nodes(ax, xy, state, colours)
+    trail_handle = draw_trails(ax, trails, colours, len(xy))
+    handles = draw_nodes(ax, xy, state, colours)
     if trail_handle is not None:
         handles.append(trail_handle)
     if deployed.any():
         handles.append(legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {r_c:g} m", edge="0.4"))
     if len(links):
-        handles.append(Line2D([], [], color=_LINK_COLOUR, linewidth=1.0, label="link"))
+        handles.append(Line2D([], [], color=LINK_COLOUR, linewidth=1.0, label="link"))
     cells = omap.cells
     free = cells == FREE
     counted = free if reachable is None else free & reachable
