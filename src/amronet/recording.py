@@ -39,6 +39,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from amronet.errors import AmronetError
+from amronet.recording_codec import (
+    Q_MAX,
+    backfill,
+    decode_positions,
+    decode_status,
+    encode_positions,
+    encode_status,
+    pad,
+)
 from amronet.robots import KIND_NAMES, STATE_NAMES, Kind
 from amronet.world.occupancy import OccupancyMap
 
@@ -49,8 +58,6 @@ __all__ = ["FORMAT", "Recorder", "Recording", "decode_positions", "encode_positi
 
 FORMAT = "amronet-recording/1"
 _META_KEYS = ("algorithm", "map", "seed", "r_c")  # what the pictures read from ``meta``
-_NO_STATUS_U8 = 255
-_Q_MAX = 65535
 
 
 class Recorder:
@@ -124,12 +131,12 @@ class Recorder:
         sw, omap = sim.swarm, sim.world.omap
         n = np.array([len(x) for x in self._xy], dtype=np.int32)
         n_all = int(n.max())
-        xy = _pad(self._xy, n_all, (2,), np.float32)
-        state = _pad(self._state, n_all, (), np.uint8)
-        status = _pad(self._status, n_all, (), np.int32)
-        _backfill(n, xy, state, status)
+        xy = pad(self._xy, n_all, (2,), np.float32)
+        state = pad(self._state, n_all, (), np.uint8)
+        status = pad(self._status, n_all, (), np.int32)
+        backfill(n, xy, state, status)
         origin = np.array([omap.extent[0], omap.extent[2]], dtype=np.float64)
-        quantum = max(omap.size_m) / _Q_MAX
+        quantum = max(omap.size_m) / Q_MAX
         sc = sim.scenario
         meta = {
             "format": FORMAT,
@@ -153,7 +160,7 @@ class Recorder:
             "xy_quantum": np.array(quantum),
             "xy_delta": encode_positions(xy, origin, quantum),
             "state": state,
-            "status": _encode_status(status),
+            "status": encode_status(status),
             "map_cells": omap.cells.astype(np.int8),
             "map_resolution": np.array(float(omap.resolution)),
             "map_origin": np.array(omap.origin, dtype=np.float64),
@@ -165,7 +172,7 @@ class Recorder:
             np.cumsum(counts, out=offsets[1:])
             pairs = np.concatenate(self._pairs) if offsets[-1] else np.zeros((0, 2), np.int32)
             out["link_offsets"] = offsets
-            out["link_pairs"] = pairs.astype(np.uint16 if n_all <= _Q_MAX else np.int32)
+            out["link_pairs"] = pairs.astype(np.uint16 if n_all <= Q_MAX else np.int32)
         return out
 
     def npz_bytes(self, sim: Simulation) -> bytes:
@@ -173,63 +180,6 @@ class Recorder:
         buf = io.BytesIO()
         np.savez_compressed(buf, **self.arrays(sim))
         return buf.getvalue()
-
-
-def _pad(frames: list[np.ndarray], n_all: int, tail: tuple[int, ...], dtype: type) -> np.ndarray:
-    """Stack per-frame arrays of growing length into ``(F, n_all, *tail)``; missing rows are zero."""
-    out = np.zeros((len(frames), n_all, *tail), dtype=dtype)
-    for f, arr in enumerate(frames):  # one copy per frame, not per robot
-        out[f, : len(arr)] = arr
-    return out
-
-
-def _backfill(n: np.ndarray, *arrays: np.ndarray) -> None:
-    """Give robots not yet present in a frame the values of the frame in which they first appear (in place)."""
-    n_all = arrays[0].shape[1]
-    first = np.searchsorted(n, np.arange(n_all), side="right")  # first frame where robot i is present
-    if not np.any(first):
-        return
-    f_idx, i_idx = np.nonzero(np.arange(len(n))[:, None] < first[None, :])
-    for arr in arrays:
-        arr[f_idx, i_idx] = arr[first[i_idx], i_idx]
-
-
-def encode_positions(xy: np.ndarray, origin: np.ndarray, quantum: float) -> np.ndarray:
-    """Quantize positions ``(F, N, 2)`` and return frame-to-frame differences modulo 2**16 as uint16.
-
-    Args:
-        xy: Positions in metres ``(F, N, 2)``.
-        origin: World point of quantum 0 ``(2,)`` (the map's lower-left corner).
-        quantum: Metres per step of the grid.
-
-    Returns:
-        ``uint16`` ``(F, N, 2)``: ``q[0]``, then ``q[f] - q[f - 1]`` modulo 65 536.
-    """
-    q = np.rint((np.asarray(xy, dtype=np.float64) - origin) / quantum)
-    q = np.clip(q, 0, _Q_MAX).astype(np.uint16)
-    delta = q.copy()
-    np.subtract(q[1:], q[:-1], out=delta[1:])  # uint16 arithmetic wraps modulo 2**16
-    return delta
-
-
-def decode_positions(delta: np.ndarray, origin: np.ndarray, quantum: float) -> np.ndarray:
-    """Invert :func:`encode_positions`: float32 positions ``(F, N, 2)`` in metres."""
-    q = np.cumsum(delta, axis=0, dtype=np.uint16)
-    return (q * quantum + origin).astype(np.float32)
-
-
-def _encode_status(status: np.ndarray) -> np.ndarray:
-    if status.size == 0 or status.max() < _NO_STATUS_U8:
-        return status.astype(np.uint8)  # -1 wraps to 255
-    return status.astype(np.int16)
-
-
-def _decode_status(status: np.ndarray) -> np.ndarray:
-    if status.dtype == np.uint8:
-        out = status.astype(np.int16)
-        out[status == _NO_STATUS_U8] = -1
-        return out
-    return status.astype(np.int16)
 
 
 @dataclass
@@ -321,7 +271,7 @@ class Recording:
                 kind=np.asarray(data["kind"], dtype=np.uint8),
                 xy=decode_positions(delta, origin, quantum),
                 state=np.asarray(data["state"], dtype=np.uint8),
-                status=_decode_status(np.asarray(data["status"])),
+                status=decode_status(np.asarray(data["status"])),
                 omap=omap,
                 reachable=reachable,
                 xy_delta=delta,
