@@ -34,3 +34,15 @@ def table_rows(store: Path, table: str):
 
 def same_store_content(a: Path, b: Path, tables=("runs", "timeseries", "sweep_runs", "sweeps")) -> bool:
     return all(table_rows(a, t) == table_rows(b, t) for t in tables)
+
+
+def runs_in(store: Path) -> int:
+    """How many runs a store holds right now, read-only (0 while it does not exist or is locked)."""
+    try:
+        con = sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=0.2)
+        try:
+            return con.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return 0

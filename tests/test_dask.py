@@ -7,7 +7,6 @@ tests must fail rather than silently skip when it is missing.
 import json
 import os
 import signal
-import sqlite3
 import subprocess
 import sys
 import time
@@ -18,7 +17,7 @@ import pytest
 from amronet.cli import main
 from amronet.experiments.runner import run_jobs
 from amronet.sweeps import DaskExecutor, LocalExecutor, run_sweep, sweep_from_spec
-from sweep_helpers import same_store_content, tiny_sweep, write_sweep
+from sweep_helpers import runs_in, same_store_content, tiny_sweep, write_sweep
 
 
 def start_cluster(tmp, workers=2):
@@ -103,17 +102,6 @@ def test_without_dask_the_scheduler_option_is_one_line(tmp_path, capsys, monkeyp
     assert not (tmp_path / "r.sqlite").exists()
 
 
-def _runs_in(store):
-    try:
-        con = sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=0.2)
-        try:
-            return con.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
-        finally:
-            con.close()
-    except sqlite3.Error:
-        return 0
-
-
 def test_losing_the_scheduler_mid_sweep_is_one_line_and_keeps_the_finished_runs(tmp_path):
     address, procs = start_cluster(tmp_path, workers=2)
     spec = {"name": "lost", "base": "self-spreading-6x6", "overrides": {"sim.time_limit": 150.0},
@@ -125,7 +113,7 @@ def test_losing_the_scheduler_mid_sweep_is_one_line_and_keeps_the_finished_runs(
     sweep = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 120
-        while _runs_in(store) < 2 and sweep.poll() is None and time.monotonic() < deadline:
+        while runs_in(store) < 2 and sweep.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
         assert sweep.poll() is None, "the sweep should still be running when the scheduler goes"
         os.kill(procs[0].pid, signal.SIGKILL)  # the scheduler, like a lost node
@@ -140,6 +128,6 @@ def test_losing_the_scheduler_mid_sweep_is_one_line_and_keeps_the_finished_runs(
     assert lines[0].startswith("amronet: error: lost the Dask cluster (") and "Traceback" not in err
     assert f"the finished runs are in {str(store)!r}: run the same command again to resume" in lines[0]
     assert sweep.returncode == 2
-    kept = _runs_in(store)
+    kept = runs_in(store)
     assert 2 <= kept < 30
     assert main(["sweep", str(path), "--store", str(store), "--workers", "2", "--json", "-q"]) == 0

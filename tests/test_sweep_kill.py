@@ -8,22 +8,11 @@ import sys
 import time
 
 from amronet.cli import main
-from sweep_helpers import same_store_content, table_rows, write_sweep
+from sweep_helpers import runs_in, same_store_content, table_rows, write_sweep
 
 SPEC = {"name": "killed", "base": "self-spreading-6x6", "overrides": {"sim.time_limit": 150.0},
         "grid": {"radio.r_c": [0.8, 1.0, 1.2]}, "seeds": 10}
 TOTAL = 30
-
-
-def _done(store):
-    try:
-        con = sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=0.2)
-        try:
-            return con.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
-        finally:
-            con.close()
-    except sqlite3.Error:
-        return 0
 
 
 def test_sigkill_part_way_then_resume(tmp_path):
@@ -33,7 +22,7 @@ def test_sigkill_part_way_then_resume(tmp_path):
     proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 60
     try:
-        while _done(store) < 4 and proc.poll() is None and time.monotonic() < deadline:
+        while runs_in(store) < 4 and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
     finally:
         os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its workers, like a power cut
