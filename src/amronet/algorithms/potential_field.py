@@ -175,7 +175,7 @@ def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_for
                          rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap,
                          k_conn, damping, mass, dt, rest_fraction, explore, reference, movers,
                          speed):  # pragma: no cover - numba
-    """Wake resting routers that feel a force, then accelerate every moving router; returns (movers, woken).
+    """Wake resting routers whose force left the held one, then accelerate every moving router; (movers, woken).
 
     A router's force depends only on positions and the neighbour table, so one pass in router order gives the
     same result as waking everybody first and then moving everybody.
