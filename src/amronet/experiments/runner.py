@@ -96,7 +96,7 @@ def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_p
 
 def _run_with_store(jobs: Sequence[Job], store_path: Path, executor: Executor, description: str,
                     show_progress: bool, on_result: Callable[[int, dict[str, Any]], None] | None,
-                    retry_failed: bool = True) -> list[dict[str, Any]]:
+                    retry_failed: bool) -> list[dict[str, Any]]:
     from amronet.errors import AmronetError
     from amronet.scenario import load_scenario
     from amronet.sweeps.engine import execute_into_store, pending_runs

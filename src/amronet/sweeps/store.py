@@ -163,7 +163,6 @@ class ResultStore:
 
     def __init__(self, path: str | Path, must_exist: bool = False, option: str = "--store") -> None:
         self.path = Path(path)
-        self.option = option
         exists = check_store_path(self.path, must_exist=must_exist, option=option)
         try:
             if not exists:

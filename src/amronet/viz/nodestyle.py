@@ -19,8 +19,8 @@ from matplotlib.patches import Patch
 
 from amronet.viz.decorations import marker_handle
 
-__all__ = ["DEPLOYED", "DISK_EDGE_ALPHA", "DISK_FACE_ALPHA", "LINK_COLOUR", "NO_STATUS", "PALETTE", "STYLE",
-           "draw_nodes", "draw_trails", "link_style", "status_colours", "status_handles"]
+__all__ = ["DEPLOYED", "DISK_EDGE_ALPHA", "DISK_FACE_ALPHA", "LINK_COLOUR", "LINK_THINNING", "NO_STATUS", "PALETTE",
+           "STYLE", "draw_nodes", "draw_trails", "link_style", "status_colours", "status_handles"]
 
 # marker, base size (pt^2), filled, z-order, legend label; drawn in this order.
 STYLE: dict[str, tuple[str, float, bool, float, str]] = {
@@ -38,6 +38,11 @@ PALETTE = np.asarray(mpl.colormaps["tab10"].colors, dtype=float)[[0, 1, 2, 4, 5,
 LINK_COLOUR = (0.45, 0.45, 0.45, 0.8)
 LINK_WIDTH = 0.6
 FEW_LINKS = 300  # up to this many links keep the full style; beyond, width and alpha shrink
+MIN_LINK_WIDTH = 0.15
+MIN_LINK_ALPHA = 0.2
+LINK_THINNING = {"few": FEW_LINKS, "width": LINK_WIDTH, "alpha": LINK_COLOUR[3], "min_width": MIN_LINK_WIDTH,
+                 "min_alpha": MIN_LINK_ALPHA}
+"""The rule of :func:`link_style` as data, for the replay page, which applies it in the browser."""
 DISK_FACE_ALPHA = 0.05
 DISK_EDGE_ALPHA = 0.4
 
@@ -59,7 +64,7 @@ def link_style(count: int) -> tuple[float, tuple[float, float, float, float]]:
     hides the nodes.
     """
     k = math.sqrt(FEW_LINKS / max(count, FEW_LINKS))
-    return max(LINK_WIDTH * k, 0.15), (*LINK_COLOUR[:3], max(LINK_COLOUR[3] * k, 0.2))
+    return max(LINK_WIDTH * k, MIN_LINK_WIDTH), (*LINK_COLOUR[:3], max(LINK_COLOUR[3] * k, MIN_LINK_ALPHA))
 
 
 def status_handles(groups: np.ndarray) -> list[Line2D]:

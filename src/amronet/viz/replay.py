@@ -29,7 +29,7 @@ from PIL import Image
 
 from amronet.recording import Recording
 from amronet.robots import KIND_NAMES, STATE_NAMES
-from amronet.viz.nodestyle import NO_STATUS, PALETTE
+from amronet.viz.nodestyle import LINK_THINNING, NO_STATUS, PALETTE
 from amronet.viz.recorded import pick_frames
 from amronet.viz.snapshot import _LUT, MAP_COLOURS, _map_image
 
@@ -158,6 +158,7 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
         "kind_names": list(KIND_NAMES),
         "palette": [_hex(c) for c in PALETTE],
         "no_status": _hex(NO_STATUS),
+        "link_thinning": LINK_THINNING,
         "map_colours": {k: "#{:02x}{:02x}{:02x}".format(*v) for k, v in MAP_COLOURS.items()},
         "map_png": _png_b64(base),
         "reach_png": _png_b64(tint),
