@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from enum import IntEnum
 
 import numpy as np
 
@@ -31,8 +30,12 @@ __all__ = [
 ]
 
 
-class Kind(IntEnum):
-    """Role of a robot in the two-tier network."""
+class Kind:
+    """Role of a robot in the two-tier network.
+
+    Plain ``int`` codes, not an ``IntEnum``: NumPy compares an array with an enum member several times slower
+    than with an ``int``, and a step makes many such comparisons.
+    """
 
     BASE = 0
     """Immobile reference node of a base station."""
@@ -42,8 +45,8 @@ class Kind(IntEnum):
     """Fast explorer (human or robot) that uses the AMRoNet."""
 
 
-class State(IntEnum):
-    """Behavioural state of a robot (paper sections 4.1-4.2)."""
+class State:
+    """Behavioural state of a robot (paper sections 4.1-4.2); plain ``int`` codes like :class:`Kind`."""
 
     BASE = 0
     """A base station's reference node."""
@@ -102,7 +105,7 @@ ROBOT_KINDS: dict[str, RobotKind] = {k.name: k for k in (PIONEER, BEBOT, AMIGOBO
 @functools.cache
 def state_lookup(states: tuple[int, ...]) -> np.ndarray:
     """Boolean table indexed by state code: ``state_lookup(states)[state]`` is a fast ``np.isin``."""
-    table = np.zeros(len(State), dtype=bool)
+    table = np.zeros(len(STATE_NAMES), dtype=bool)
     table[list(states)] = True
     table.flags.writeable = False
     return table
@@ -179,7 +182,7 @@ class Swarm:
     def __len__(self) -> int:
         return len(self.xy)
 
-    def extend(self, robot_kind: RobotKind, kind: Kind, state: State, xy: np.ndarray, status: np.ndarray,
+    def extend(self, robot_kind: RobotKind, kind: int, state: int, xy: np.ndarray, status: np.ndarray,
                heading: np.ndarray | None = None) -> np.ndarray:
         """Add robots (e.g. routers an agent releases) and return their new ids.
 

@@ -31,7 +31,7 @@ from amronet.errors import ScenarioError
 from amronet.motion import drive
 from amronet.network import agents_connected, components, connected_to
 from amronet.radio import NeighbourTable, make_medium
-from amronet.robots import MOBILE_STATES, Kind, State, Swarm
+from amronet.robots import MOBILE_STATES, STATE_NAMES, Kind, Swarm
 from amronet.scenario import Scenario
 from amronet.sensing import range_scan
 from amronet.world.occupancy import OccupancyMap
@@ -255,7 +255,5 @@ class Simulation:
 
     def state_counts(self) -> dict[str, int]:
         """How many robots are in each state."""
-        from amronet.robots import STATE_NAMES
-
-        counts = np.bincount(self.swarm.state, minlength=len(State))
+        counts = np.bincount(self.swarm.state, minlength=len(STATE_NAMES))
         return {STATE_NAMES[s]: int(c) for s, c in enumerate(counts) if c}

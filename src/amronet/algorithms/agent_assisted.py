@@ -193,7 +193,7 @@ class AgentAssisted(Controller):
         hit = np.flatnonzero(ok)
         return cand[hit[0]] if len(hit) else p.copy()
 
-    def _add_router(self, agent: int, toward: int, state: State) -> int:
+    def _add_router(self, agent: int, toward: int, state: int) -> int:
         sw = self.swarm
         spot = self._release_spot(agent, toward)
         new = sw.extend(self.router_kind, Kind.ROUTER, state, spot[None], np.array([sw.status[agent]]),
