@@ -23,6 +23,7 @@ from numba import njit
 from amronet.neighbours import neighbour_csr
 from amronet.radio import NeighbourTable
 from amronet.sensing import beam_angles
+from amronet.streams import RunStreams, draw_per_run
 from amronet.world.gridwalk import walk_next, walk_start
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
@@ -98,7 +99,7 @@ def random_walk(
     scans: np.ndarray,
     sensor_range: float,
     was_blocked: np.ndarray,
-    rng: np.random.Generator,
+    rng: np.random.Generator | RunStreams,
     turn_sigma: float,
 ) -> None:
     """Update the headings of robots doing a random walk with obstacle avoidance, in place.
@@ -113,13 +114,12 @@ def random_walk(
         scans: Their range readings ``(M, n_beams)``.
         sensor_range: Maximum range of the beams.
         was_blocked: Which of them had their last move refused ``(M,)``.
-        rng: The run's random generator.
+        rng: The run's random generator (or the streams of a batch of runs).
         turn_sigma: Standard deviation of the heading noise per step, radians.
     """
-    m = len(who)
-    noise = rng.normal(0.0, turn_sigma, size=m)
-    fresh = rng.uniform(-np.pi, np.pi, size=m)
-    if m:
+    noise, fresh = draw_per_run(rng, who, lambda g, m: (g.normal(0.0, turn_sigma, size=m),
+                                                        g.uniform(-np.pi, np.pi, size=m)))
+    if len(who):
         _random_walk(heading, np.asarray(who, dtype=np.int64), np.ascontiguousarray(scans, dtype=float),
                      beam_angles(scans.shape[1]), float(sensor_range), np.asarray(was_blocked, dtype=np.bool_),
                      noise, fresh)
@@ -294,7 +294,7 @@ def drive(
         if table is not None and reach <= table.r:
             indptr, indices, dist = table.indptr, table.indices, table.dist
         else:
-            indptr, indices, dist = neighbour_csr(xy, reach)
+            indptr, indices, dist = neighbour_csr(xy, reach, None if table is None else table.groups)
     _drive(clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), movers, heading,
            length, xy, radius, bodies, indptr, indices, dist, reach, refused, travelled)
     return refused, travelled

@@ -14,6 +14,8 @@ How it works (a cell list on one core; at mean degree 11, N = 3000 takes ~0.12 m
    cells. When the box is huge relative to ``r`` the grid is capped at ``4 N`` cells and ``h`` grows (the
    result never depends on ``h``, only the running time does: points crowded into a few clumps far apart
    share coarser cells, e.g. two clumps of 1500 points 10 000 r apart take ~0.5 ms).
+   With groups (several runs sharing one table), every group has a grid of its own over the common box, and
+   the cells are numbered group by group.
 2. Every candidate pair is tested once, in cell order: a point against the later points of its own cell and
    of the cell to its right (one contiguous run of the sorted coordinates), and against the three cells of
    the row above (a second run). The test appends branch-free, so the loop has no unpredictable branch.
@@ -53,8 +55,12 @@ _MIN_CELL = 1e-150  # below this r * r is subnormal and loses relative precision
 
 
 @njit(cache=True)
-def _grid(xy, r):  # pragma: no cover - numba
-    """Grid over the bounding box: ``(ok, xmin, ymin, inv_h, nx, ny)``; not ``ok`` if xy is not finite."""
+def _grid(xy, r, n_groups):  # pragma: no cover - numba
+    """Grid over the bounding box: ``(ok, xmin, ymin, inv_h, nx, ny)``; not ``ok`` if xy is not finite.
+
+    With ``n_groups`` groups every group gets a grid of its own over the common box, so the cap on the cells is
+    shared out among them.
+    """
     n = xy.shape[0]
     xmin = math.inf
     ymin = math.inf
@@ -73,7 +79,7 @@ def _grid(xy, r):  # pragma: no cover - numba
         return True, 0.0, 0.0, 0.0, 1, 1
     w = xmax - xmin  # overflows to inf only for coordinates near the float64 limit: then a single cell
     hgt = ymax - ymin
-    cap = max(4.0 * n, 16.0)
+    cap = max(4.0 * n / n_groups, 16.0)
     # Relative margin of h over r. A linked pair has |x_j - x_i| <= r (1 + 3 eps); the computed cell
     # coordinates t = (x - xmin) / h carry an absolute error of at most 3 eps * (cells per axis + 1) each.
     # With h >= r (1 + delta) and delta > 3 eps + 6 eps (cells + 1), t_j - t_i < 1, hence adjacent cells.
@@ -95,10 +101,13 @@ def _grid(xy, r):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _cell_sort(xy, xmin, ymin, inv_h, nx, ny):  # pragma: no cover - numba
-    """Counting sort into cells: starts ``cs`` (cell c is ``cs[c]:cs[c + 1]``), order, sorted coordinates."""
+def _cell_sort(xy, group, n_groups, xmin, ymin, inv_h, nx, ny):  # pragma: no cover - numba
+    """Counting sort into cells: starts ``cs`` (cell c is ``cs[c]:cs[c + 1]``), order, sorted coordinates.
+
+    Group ``g`` owns the cells ``g * nx * ny`` to ``(g + 1) * nx * ny - 1``.
+    """
     n = xy.shape[0]
-    ncell = nx * ny
+    ncell = nx * ny * n_groups
     fnx = float(nx)
     fny = float(ny)
     cell = np.empty(n, np.int64)
@@ -108,7 +117,7 @@ def _cell_sort(xy, xmin, ymin, inv_h, nx, ny):  # pragma: no cover - numba
         ty = (xy[_u(i), 1] - ymin) * inv_h
         ix = int(tx) if tx < fnx else nx - 1  # clamps rounding at the far edge (and NaN from inf * 0)
         iy = int(ty) if ty < fny else ny - 1
-        c = iy * nx + ix
+        c = group[_u(i)] * nx * ny + iy * nx + ix
         cell[_u(i)] = c
         cs[_u(c + 2)] += 1
     for c in range(ncell):
@@ -127,48 +136,51 @@ def _cell_sort(xy, xmin, ymin, inv_h, nx, ny):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _upper_pairs(cs, sx, sy, r2, nx, ny):  # pragma: no cover - numba
-    """For every sorted point a, the later sorted points b within reach: ``pb[ustart[a]:ustart[a + 1]]``."""
+def _upper_pairs(cs, sx, sy, r2, nx, ny, n_groups):  # pragma: no cover - numba
+    """For every sorted point a, the later sorted points b within reach: ``pb[ustart[a]:ustart[a + 1]]``.
+
+    Candidates come from the point's own group only (its block of cells).
+    """
     n = sx.shape[0]
     cap = 8 * n + 64
     pb = np.empty(cap, np.int32)
     ustart = np.empty(n + 1, np.int64)
     cnt = 0
-    for iy in range(ny):
-        for ix in range(nx):
-            c = iy * nx + ix
-            s0 = cs[_u(c)]
-            s1 = cs[_u(c + 1)]
-            if s0 == s1:
-                continue
-            # run 1: the rest of this cell and the cell to the right; run 2: the three cells of the row above
-            e1 = cs[_u(c + 2)] if ix + 1 < nx else s1
-            lo2 = 0
-            hi2 = 0
-            if iy + 1 < ny:
-                lo2 = cs[_u(c + nx - 1)] if ix > 0 else cs[_u(c + nx)]
-                hi2 = cs[_u(c + nx + 2)] if ix + 1 < nx else cs[_u(c + nx + 1)]
-            m = s1 - s0
-            need = cnt + m * (e1 - s0 + hi2 - lo2) - m * (m + 1) // 2  # candidates of this cell
-            if need > cap:  # grown per cell, never inside the hot loops (that would slow them down)
-                cap = max(2 * cap, need)
-                grown = np.empty(cap, np.int32)
-                grown[:cnt] = pb[:cnt]
-                pb = grown
-            for a in range(s0, s1):
-                ustart[_u(a)] = cnt
-                xa = sx[_u(a)]
-                ya = sy[_u(a)]
-                for b in range(a + 1, e1):  # branch-free append: write, then advance if linked
-                    dx = sx[_u(b)] - xa
-                    dy = sy[_u(b)] - ya
-                    pb[_u(cnt)] = b
-                    cnt += dx * dx + dy * dy <= r2
-                for b in range(lo2, hi2):
-                    dx = sx[_u(b)] - xa
-                    dy = sy[_u(b)] - ya
-                    pb[_u(cnt)] = b
-                    cnt += dx * dx + dy * dy <= r2
+    for c in range(n_groups * nx * ny):
+        ix = c % nx
+        iy = (c // nx) % ny
+        s0 = cs[_u(c)]
+        s1 = cs[_u(c + 1)]
+        if s0 == s1:
+            continue
+        # run 1: the rest of this cell and the cell to the right; run 2: the three cells of the row above
+        e1 = cs[_u(c + 2)] if ix + 1 < nx else s1
+        lo2 = 0
+        hi2 = 0
+        if iy + 1 < ny:
+            lo2 = cs[_u(c + nx - 1)] if ix > 0 else cs[_u(c + nx)]
+            hi2 = cs[_u(c + nx + 2)] if ix + 1 < nx else cs[_u(c + nx + 1)]
+        m = s1 - s0
+        need = cnt + m * (e1 - s0 + hi2 - lo2) - m * (m + 1) // 2  # candidates of this cell
+        if need > cap:  # grown per cell, never inside the hot loops (that would slow them down)
+            cap = max(2 * cap, need)
+            grown = np.empty(cap, np.int32)
+            grown[:cnt] = pb[:cnt]
+            pb = grown
+        for a in range(s0, s1):
+            ustart[_u(a)] = cnt
+            xa = sx[_u(a)]
+            ya = sy[_u(a)]
+            for b in range(a + 1, e1):  # branch-free append: write, then advance if linked
+                dx = sx[_u(b)] - xa
+                dy = sy[_u(b)] - ya
+                pb[_u(cnt)] = b
+                cnt += dx * dx + dy * dy <= r2
+            for b in range(lo2, hi2):
+                dx = sx[_u(b)] - xa
+                dy = sy[_u(b)] - ya
+                pb[_u(cnt)] = b
+                cnt += dx * dx + dy * dy <= r2
     ustart[n] = cnt
     return ustart, pb
 
@@ -243,12 +255,12 @@ def _distances(xy, indptr, indices):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _neighbour_csr(xy, r):  # pragma: no cover - numba
-    ok, xmin, ymin, inv_h, nx, ny = _grid(xy, r)
+def _neighbour_csr(xy, r, group, n_groups):  # pragma: no cover - numba
+    ok, xmin, ymin, inv_h, nx, ny = _grid(xy, r, n_groups)
     if not ok:
         return False, np.zeros(1, np.int64), np.empty(0, np.int32), np.empty(0)
-    cs, sidx, sx, sy = _cell_sort(xy, xmin, ymin, inv_h, nx, ny)
-    ustart, pb = _upper_pairs(cs, sx, sy, r * r, nx, ny)
+    cs, sidx, sx, sy = _cell_sort(xy, group, n_groups, xmin, ymin, inv_h, nx, ny)
+    ustart, pb = _upper_pairs(cs, sx, sy, r * r, nx, ny, n_groups)
     qp, qi = _sorted_point_table(ustart, pb, sidx)
     indptr, indices = _transpose_by_index(qp, qi, sidx)
     return True, indptr, indices, _distances(xy, indptr, indices)
@@ -286,15 +298,20 @@ def _pairs(indptr, indices):  # pragma: no cover - numba
 # --------------------------------------------------------------------------------------------------------
 
 
-def neighbour_csr(xy: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def neighbour_csr(xy: np.ndarray, r: float, groups: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Symmetric CSR of all pairs of points within distance ``r`` of each other (the unit-disk graph).
 
     ``i != j`` are linked iff ``dx * dx + dy * dy <= r * r`` in float64 (inclusive: points exactly ``r``
-    apart along an axis are linked). Deterministic bit for bit.
+    apart along an axis are linked) and, with ``groups``, they belong to the same group. Deterministic bit for
+    bit; with groups, every group's rows are exactly those of :func:`neighbour_csr` of the group's points alone
+    (shifted by the group's first index when the groups are contiguous blocks): several runs can share one table.
 
     Args:
         xy: Positions ``(N, 2)``, all finite (converted to float64).
         r: Link radius, positive and finite.
+        groups: Group id of every point ``(N,)``, integers in ``[0, G)``; points of different groups are never
+            linked. ``None``: one group.
 
     Returns:
         ``(indptr, indices, dist)``: ``indptr`` int64 ``(N + 1,)``; ``indices`` int32 ``(nnz,)``, each row's
@@ -303,7 +320,7 @@ def neighbour_csr(xy: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray, np.
 
     Raises:
         ValueError: If ``r`` is not positive and finite, or ``xy`` is not ``(N, 2)``, has non-finite entries
-            or ``2**31`` rows or more.
+            or ``2**31`` rows or more, or ``groups`` does not give every point an id in ``[0, G)``.
     """
     r = float(r)
     if not (r > 0.0 and math.isfinite(r)):
@@ -313,7 +330,14 @@ def neighbour_csr(xy: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray, np.
         raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
     if xy.shape[0] > np.iinfo(np.int32).max:
         raise ValueError(f"at most 2**31 - 1 points, got {xy.shape[0]}")
-    ok, indptr, indices, dist = _neighbour_csr(xy, r)
+    if groups is None:
+        group, n_groups = np.zeros(xy.shape[0], dtype=np.int64), 1
+    else:
+        group = np.ascontiguousarray(groups, dtype=np.int64)
+        if group.shape != (xy.shape[0],) or (len(group) and group.min() < 0):
+            raise ValueError(f"groups must be {xy.shape[0]} integers >= 0, got shape {group.shape}")
+        n_groups = int(group.max()) + 1 if len(group) else 1
+    ok, indptr, indices, dist = _neighbour_csr(xy, r, group, n_groups)
     if not ok:
         raise ValueError("xy has non-finite coordinates")
     return indptr, indices, dist

@@ -17,7 +17,6 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from amronet.neighbours import neighbour_csr, pairs_from_csr
 
@@ -34,6 +33,8 @@ class NeighbourTable:
         indptr: CSR row pointers ``(N + 1,)``.
         indices: Neighbour ids, sorted within each row.
         dist: Link lengths aligned with ``indices``.
+        groups: Run id of every node when several runs share the table (:mod:`amronet.batch`): nodes of
+            different runs are never linked. ``None`` for a single run.
     """
 
     xy: np.ndarray
@@ -41,6 +42,17 @@ class NeighbourTable:
     indptr: np.ndarray
     indices: np.ndarray
     dist: np.ndarray
+    groups: np.ndarray | None = None
+
+    def block(self, robots: slice) -> NeighbourTable:
+        """The table of one run of a batch: the rows ``robots`` (a contiguous block that links only within itself).
+
+        Equal, array for array, to the table the medium builds from that run's positions alone.
+        """
+        start, stop, _ = robots.indices(len(self.xy))
+        lo, hi = self.indptr[start], self.indptr[stop]
+        return NeighbourTable(xy=self.xy[start:stop], r=self.r, indptr=self.indptr[start:stop + 1] - lo,
+                              indices=self.indices[lo:hi] - np.int32(start), dist=self.dist[lo:hi])
 
     @property
     def degree(self) -> np.ndarray:
@@ -58,10 +70,6 @@ class NeighbourTable:
         """Undirected links ``(M, 2)`` with ``i < j``."""
         return pairs_from_csr(self.indptr, self.indices)
 
-    @cached_property
-    def tree(self) -> cKDTree:
-        """A k-d tree over :attr:`xy`, built on first use (for queries beyond ``r``)."""
-        return cKDTree(self.xy)
 
 
 class RadioMedium:
@@ -80,17 +88,17 @@ class RadioMedium:
         """Mask of candidate links (CSR order) that exist; ``None`` keeps them all. Must be symmetric."""
         return None
 
-    def update(self, xy: np.ndarray) -> NeighbourTable:
-        """Build this step's neighbour table from all robot positions ``(N, 2)``."""
+    def update(self, xy: np.ndarray, groups: np.ndarray | None = None) -> NeighbourTable:
+        """Build this step's neighbour table from all robot positions ``(N, 2)`` (of several runs: ``groups``)."""
         xy = np.array(xy, dtype=float)
-        indptr, indices, dist = neighbour_csr(xy, self.r_c)
+        indptr, indices, dist = neighbour_csr(xy, self.r_c, groups)
         mask = self.keep(xy, indptr, indices, dist)
         if mask is not None:
             rows = np.repeat(np.arange(len(xy)), np.diff(indptr))[mask]
             indices, dist = indices[mask], dist[mask]
             indptr = np.zeros(len(xy) + 1, dtype=np.int64)
             np.cumsum(np.bincount(rows, minlength=len(xy)), out=indptr[1:])
-        return NeighbourTable(xy=xy, r=self.r_c, indptr=indptr, indices=indices, dist=dist)
+        return NeighbourTable(xy=xy, r=self.r_c, indptr=indptr, indices=indices, dist=dist, groups=groups)
 
 
 class UnitDisk(RadioMedium):

@@ -179,6 +179,28 @@ class Swarm:
             distance=np.zeros(n_total),
         )
 
+    _ROW_FIELDS = ("xy", "heading", "kind", "state", "status", "radius", "max_speed", "model", "distance")
+
+    @classmethod
+    def concat(cls, parts: list[Swarm]) -> Swarm:
+        """One swarm holding the robots of ``parts`` one block after another (runs stepped together).
+
+        Raises:
+            ValueError: If the parts do not have the same robot models (model codes would mean different kinds).
+        """
+        models = parts[0].models
+        if any(p.models != models for p in parts):
+            raise ValueError("swarms with different robot models cannot be joined")
+        return cls(models=models, **{f: np.concatenate([getattr(p, f) for p in parts]) for f in cls._ROW_FIELDS})
+
+    def rows(self, robots: slice) -> Swarm:
+        """The robots ``robots`` (a slice) as a swarm whose arrays are views into this one's."""
+        return Swarm(models=self.models, **{f: getattr(self, f)[robots] for f in self._ROW_FIELDS})
+
+    def copy(self) -> Swarm:
+        """A swarm with copies of every array."""
+        return Swarm(models=self.models, **{f: getattr(self, f).copy() for f in self._ROW_FIELDS})
+
     def __len__(self) -> int:
         return len(self.xy)
 

@@ -113,7 +113,7 @@ def range_scan(
         max_range: Maximum range of a beam in metres.
         radius: Body radius of all robots, ``(N,)``; when given (with ``table``) other robots stop beams too.
         table: The radio medium's neighbour table for ``xy``: bodies within its range are found from it; a
-            sensor reaching farther falls back to the table's k-d tree.
+            sensor reaching farther gets a neighbour search of its own (of the table's groups).
 
     Returns:
         Distances ``(M, n_beams)`` in metres, each in ``[0, max_range]``; row ``m`` belongs to robot ``who[m]``.
@@ -133,6 +133,6 @@ def range_scan(
         if reach <= table.r:
             indptr, indices, dist = table.indptr, table.indices, table.dist
         else:  # the sensor reaches beyond the radio range: a neighbour search of its own
-            indptr, indices, dist = neighbour_csr(xy, reach)
+            indptr, indices, dist = neighbour_csr(xy, reach, table.groups)
         _cast_bodies(who, indptr, indices, dist, xy, heading, angles, float(max_range), radius, out)
     return out

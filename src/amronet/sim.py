@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amronet.algorithms import ALGORITHMS, Readings, StepInput
+from amronet.algorithms import ALGORITHMS, Command, Controller, Readings, StepInput
 from amronet.assemble import World, build_swarm, build_world
 from amronet.errors import ScenarioError
 from amronet.motion import drive
@@ -40,7 +40,32 @@ if TYPE_CHECKING:
     from amronet.recording import Recorder
     from amronet.results import RunResult
 
-__all__ = ["Metrics", "Simulation"]
+__all__ = ["Metrics", "Simulation", "move", "sense"]
+
+def sense(controller: Controller, sw: Swarm, omap: OccupancyMap, table: NeighbourTable) -> Readings:
+    """The sense phase: the range rings of every moving robot (none when the controller reads none)."""
+    if not controller.needs_range_readings:
+        return Readings({})
+    mobile = sw.in_states(MOBILE_STATES)
+    groups = {}
+    for m, kind in enumerate(sw.models):
+        who = np.flatnonzero(mobile & (sw.model == m))
+        if len(who):
+            scans = range_scan(omap, sw.xy, sw.heading, who, kind.sensor_beams, kind.sensor_range,
+                               radius=sw.radius, table=table)
+            groups[m] = (who, scans)
+    return Readings(groups)
+
+
+def move(controller: Controller, command: Command, sw: Swarm, omap: OccupancyMap, table: NeighbourTable,
+         dt: float, bodies: bool) -> None:
+    """The move phase: drive the movers, add up distances and tell the controller which moves were refused."""
+    movers = command.movers
+    refused, travelled = drive(omap, sw.xy, movers, sw.heading[movers], command.speed * dt, sw.radius,
+                               bodies=bodies, table=table)
+    sw.distance[movers] += travelled
+    controller.after_move(movers, refused)
+
 
 @dataclass
 class Metrics:
@@ -112,15 +137,11 @@ class Simulation:
         sw = self.swarm
         clock = time.perf_counter
         t0 = clock()
-        readings = self._sense()
+        readings = sense(self.controller, sw, self.world.omap, self.table)
         t1 = clock()
         command = self.controller.decide(StepInput(self.steps, self.t, self.dt, self.table, readings))
         t2 = clock()
-        movers = command.movers
-        refused, travelled = drive(self.world.omap, sw.xy, movers, sw.heading[movers], command.speed * self.dt,
-                                   sw.radius, bodies=self.scenario.sim.robot_collisions, table=self.table)
-        sw.distance[movers] += travelled
-        self.controller.after_move(movers, refused)
+        move(self.controller, command, sw, self.world.omap, self.table, self.dt, self.scenario.sim.robot_collisions)
         t3 = clock()
         self.table = self.medium.update(sw.xy)
         t4 = clock()
@@ -133,20 +154,6 @@ class Simulation:
             self.agents_connected_min = min(self.agents_connected_min, frac)
         for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
             self.phase_seconds[name] += dt
-
-    def _sense(self) -> Readings:
-        if not self.controller.needs_range_readings:
-            return Readings({})
-        sw = self.swarm
-        mobile = sw.in_states(MOBILE_STATES)
-        groups = {}
-        for m, kind in enumerate(sw.models):
-            who = np.flatnonzero(mobile & (sw.model == m))
-            if len(who):
-                scans = range_scan(self.world.omap, sw.xy, sw.heading, who, kind.sensor_beams, kind.sensor_range,
-                                   radius=sw.radius, table=self.table)
-                groups[m] = (who, scans)
-        return Readings(groups)
 
     # -- metrics ---------------------------------------------------------------------------------------------
     def metrics(self, method: str | None = None) -> Metrics:

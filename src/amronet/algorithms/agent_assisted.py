@@ -26,12 +26,13 @@ from __future__ import annotations
 from typing import Annotated
 
 import numpy as np
+from numba import njit
 from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
 from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
 from amronet.algorithms.explorers import EXPLORERS
 from amronet.algorithms.goto import GoalSteering
-from amronet.algorithms.references import check_loss_band, track_references
+from amronet.algorithms.references import _track_row, check_loss_band
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.errors import ScenarioError
 from amronet.motion import path_clear
@@ -64,6 +65,38 @@ class AgentAssistedParams(BaseModel):
     avoid_range: Annotated[float, Field(gt=0, allow_inf_nan=False)] = 0.6
     give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
     release_gap: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.02
+
+
+@njit(cache=True)
+def _track_agents(agents, current, is_reference, status, indptr, indices, dist, want_other, left, r_eff,
+                  nearest_d, other):  # pragma: no cover - numba
+    """Track the agents' references in place and count who must act this step.
+
+    For every agent ``agents[m]``: its current reference ``current[agents[m]]`` is updated
+    (:func:`~amronet.algorithms.references._track_row`), it takes that reference's status (when it has one), and
+    ``nearest_d[m]`` and ``other[m]`` get the distance to the nearest reference in range and the nearest
+    reference of another status. Agents are never references, so adopting a status does not change what the
+    other agents see.
+
+    Returns:
+        ``(triangle candidates, losing)``: how many agents hear a reference of another status and carry a router,
+        and how many are about to lose their last reference (``nearest_d >= r_eff``).
+    """
+    n_cand = 0
+    n_losing = 0
+    for m in range(agents.shape[0]):
+        a = agents[m]
+        cur, near, o, _ = _track_row(a, current[a], is_reference, status, indptr, indices, dist, want_other)
+        current[a] = cur
+        nearest_d[m] = near
+        other[m] = o
+        if cur >= 0:
+            status[a] = status[cur]
+            if near >= r_eff:
+                n_losing += 1
+        if o >= 0 and left[a] >= 1:
+            n_cand += 1
+    return n_cand, n_losing
 
 
 @register_algorithm("agent-assisted")
@@ -105,6 +138,13 @@ class AgentAssisted(Controller):
         self.agent_model = int(sw.model[self.agents[0]])
         self.several_statuses = len(np.unique(sw.status[sw.kind == Kind.BASE])) > 1
         self.released = 0
+        self.agent_speed = sw.max_speed[self.agents]
+        self.moving_triangles = 0
+        """Released triangle routers that have not reached their goal yet."""
+        self._nearest_d = np.empty(len(self.agents))
+        self._other = np.empty(len(self.agents), dtype=np.int64)
+        self._deployed: np.ndarray | None = None
+        self._deployed_xy: np.ndarray | None = None
 
     @property
     def settled(self) -> bool:  # noqa: D102 - agents never settle; the coverage target ends the run
@@ -123,51 +163,80 @@ class AgentAssisted(Controller):
         st.goal, st.anchors = pad(st.goal, 0.0), pad(st.anchors, -1)
         st.last_to_goal, st.blocked_steps = pad(st.last_to_goal, np.inf), pad(st.blocked_steps, 0)
 
+    # -- the deployed nodes (they change only when this controller releases a router or one settles) ---------
+    def _deployed_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mask of the deployed nodes (base nodes and deployed routers) and their positions, cached.
+
+        Deployed nodes never move, and only this controller changes robots' states (releasing a router, a
+        triangle router settling), so the cache is dropped by :meth:`_nodes_changed` on those events.
+        """
+        if self._deployed is None:
+            sw = self.swarm
+            self._deployed = sw.deployed
+            self._deployed_xy = sw.xy[self._deployed]
+        assert self._deployed_xy is not None
+        return self._deployed, self._deployed_xy
+
+    def _nodes_changed(self) -> None:
+        self._deployed = self._deployed_xy = None
+
     # -- the step -------------------------------------------------------------------------------------------
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm
         agents = self.agents
         n_before = len(sw)
-        is_ref = sw.deployed
-        view = track_references(step.table, agents, self.current[agents], is_ref, sw.status,
-                                want_other=self.several_statuses and self.params.triangular != "off")
-        self.current[agents] = view.current
-        has = view.current >= 0
-        sw.status[agents[has]] = sw.status[view.current[has]]
+        is_ref, _ = self._deployed_nodes()
+        table = step.table
+        triangular = self.params.triangular != "off"
+        n_cand, n_losing = _track_agents(agents, self.current, is_ref, sw.status, table.indptr, table.indices,
+                                         table.dist, self.several_statuses and triangular, self.left, self.r_eff,
+                                         self._nearest_d, self._other)
+        # the rare steps in which an agent must release a router (or turn back) take the general path below
+        current = self.current[agents] if n_cand or n_losing else None
 
-        if self.params.triangular != "off":
-            cand = np.flatnonzero((view.other >= 0) & (self.left[agents] >= 1))
-            if len(cand):
-                committed = is_ref | (sw.state == State.TRIANGLE)
-                go = select_triangles(self.params.triangular, agents[cand], view.current[cand], view.other[cand],
-                                      sw.xy, self.r_c, self.disabled, step.table, committed)
-                for m in cand[go]:
-                    self._release_triangle(int(agents[m]), int(view.current[m]), int(view.other[m]))
+        if n_cand:
+            assert current is not None
+            other = self._other
+            cand = np.flatnonzero((other >= 0) & (self.left[agents] >= 1))
+            committed = is_ref | (sw.state == State.TRIANGLE)
+            go = select_triangles(self.params.triangular, agents[cand], current[cand], other[cand], sw.xy,
+                                  self.r_c, self.disabled, table, committed)
+            for m in cand[go]:
+                self._release_triangle(int(agents[m]), int(current[m]), int(other[m]))
 
-        losing = view.has_reference & (view.nearest_distance >= self.r_eff)
-        for m in np.flatnonzero(losing & (self.left[agents] >= 1)):
-            self._release_reference(int(agents[m]), int(view.current[m]))
+        losing = None
+        if n_losing:
+            assert current is not None
+            losing = (current >= 0) & (self._nearest_d >= self.r_eff)
+            for m in np.flatnonzero(losing & (self.left[agents] >= 1)):
+                self._release_reference(int(agents[m]), int(current[m]))
 
         # agents: explore, or turn back when tethered (no router left and about to lose the last reference)
         scans = step.readings.of(agents, self.agent_model)
         sensor_range = sw.models[self.agent_model].sensor_range
         self.explorer.steer(sw.heading, agents, scans, sensor_range, self.refused[agents], self.rng, sw.xy,
-                            sw.xy[sw.deployed])
-        tethered = losing & (self.left[agents] < 1)
-        if tethered.any():
-            back = sw.xy[view.current[tethered]] - sw.xy[agents[tethered]]
-            sw.heading[agents[tethered]] = np.arctan2(back[:, 1], back[:, 0])
-        speed = sw.max_speed[agents].copy()
+                            self._deployed_nodes()[1])
+        if losing is not None:
+            assert current is not None
+            tethered = losing & (self.left[agents] < 1)
+            if tethered.any():
+                back = sw.xy[current[tethered]] - sw.xy[agents[tethered]]
+                sw.heading[agents[tethered]] = np.arctan2(back[:, 1], back[:, 0])
+        speed = self.agent_speed.copy()
 
         # triangle routers released before this step drive to their goals
-        tri = np.flatnonzero(sw.state[:n_before] == State.TRIANGLE)
-        if len(tri):
-            model = int(sw.model[tri[0]])
-            tri_scans = step.readings.of(tri, model)
-            length, done = self.steering.steer(tri, sw.xy, sw.heading, tri_scans, sw.models[model].sensor_range,
-                                               sw.max_speed[tri] * self.dt, self.r_eff)
-            sw.state[tri[done]] = State.TRIANGLE_SETTLED
-            return Command(np.concatenate([agents, tri]), np.concatenate([speed, length / self.dt]))
+        if self.moving_triangles:
+            tri = np.flatnonzero(sw.state[:n_before] == State.TRIANGLE)
+            if len(tri):
+                model = int(sw.model[tri[0]])
+                tri_scans = step.readings.of(tri, model)
+                length, done = self.steering.steer(tri, sw.xy, sw.heading, tri_scans, sw.models[model].sensor_range,
+                                                   sw.max_speed[tri] * self.dt, self.r_eff)
+                if done.any():
+                    sw.state[tri[done]] = State.TRIANGLE_SETTLED
+                    self.moving_triangles -= int(np.count_nonzero(done))
+                    self._nodes_changed()
+                return Command(np.concatenate([agents, tri]), np.concatenate([speed, length / self.dt]))
         return Command(agents, speed)
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
@@ -199,6 +268,7 @@ class AgentAssisted(Controller):
         new = sw.extend(self.router_kind, Kind.ROUTER, state, spot[None], np.array([sw.status[agent]]),
                         heading=np.array([sw.heading[agent]]))
         self._grow(len(new))
+        self._nodes_changed()
         self.left[agent] -= 1
         self.released += 1
         return int(new[0])
@@ -209,6 +279,7 @@ class AgentAssisted(Controller):
     def _release_triangle(self, agent: int, ref_i: int, ref_j: int) -> None:
         sw = self.swarm
         new = self._add_router(agent, ref_i, State.TRIANGLE)
+        self.moving_triangles += 1
         goal = triangle_goal(sw.xy[[ref_i]], sw.xy[[ref_j]], sw.xy[[agent]], self.r_eff)
         self.steering.start(np.array([new]), goal, np.array([[ref_i, ref_j]]))
         if self.params.triangular == "local":

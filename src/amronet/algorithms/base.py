@@ -21,6 +21,7 @@ from amronet.world.occupancy import OccupancyMap
 
 if TYPE_CHECKING:
     from amronet.scenario import Scenario
+    from amronet.streams import RunStreams
 
 __all__ = ["ALGORITHMS", "Command", "Controller", "Readings", "StepInput", "register_algorithm"]
 
@@ -80,12 +81,20 @@ class Controller(ABC):
         omap: The map (for nothing but its geometry's sake; controllers do not read obstacles from it).
         r_c: Communication radius.
         dt: Step length.
-        rng: The run's random generator.
+        rng: The run's random generator; for a batch of runs, their :class:`~amronet.streams.RunStreams`.
         scenario: The whole scenario, for controllers that need more (e.g. the robot kind agents release).
+
+    Batching (:mod:`amronet.batch`): a controller with :attr:`batchable` set can drive several runs at once, their
+    robots concatenated into one swarm and one neighbour table that never links robots of different runs. It
+    must then keep every run independent of the others: per-robot state only, no reductions over all robots that
+    feed back into decisions, every random draw through :func:`~amronet.streams.draw_per_run`, and
+    :meth:`unsettled` and :meth:`report_run` to answer per run.
     """
 
     name: ClassVar[str]
     Params: ClassVar[type[BaseModel]]
+    batchable: ClassVar[bool] = False
+    """Whether the controller can step several runs in one swarm (see the class docstring)."""
 
     def __init__(
         self,
@@ -94,7 +103,7 @@ class Controller(ABC):
         omap: OccupancyMap,
         r_c: float,
         dt: float,
-        rng: np.random.Generator,
+        rng: np.random.Generator | RunStreams,
         scenario: Scenario | None = None,
     ) -> None:
         self.scenario = scenario
@@ -123,6 +132,14 @@ class Controller(ABC):
     def report(self) -> dict[str, object]:
         """Algorithm-specific numbers for the run's summary (default: none)."""
         return {}
+
+    def unsettled(self) -> np.ndarray:
+        """Mask ``(N,)`` of the robots that may still move (batchable controllers; :attr:`settled` per run)."""
+        raise NotImplementedError(f"{type(self).__name__} does not step runs in batches")
+
+    def report_run(self, robots: slice) -> dict[str, object]:
+        """:meth:`report` of the run whose robots are ``robots`` in a batch (default: :meth:`report`)."""
+        return self.report()
 
     @property
     @abstractmethod

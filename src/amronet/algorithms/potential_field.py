@@ -102,6 +102,7 @@ class PotentialField(Controller):
 
     Params = PotentialFieldParams
     params: PotentialFieldParams
+    batchable = True
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
@@ -123,7 +124,8 @@ class PotentialField(Controller):
         self.window_start = sw.xy.copy()
         self.force = np.zeros((n, 2))
         self.held_force = np.zeros((n, 2))
-        self.wakeups = 0
+        self.wakeups = np.zeros(n, dtype=np.int64)
+        """How often every router woke up from rest."""
 
     @property
     def needs_range_readings(self) -> bool:  # noqa: D102
@@ -132,6 +134,9 @@ class PotentialField(Controller):
     @property
     def settled(self) -> bool:  # noqa: D102
         return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
+
+    def unsettled(self) -> np.ndarray:  # noqa: D102
+        return (self.swarm.state == State.EXPLORE) & (self.swarm.kind == Kind.ROUTER)
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params
@@ -145,13 +150,12 @@ class PotentialField(Controller):
         table = step.table
         movers = np.empty(len(self.routers), dtype=np.int64)
         speed = np.empty(len(self.routers))
-        n_movers, woken = _wake_and_accelerate(
+        n_movers = _wake_and_accelerate(
             self.routers, sw.state, table.indptr, table.indices, table.dist, sw.xy, self.obstacle_force,
             self.velocity, sw.heading, sw.max_speed, self.rest_count, self.window_start, self.force,
             self.held_force, self.k_cover, self.k_degree, self.q_rc, self.force_cap,
-            p.connectivity_k, p.damping, p.mass, self.dt, p.rest_fraction, int(State.EXPLORE), int(State.REFERENCE),
-            movers, speed)
-        self.wakeups += woken
+            p.connectivity_k, p.damping, p.mass, self.dt, p.rest_fraction, State.EXPLORE, State.REFERENCE,
+            self.wakeups, movers, speed)
         return Command(movers[:n_movers], speed[:n_movers])
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
@@ -161,27 +165,29 @@ class PotentialField(Controller):
         _come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), self.swarm.state,
                       self.swarm.xy, self.swarm.max_speed, self.velocity, self.rest_count, self.window_start,
                       self.force, self.held_force, p.rest_steps, self.dt, p.rest_fraction, p.damping,
-                      int(State.REFERENCE))
+                      State.REFERENCE)
 
     def report(self) -> dict[str, object]:
         """The force constants used and how often resting routers woke up."""
+        return self.report_run(slice(None))
+
+    def report_run(self, robots: slice) -> dict[str, object]:  # noqa: D102
         return {"k_cover": self.k_cover, "k_degree": self.k_degree, "k_obstacle": self.k_obstacle,
-                "wakeups": self.wakeups}
+                "wakeups": int(self.wakeups[robots].sum())}
 
 
 # -- compiled kernels: one pass over the routers per phase (30 robots are all overhead in NumPy) -----------------
 @numba.njit(cache=True)
 def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
                          rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap,
-                         k_conn, damping, mass, dt, rest_fraction, explore, reference, movers,
+                         k_conn, damping, mass, dt, rest_fraction, explore, reference, wakeups, movers,
                          speed):  # pragma: no cover - numba
-    """Wake resting routers whose force left the held one, then accelerate every moving router; (movers, woken).
+    """Wake resting routers whose force left the held one, then accelerate every moving router; the mover count.
 
     A router's force depends only on positions and the neighbour table, so one pass in router order gives the
     same result as waking everybody first and then moving everybody.
     """
     n_movers = 0
-    woken = 0
     for i in routers:
         if state[i] != explore and state[i] != reference:
             continue
@@ -196,7 +202,7 @@ def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_for
             rest_count[i] = 0
             window_start[i, 0] = xy[i, 0]
             window_start[i, 1] = xy[i, 1]
-            woken += 1
+            wakeups[i] += 1
         force[i, 0] = fx
         force[i, 1] = fy
         vx = velocity[i, 0] + (fx - damping * velocity[i, 0]) / mass * dt
@@ -212,7 +218,7 @@ def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_for
         movers[n_movers] = i
         speed[n_movers] = s
         n_movers += 1
-    return n_movers, woken
+    return n_movers
 
 
 @numba.njit(cache=True)

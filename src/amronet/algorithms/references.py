@@ -74,45 +74,50 @@ def _nearest_other(lo, hi, s_cur, is_reference, status, indices, dist):  # pragm
 
 
 @njit(cache=True)
-def _track(who, current, is_reference, status, indptr, indices, dist, want_other,
-           new_current, nearest_d, other, other_d):  # pragma: no cover - numba
-    """One pass over each row; a second only when the current reference changed (rare in steady state)."""
-    for m in range(who.shape[0]):
-        i = who[m]
-        lo = indptr[i]
-        hi = indptr[i + 1]
-        cur = current[m]
-        s_cur = status[cur] if cur >= 0 else -1
-        still = False
-        best = -1
-        best_d = np.inf
+def _track_row(i, cur, is_reference, status, indptr, indices, dist, want_other):  # pragma: no cover - numba
+    """Track one robot ``i`` whose current reference is ``cur``: ``(current, nearest_distance, other, other_d)``.
+
+    One pass over the row; a second only when the current reference changed (rare in steady state).
+    """
+    lo = indptr[i]
+    hi = indptr[i + 1]
+    s_cur = status[cur] if cur >= 0 else -1
+    still = False
+    best = -1
+    best_d = np.inf
+    o = -1
+    od = np.inf
+    for e in range(lo, hi):
+        j = indices[e]
+        if not is_reference[j]:
+            continue
+        de = dist[e]
+        if j == cur:
+            still = True
+        if de < best_d:
+            best_d = de
+            best = j
+        if want_other:
+            sj = status[j]
+            if sj >= 0 and s_cur >= 0 and sj != s_cur and de < od:
+                od = de
+                o = j
+    chosen = cur if still else best
+    if want_other and chosen != cur:
         o = -1
         od = np.inf
-        for e in range(lo, hi):
-            j = indices[e]
-            if not is_reference[j]:
-                continue
-            de = dist[e]
-            if j == cur:
-                still = True
-            if de < best_d:
-                best_d = de
-                best = j
-            if want_other:
-                sj = status[j]
-                if sj >= 0 and s_cur >= 0 and sj != s_cur and de < od:
-                    od = de
-                    o = j
-        chosen = cur if still else best
-        if want_other and chosen != cur:
-            o = -1
-            od = np.inf
-            if chosen >= 0 and status[chosen] >= 0:
-                o, od = _nearest_other(lo, hi, status[chosen], is_reference, status, indices, dist)
-        new_current[m] = chosen
-        nearest_d[m] = best_d
-        other[m] = o
-        other_d[m] = od
+        if chosen >= 0 and status[chosen] >= 0:
+            o, od = _nearest_other(lo, hi, status[chosen], is_reference, status, indices, dist)
+    return chosen, best_d, o, od
+
+
+@njit(cache=True)
+def _track(who, current, is_reference, status, indptr, indices, dist, want_other,
+           new_current, nearest_d, other, other_d):  # pragma: no cover - numba
+    """:func:`_track_row` for every robot of ``who``."""
+    for m in range(who.shape[0]):
+        new_current[m], nearest_d[m], other[m], other_d[m] = _track_row(
+            who[m], current[m], is_reference, status, indptr, indices, dist, want_other)
 
 
 def track_references(

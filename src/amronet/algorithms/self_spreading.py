@@ -62,6 +62,7 @@ class SelfSpreading(Controller):
 
     Params = SelfSpreadingParams
     params: SelfSpreadingParams
+    batchable = True
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
@@ -80,6 +81,9 @@ class SelfSpreading(Controller):
     @property
     def settled(self) -> bool:  # noqa: D102
         return not self.swarm.in_states(SETTLING_STATES).any()
+
+    def unsettled(self) -> np.ndarray:  # noqa: D102
+        return self.swarm.in_states(SETTLING_STATES)
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm

@@ -97,6 +97,7 @@ class FrontierExplorer(Explorer):
         self._fr_ii, self._us_ii = _integral_buffers((rows, cols))
         self._parent, self._depth, self._queue = _search_buffers(rows * cols)
         self._nodes_key: tuple[int, float] | None = None
+        self._reals_for: tuple[float, np.ndarray, float] | None = None
         self.steps = 0
         self._start(0)
 
@@ -132,7 +133,7 @@ class FrontierExplorer(Explorer):
         grid = self.grid
         res = grid.resolution
         grid.integrate(xy[who], heading[who], scans, sensor_range, deployed_xy, self.robot_radius)
-        key = (len(deployed_xy), float(np.sum(deployed_xy)))
+        key = (len(deployed_xy), float(deployed_xy.sum()))
         refresh = key != self._nodes_key
         if refresh:
             self._nodes_key = key
@@ -140,18 +141,26 @@ class FrontierExplorer(Explorer):
             _paint_covered(self.covered, grid.origin[0], grid.origin[1], res, nodes, self.cover_radius)
             _paint_covered(self.robots, grid.origin[0], grid.origin[1], res, nodes, self.clearance)
             self.gap = self.gap_weight * gap_to_uncovered(self.covered)
-        avoid = min(sensor_range, self.avoid_range)
-        reals = np.array([grid.origin[0], grid.origin[1], res, avoid, STUCK_RADIUS, (self.claim_radius / res) ** 2,
-                          0.75 * res, self.lane])
+        reals, avoid = self._reals(sensor_range)
         fresh = rng.uniform(-np.pi, np.pi, size=m)
         buf_r, buf_c = grid.buffers(max(sensor_range, (self.settings[_I_LOOK] + 2) * res * 1.5))
-        _navigate(self.steps, refresh, xy, heading, who, np.ascontiguousarray(np.minimum(scans, avoid), dtype=float),
-                  beam_angles(scans.shape[1]), np.asarray(refused, dtype=np.bool_), fresh, grid.score, grid.seen,
-                  self.robots, self.covered, self.gap, self.visited, self.off_r, self.off_c, self.settings, reals,
-                  self.state, self.anchor, self.paths, self._open, self._parent, self._depth, self._queue, self._trav,
-                  self._trav_soft, self._fr_ii, self._us_ii, buf_r, buf_c, self.active)
+        _navigate(self.steps, refresh, xy, heading, who, np.minimum(scans, avoid), beam_angles(scans.shape[1]),
+                  np.asarray(refused, dtype=np.bool_), fresh, grid.score, grid.seen, self.robots, self.covered,
+                  self.gap, self.visited, self.off_r, self.off_c, self.settings, reals, self.state, self.anchor,
+                  self.paths, self._open, self._parent, self._depth, self._queue, self._trav, self._trav_soft,
+                  self._fr_ii, self._us_ii, buf_r, buf_c, self.active)
         self.steps += 1
-        idle = ~self.active
-        if idle.any():
+        if not self.active.all():
+            idle = ~self.active
             random_walk(heading, who[idle], np.minimum(scans[idle], avoid), avoid, np.asarray(refused)[idle], rng,
                         self.turn_noise * np.sqrt(self.dt))
+
+    def _reals(self, sensor_range: float) -> tuple[np.ndarray, float]:
+        """The navigation kernel's real settings (``_F_*``) and the avoidance reach, for this sensor range."""
+        if self._reals_for is None or self._reals_for[0] != sensor_range:
+            res = self.grid.resolution
+            avoid = min(sensor_range, self.avoid_range)
+            reals = np.array([self.grid.origin[0], self.grid.origin[1], res, avoid, STUCK_RADIUS,
+                              (self.claim_radius / res) ** 2, 0.75 * res, self.lane])
+            self._reals_for = (sensor_range, reals, avoid)
+        return self._reals_for[1], self._reals_for[2]

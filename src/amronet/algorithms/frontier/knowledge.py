@@ -45,13 +45,26 @@ def _trace(ox, oy, res, rows, cols, x0, y0, x1, y1, out_r, out_c):  # pragma: no
     return n
 
 
-@njit(cache=True)
-def _integrate(score, seen, ox, oy, res, pos, heading, scans, angles, max_range, robots, n_own, robot_r,
-               hit_gain, cap, floor, buf_r, buf_c):  # pragma: no cover - numba
-    """Add the evidence of every beam of every sensing robot to the grid.
+@njit(cache=True, inline="always")
+def _near_any(x, y, pts, skip, rr2):  # pragma: no cover - numba
+    """Is ``(x, y)`` within ``sqrt(rr2)`` of a row of ``pts`` other than row ``skip``?"""
+    for j in range(pts.shape[0]):
+        if j == skip:
+            continue
+        ex = x - pts[j, 0]
+        ey = y - pts[j, 1]
+        if ex * ex + ey * ey <= rr2:
+            return True
+    return False
 
-    ``robots[:n_own]`` are the sensing robots themselves (row ``a`` is ``pos[a]``): a robot's own position
-    never hides its reading.
+
+@njit(cache=True)
+def _integrate(score, seen, ox, oy, res, pos, heading, scans, angles, max_range, nodes, robot_r,
+               hit_gain, cap, floor, buf_r, buf_c):  # pragma: no cover - numba
+    """Add the evidence of every beam of every sensing robot (row ``a`` of ``pos`` and ``heading``) to the grid.
+
+    A reading that ends within ``robot_r`` of another sensing robot or of one of ``nodes`` marks no obstacle (a
+    robot's own position never hides its reading).
     """
     rows, cols = score.shape
     rr2 = robot_r * robot_r
@@ -68,14 +81,7 @@ def _integrate(score, seen, ox, oy, res, pos, heading, scans, angles, max_range,
             if hit:
                 hx = x0 + d * ux
                 hy = y0 + d * uy
-                for j in range(robots.shape[0]):
-                    if j == a and j < n_own:
-                        continue
-                    ex = hx - robots[j, 0]
-                    ey = hy - robots[j, 1]
-                    if ex * ex + ey * ey <= rr2:
-                        on_robot = True
-                        break
+                on_robot = _near_any(hx, hy, pos, a, rr2) or _near_any(hx, hy, nodes, -1, rr2)
                 d += 1e-6  # the reading's point lies in the obstacle's cell
             n = _trace(ox, oy, res, rows, cols, x0, y0, x0 + d * ux, y0 + d * uy, buf_r, buf_c)
             last = n - 1 if hit else n
@@ -155,6 +161,9 @@ def _passable_mask(score, seen, rb, off_r, off_c, out):  # pragma: no cover - nu
                 cc = c + off_c[q]
                 if rr < 0 or rr >= rows or cc < 0 or cc >= cols:
                     out[r, c] = False
+
+
+_NO_NODES = np.zeros((0, 2))
 
 
 class KnowledgeGrid:
@@ -240,15 +249,14 @@ class KnowledgeGrid:
             robot_radius: See ``robots_xy``.
         """
         xy = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
-        scans = np.ascontiguousarray(scans, dtype=float)
         if len(xy) == 0:
             return
-        others = xy if robots_xy is None else np.concatenate([xy, np.asarray(robots_xy, dtype=float).reshape(-1, 2)])
+        nodes = _NO_NODES if robots_xy is None else np.ascontiguousarray(robots_xy, dtype=float).reshape(-1, 2)
         buf_r, buf_c = self.buffers(sensor_range)
         _integrate(self.score, self.seen, self.origin[0], self.origin[1], self.resolution, xy,
-                   np.ascontiguousarray(heading, dtype=float), scans, beam_angles(scans.shape[1]), float(sensor_range),
-                   np.ascontiguousarray(others), len(xy), float(robot_radius), HIT_GAIN, OCCUPIED_CAP, FREE_FLOOR,
-                   buf_r, buf_c)
+                   np.ascontiguousarray(heading, dtype=float), np.ascontiguousarray(scans, dtype=float),
+                   beam_angles(scans.shape[1]), float(sensor_range), nodes, float(robot_radius), HIT_GAIN,
+                   OCCUPIED_CAP, FREE_FLOOR, buf_r, buf_c)
 
     def covered_by(self, nodes_xy: np.ndarray, radius: float) -> np.ndarray:
         """Cells whose centre lies within ``radius`` of one of the nodes ``(D, 2)``."""
