@@ -130,3 +130,38 @@ def test_bad_points() -> None:
         neighbour_csr(np.array([[0.0, 0.0], [np.nan, 1.0]]), 1.0)
     with pytest.raises(ValueError, match="shape"):
         neighbour_csr(np.zeros((3, 3)), 1.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    sizes=st.lists(st.integers(0, 25), min_size=1, max_size=6),
+    spread=st.floats(0.1, 30.0),
+    r=st.floats(0.05, 5.0),
+    seed=st.integers(0, 2**32 - 1),
+    interleave=st.booleans(),
+)
+def test_groups_are_tables_of_their_own(sizes, spread, r, seed, interleave):
+    """With groups, every group's rows are its own table's, bit for bit: groups on top of each other never link."""
+    rng = np.random.default_rng(seed)
+    parts = [rng.random((n, 2)) * spread for n in sizes]  # all groups over the same area
+    xy = np.concatenate(parts)
+    groups = np.repeat(np.arange(len(sizes)), sizes)
+    if interleave:  # groups need not be contiguous blocks
+        order = rng.permutation(len(xy))
+        xy, groups = xy[order], groups[order]
+    indptr, indices, dist = neighbour_csr(xy, r, groups)
+    for g in range(len(sizes)):
+        members = np.flatnonzero(groups == g)
+        own_ptr, own_idx, own_dist = neighbour_csr(xy[members], r)
+        rows = [np.arange(indptr[i], indptr[i + 1]) for i in members]
+        got = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
+        np.testing.assert_array_equal([len(k) for k in rows], np.diff(own_ptr))
+        np.testing.assert_array_equal(indices[got], members[own_idx])
+        np.testing.assert_array_equal(dist[got], own_dist)
+
+
+def test_bad_groups_are_refused():
+    with pytest.raises(ValueError, match="groups must be 3 integers >= 0"):
+        neighbour_csr(np.zeros((3, 2)), 1.0, np.array([0, -1, 0]))
+    with pytest.raises(ValueError, match="groups must be 3 integers"):
+        neighbour_csr(np.zeros((3, 2)), 1.0, np.array([0, 1]))

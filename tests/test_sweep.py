@@ -189,15 +189,15 @@ def test_parquet_without_pyarrow_is_one_line(swept, tmp_path, capsys, monkeypatc
 
 
 def _die_on_seed_1(job):
-    """A sweep job that kills its worker process (like the out-of-memory killer) on seed 1."""
+    """A sweep job that kills its worker process (like the out-of-memory killer) when it holds seed 1."""
     import os
     import signal
 
-    from amronet.sweeps.worker import execute_job
+    from amronet.sweeps.worker import execute_batch
 
-    if job["seed"] == 1:
+    if 1 in job["seeds"]:
         os.kill(os.getpid(), signal.SIGKILL)
-    return execute_job(job)
+    return execute_batch(job)
 
 
 def test_a_dead_worker_is_one_line_and_the_pool_can_run_again():
@@ -216,7 +216,7 @@ def test_a_sweep_whose_worker_dies_keeps_its_runs_and_resumes(tmp_path, capsys, 
 
     path = write_sweep(tmp_path / "sweep.yaml", tiny_sweep(seeds=[0, 1, 2]))
     store = tmp_path / "results.sqlite"
-    monkeypatch.setattr(engine, "execute_job", _die_on_seed_1)
+    monkeypatch.setattr(engine, "execute_batch", _die_on_seed_1)
     assert main(["sweep", str(path), "--store", str(store), "--workers", "2", "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("amronet: error: a worker process died") and len(err.splitlines()) == 1
@@ -291,13 +291,15 @@ def test_run_jobs_retries_failed_runs_only_when_told_to(tmp_path):
 
 
 class _LosesTheCluster:
-    """An executor whose cluster goes away after the first job."""
+    """An executor whose cluster goes away after the first job (a batch of runs of one scenario)."""
 
     slots = 1
+    first_job_runs = 0
 
     def imap_unordered(self, fn, jobs):
         from amronet.sweeps.executors import ClusterLostError
 
+        self.first_job_runs = len(jobs[0]["seeds"])
         yield 0, fn(jobs[0])
         raise ClusterLostError("scheduler-connection-lost")
 
@@ -313,9 +315,10 @@ def test_a_lost_cluster_is_one_error_that_keeps_the_finished_runs(tmp_path):
     from amronet.sweeps.executors import ClusterLostError
 
     store = tmp_path / "r.sqlite"
+    executor = _LosesTheCluster()
     with pytest.raises(ClusterLostError) as info:
-        run_sweep(sweep_from_spec(tiny_sweep()), store, _LosesTheCluster(), show_progress=False)
+        run_sweep(sweep_from_spec(tiny_sweep()), store, executor, show_progress=False)
     assert str(info.value) == (f"lost the Dask cluster (scheduler-connection-lost); the finished runs are in "
                                f"{str(store)!r}: run the same command again to resume")
     with ResultStore(store) as st:
-        assert len(st.runs()) == 1
+        assert len(st.runs()) == executor.first_job_runs == 2  # the two seeds of the first point, one batch

@@ -17,7 +17,7 @@ from typing import Any
 
 from amronet.sweeps.executors import Executor, LocalExecutor, default_workers
 
-__all__ = ["Job", "default_workers", "run_job", "run_jobs"]
+__all__ = ["Job", "default_workers", "run_batch", "run_job", "run_jobs"]
 
 Job = dict[str, Any]
 """``{"scenario": dict, "seed": int, "labels": dict, "timeseries": bool}``."""
@@ -25,14 +25,32 @@ Job = dict[str, Any]
 
 def run_job(job: Job) -> dict[str, Any]:
     """Run one job and return its labels, summary and (optionally) time series as plain data."""
+    return run_batch([job])[0]
+
+
+def run_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
+    """Run jobs of one scenario that differ only in seed and labels, stepped together when the scenario allows.
+
+    Returns:
+        One :func:`run_job` result per job, in order.
+    """
+    from amronet.batch import BatchSimulation, batchable
     from amronet.scenario import load_scenario
     from amronet.sim import Simulation
 
-    result = Simulation(load_scenario(job["scenario"]), job["seed"]).run()
-    out = {"labels": job.get("labels", {}), "seed": job["seed"], "summary": result.summary}
-    if job.get("timeseries"):
-        out["timeseries"] = {k: v.tolist() for k, v in result.timeseries.items()}
-    return out
+    scenario = load_scenario(jobs[0]["scenario"])
+    seeds = [job["seed"] for job in jobs]
+    if len(jobs) > 1 and batchable(scenario):
+        results = BatchSimulation(scenario, seeds).run()
+    else:
+        results = [Simulation(scenario, seed).run() for seed in seeds]
+    outs = []
+    for job, result in zip(jobs, results, strict=True):
+        out = {"labels": job.get("labels", {}), "seed": job["seed"], "summary": result.summary}
+        if job.get("timeseries"):
+            out["timeseries"] = {k: v.tolist() for k, v in result.timeseries.items()}
+        outs.append(out)
+    return outs
 
 
 def run_jobs(
@@ -80,17 +98,22 @@ def run_jobs(
 
 def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_progress: bool,
                on_result: Callable[[int, dict[str, Any]], None] | None) -> list[dict[str, Any]]:
-    from amronet.sweeps.engine import progress_bar
+    from amronet.sweeps.engine import plan_batches, progress_bar
+    from amronet.sweeps.identity import canonical_json
 
     results: list[dict[str, Any] | None] = [None] * len(jobs)
     slots = executor.slots if jobs else 0
+    batches = plan_batches([(canonical_json(job["scenario"]), job["seed"], job["scenario"]) for job in jobs], slots)
+    n = 0
     with progress_bar(show_progress) as bar:
         task = bar.add_task(description, total=len(jobs), done=0, failed=0, running=min(slots, len(jobs)))
-        for n, (k, result) in enumerate(executor.imap_unordered(run_job, list(jobs)), start=1):
-            results[k] = result
-            if on_result:
-                on_result(k, result)
-            bar.update(task, advance=1, done=n, running=min(slots, len(jobs) - n))
+        for b, outs in executor.imap_unordered(run_batch, [[jobs[k] for k in ks] for ks in batches]):
+            for k, result in zip(batches[b], outs, strict=True):
+                n += 1
+                results[k] = result
+                if on_result:
+                    on_result(k, result)
+                bar.update(task, advance=1, done=n, running=min(slots, len(jobs) - n))
     return [r for r in results if r is not None]
 
 

@@ -20,12 +20,17 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, WorkerDiedError
 from amronet.sweeps.spec import Sweep
 from amronet.sweeps.store import ResultStore
-from amronet.sweeps.worker import execute_job
+from amronet.sweeps.worker import execute_batch
 
-__all__ = ["SweepReport", "execute_into_store", "pending_runs", "run_sweep"]
+__all__ = ["MAX_BATCH", "SweepReport", "execute_into_store", "pending_runs", "plan_batches", "run_sweep"]
 
 StoreJob = tuple[str, int, dict[str, Any]]
 """``(scenario_hash, seed, resolved scenario)``."""
+
+MAX_BATCH = 16
+"""Most runs in one batch job. Per-run cost hardly falls beyond this (30 robots: 34 us per run-step at 10 runs,
+31 us at 25, against 115 us alone), while smaller batches share the work out more evenly and lose less when a
+sweep is interrupted (a batch's runs are recorded when the whole batch ends)."""
 
 
 @dataclass
@@ -73,6 +78,41 @@ def pending_runs(store: ResultStore, runs: Sequence[StoreJob], retry_failed: boo
     return out
 
 
+def plan_batches(pending: Sequence[StoreJob], slots: int, max_size: int = MAX_BATCH) -> list[list[int]]:
+    """Group runs into jobs: runs of one batchable scenario (:func:`amronet.batch.batchable`) share a job.
+
+    A scenario's ``n`` runs form ``max(ceil(n / max_size), min(slots, n))`` batches of nearly equal size, so
+    that every slot gets work; any other run is a job of its own. Larger jobs come first (they take longest).
+
+    Returns:
+        Lists of indices into ``pending``, one per job.
+    """
+    from amronet.batch import batchable
+    from amronet.scenario import load_scenario
+
+    by_hash: dict[str, list[int]] = {}
+    for k, (h, _, _) in enumerate(pending):
+        by_hash.setdefault(h, []).append(k)
+    jobs: list[list[int]] = []
+    for ks in by_hash.values():
+        try:
+            together = len(ks) > 1 and batchable(load_scenario(pending[ks[0]][2]))
+        except Exception:
+            together = False  # not this function's business: the run itself reports it
+        if not together:
+            jobs += [[k] for k in ks]
+            continue
+        parts = max(-(-len(ks) // max_size), min(slots, len(ks)))
+        size, extra = divmod(len(ks), parts)
+        at = 0
+        for p in range(parts):
+            n = size + (p < extra)
+            jobs.append(ks[at:at + n])
+            at += n
+    jobs.sort(key=len, reverse=True)  # stable: equal sizes keep the runs' order
+    return jobs
+
+
 def execute_into_store(
     store: ResultStore,
     pending: Sequence[StoreJob],
@@ -104,24 +144,32 @@ def execute_into_store(
         ClusterLostError: The Dask scheduler connection was lost or workers died under a job; likewise.
     """
     total = len(pending) if total is None else total
-    jobs = [{"scenario": sc, "seed": seed} for _, seed, sc in pending]
-    done = failed = 0
     slots = executor.slots if pending else 0
+    batches = plan_batches(pending, slots)
+    jobs = [{"scenario": pending[ks[0]][2], "seeds": [pending[k][1] for k in ks]} for ks in batches]
+    unfinished = dict(enumerate(len(ks) for ks in batches))  # in submission order: the first `slots` run
+
+    def running() -> int:
+        return sum(list(unfinished.values())[:slots])
+
+    done = failed = 0
     with progress_bar(show_progress) as bar:
         task = bar.add_task(description, total=total, completed=total - len(pending), done=already[0],
-                            failed=already[1], running=min(slots, len(pending)))
+                            failed=already[1], running=running())
         try:
-            for k, outcome in executor.imap_unordered(execute_job, jobs):
-                h, seed, scenario = pending[k]
-                store.record(h, seed, scenario, outcome)
-                if outcome["status"] == "done":
-                    done += 1
-                else:
-                    failed += 1
-                bar.update(task, advance=1, done=already[0] + done, failed=already[1] + failed,
-                           running=min(slots, len(pending) - done - failed))
-                if on_outcome is not None:
-                    on_outcome(h, seed, outcome)
+            for b, outcomes in executor.imap_unordered(execute_batch, jobs):
+                del unfinished[b]
+                for k, outcome in zip(batches[b], outcomes, strict=True):
+                    h, seed, scenario = pending[k]
+                    store.record(h, seed, scenario, outcome)
+                    if outcome["status"] == "done":
+                        done += 1
+                    else:
+                        failed += 1
+                    bar.update(task, advance=1, done=already[0] + done, failed=already[1] + failed,
+                               running=running())
+                    if on_outcome is not None:
+                        on_outcome(h, seed, outcome)
         except WorkerDiedError:
             raise WorkerDiedError(f"a worker process died (killed, or out of memory?); the finished runs are kept in "
                              f"{str(store.path)!r}: run the same command again to resume (with fewer --workers if "

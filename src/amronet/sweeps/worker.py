@@ -10,7 +10,7 @@ import socket
 import time
 from typing import Any
 
-__all__ = ["SUMMARY_EXTRAS", "execute_job", "one_line_error"]
+__all__ = ["SUMMARY_EXTRAS", "execute_batch", "execute_job", "one_line_error"]
 
 SUMMARY_EXTRAS = ("wall_time_s", "amronet_version", "scenario")
 """Summary fields the store keeps in their own columns rather than in the summary JSON (in this order, last)."""
@@ -46,7 +46,34 @@ def execute_job(job: dict[str, Any]) -> dict[str, Any]:
     except Exception as exc:
         return {**out, "status": "failed", "error": one_line_error(exc), "summary": None, "timeseries": None,
                 "wall_time_s": time.perf_counter() - start}
+    return {**out, **_done(result), "wall_time_s": time.perf_counter() - start}
+
+
+def _done(result: Any) -> dict[str, Any]:
     summary = {k: v for k, v in result.summary.items() if k not in SUMMARY_EXTRAS}
     timeseries = {k: v.tolist() for k, v in result.timeseries.items()}
-    return {**out, "status": "done", "error": None, "summary": summary, "timeseries": timeseries,
-            "wall_time_s": time.perf_counter() - start}
+    return {"status": "done", "error": None, "summary": summary, "timeseries": timeseries}
+
+
+def execute_batch(job: dict[str, Any]) -> list[dict[str, Any]]:
+    """Run the seeds of one job ``{"scenario": resolved dict, "seeds": [int, ...]}``; one outcome per seed.
+
+    Several seeds of a batchable scenario are stepped together (:class:`~amronet.batch.BatchSimulation`), with
+    the same results as one by one; a run's ``wall_time_s`` is then its share of the batch. If the batch raises,
+    its seeds run again one by one, so every run gets its own outcome (and a failure names its own error).
+    """
+    from amronet import __version__
+
+    seeds = [int(s) for s in job["seeds"]]
+    if len(seeds) > 1:
+        out: dict[str, Any] = {"host": socket.gethostname(), "amronet_version": __version__}
+        try:
+            from amronet.batch import BatchSimulation
+            from amronet.scenario import load_scenario
+
+            results = BatchSimulation(load_scenario(job["scenario"]), seeds).run()
+        except Exception:
+            pass  # each run again on its own, below, so that it records its own outcome
+        else:
+            return [{**out, **_done(r), "wall_time_s": r.summary["wall_time_s"]} for r in results]
+    return [execute_job({"scenario": job["scenario"], "seed": seed}) for seed in seeds]
