@@ -93,6 +93,11 @@ def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: floa
     return escape, alarmed
 
 
+def _turn_draws(rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """``m`` standard normal, then ``m`` standard uniform numbers (cheaper calls than ``normal``/``uniform``)."""
+    return rng.standard_normal(m), rng.random(m)
+
+
 def random_walk(
     heading: np.ndarray,
     who: np.ndarray,
@@ -117,8 +122,9 @@ def random_walk(
         rng: The run's random generator (or the streams of a batch of runs).
         turn_sigma: Standard deviation of the heading noise per step, radians.
     """
-    noise, fresh = draw_per_run(rng, who, lambda g, m: (g.normal(0.0, turn_sigma, size=m),
-                                                        g.uniform(-np.pi, np.pi, size=m)))
+    normal, uniform = draw_per_run(rng, who, _turn_draws)
+    noise = turn_sigma * normal  # rng.normal(0.0, turn_sigma, m) and rng.uniform(-pi, pi, m), bit for bit
+    fresh = -np.pi + (2.0 * np.pi) * uniform
     if len(who):
         _random_walk(heading, np.asarray(who, dtype=np.int64), np.ascontiguousarray(scans, dtype=float),
                      beam_angles(scans.shape[1]), float(sensor_range), np.asarray(was_blocked, dtype=np.bool_),

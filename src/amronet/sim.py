@@ -14,6 +14,10 @@ The life of a step, in this order and nowhere else:
 
 All randomness comes from one ``numpy.random.Generator`` seeded by the run's seed: the same scenario and seed
 give the same positions, bit for bit.
+
+The phases are the functions :func:`sense` and :func:`move` and the medium's ``update``; :class:`Simulation`
+runs them for one run, :class:`~amronet.batch.BatchSimulation` for many runs of one scenario in one set of
+arrays, in the same order.
 """
 
 from __future__ import annotations

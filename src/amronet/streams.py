@@ -42,21 +42,17 @@ class RunStreams:
         who = np.asarray(who, dtype=np.int64)
         run = np.searchsorted(self.starts, who, side="right") - 1
         counts = np.bincount(run, minlength=len(self.generators))
-        order = np.argsort(run, kind="stable")
-        out: list[np.ndarray] | None = None
-        at = 0
-        for g in np.flatnonzero(counts):
-            m = int(counts[g])
-            parts = draw(self.generators[g], m)
-            if out is None:
-                out = [np.empty((len(who), *p.shape[1:]), dtype=p.dtype) for p in parts]
-            rows = order[at:at + m]
-            for o, p in zip(out, parts, strict=True):
-                o[rows] = p
-            at += m
-        if out is None:  # nobody draws; the shapes and types of a zero-size draw
-            out = [p[:0] for p in draw(np.random.default_rng(0), 0)]
-        return tuple(out)
+        drawn = [draw(self.generators[g], int(counts[g])) for g in np.flatnonzero(counts)]
+        if not drawn:  # nobody draws: the shapes and types of a zero-size draw
+            return tuple(p[:0] for p in draw(np.random.default_rng(0), 0))
+        joined = tuple(np.concatenate(parts) for parts in zip(*drawn, strict=True))
+        if len(run) > 1 and np.any(run[1:] < run[:-1]):  # not grouped by run already: put every number in place
+            order = np.argsort(run, kind="stable")
+            out = tuple(np.empty_like(j) for j in joined)
+            for o, j in zip(out, joined, strict=True):
+                o[order] = j
+            return out
+        return joined
 
 
 def draw_per_run(rng: np.random.Generator | RunStreams, who: np.ndarray, draw: Draw) -> tuple[np.ndarray, ...]:
