@@ -105,3 +105,13 @@ def test_bad_agent_scenarios(over, field):
     with pytest.raises(ScenarioError) as info:
         Simulation(agent_scenario(**over), 0)
     assert str(info.value).startswith(field)
+
+
+def test_cached_deployed_nodes_follow_releases_and_settling():
+    sim = Simulation(agent_scenario(), seed=5)
+    for _ in range(400):
+        sim.step()
+        deployed, deployed_xy = sim.controller._deployed_nodes()
+        sw = sim.swarm
+        assert np.array_equal(deployed, sw.deployed) and np.array_equal(deployed_xy, sw.xy[sw.deployed])
+    assert sim.controller.released >= 1

@@ -17,8 +17,11 @@ from amronet.algorithms.frontier import (
     _offsets,
     _passable_mask,
     find_path,
+    gap_to_uncovered,
     target_kinds,
 )
+from amronet.algorithms.frontier.knowledge import _passable
+from amronet.algorithms.frontier.planning import _integrals, _is_frontier
 
 RES = 0.25
 
@@ -276,3 +279,51 @@ def test_frontier_agents_cover_the_office_quickly_and_stay_connected(seed):
     assert s["stop_reason"] == "coverage_target", s
     assert s["coverage"] >= 0.99
     assert s["agents_connected_fraction"] == 1.0
+
+
+# -- kernels against their plain definitions ------------------------------------------------------------------
+
+def random_grid(rng, rows, cols):
+    score = (rng.integers(-4, 12, (rows, cols)) * (rng.random((rows, cols)) < rng.random())).astype(np.int16)
+    return score, rng.random((rows, cols)) < rng.random(), rng.random((rows, cols)) < 0.5
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_gap_to_uncovered_equals_scipys_distance_transform(seed):
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    for _ in range(40):
+        rows, cols = rng.integers(1, 60, size=2)
+        covered = rng.random((rows, cols)) < rng.random() ** 0.2
+        yy, xx = np.mgrid[:rows, :cols]
+        for _ in range(rng.integers(0, 6)):  # disks, like the nodes' coverage
+            covered |= (yy - rng.uniform(0, rows)) ** 2 + (xx - rng.uniform(0, cols)) ** 2 <= rng.uniform(1, 25) ** 2
+        gap = gap_to_uncovered(covered)
+        if covered.all():
+            assert (gap == rows + cols).all()
+        else:
+            assert gap.tobytes() == ndimage.distance_transform_edt(covered).tobytes()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_integral_images_and_traversable_mask_match_their_definitions(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(15):
+        rows, cols = (int(v) for v in rng.integers(1, 25, size=2))
+        score, seen, covered = random_grid(rng, rows, cols)
+        fr_ii = np.full((rows + 1, cols + 1), 9, dtype=np.int32)
+        us_ii = np.full((rows + 1, cols + 1), 9, dtype=np.int32)
+        _integrals(score, seen, covered, fr_ii, us_ii)
+        frontier = np.array([[_is_frontier(score, seen, r, c) for c in range(cols)] for r in range(rows)])
+        expect_fr = np.zeros((rows + 1, cols + 1), dtype=np.int64)
+        expect_fr[1:, 1:] = frontier.cumsum(0).cumsum(1)
+        expect_us = np.zeros((rows + 1, cols + 1), dtype=np.int64)
+        expect_us[1:, 1:] = (seen & ~covered).cumsum(0).cumsum(1)
+        assert (fr_ii == expect_fr).all() and (us_ii == expect_us).all()
+        rb = rng.random((rows, cols)) < 0.1
+        off_r, off_c = _offsets(float(rng.choice([0.1, 0.3, 0.6])), RES)
+        out = np.ones((rows, cols), dtype=bool)
+        _passable_mask(score, seen, rb, off_r, off_c, out)
+        expect = [[_passable(score, seen, rb, r, c, off_r, off_c) for c in range(cols)] for r in range(rows)]
+        assert (out == np.array(expect, dtype=bool)).all()

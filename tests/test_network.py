@@ -42,6 +42,8 @@ def test_agents_connected_through_the_network_only():
     t = UnitDisk(1.0).update(xy)
     network = np.array([True, True, False, False])
     assert agents_connected(t, np.array([2, 3]), np.array([0]), network).tolist() == [True, False]
+    assert agents_connected(t, np.array([2, 3]), np.array([], dtype=np.int64), network).tolist() == [False, False]
+    assert agents_connected(t, np.array([], dtype=np.int64), np.array([0]), network).tolist() == []
 
 
 @settings(max_examples=40, deadline=None)

@@ -89,12 +89,18 @@ def hop_counts(graph: CSRGraph, sources: np.ndarray, nodes: np.ndarray | None = 
 
 
 @njit(cache=True)
-def _hears_any(indptr, indices, who, mask, out):  # pragma: no cover - numba
-    for m in range(who.shape[0]):
-        i = who[m]
+def _agents_linked(indptr, indices, agents, bases, network, out):  # pragma: no cover - numba
+    """``out[m]``: agent ``agents[m]`` hears a node of ``network`` that has a path to a base through ``network``."""
+    n = indptr.shape[0] - 1
+    labels = np.full(n, -1, dtype=np.int64)
+    hops = np.empty(n, dtype=np.int64)
+    if bases.shape[0] > 0:  # (with no sources, _bfs_labels would label every component)
+        _bfs_labels(indptr, indices, network, bases, labels, hops)
+    for m in range(agents.shape[0]):
+        i = agents[m]
         out[m] = False
         for e in range(indptr[i], indptr[i + 1]):
-            if mask[indices[e]]:
+            if labels[indices[e]] >= 0:
                 out[m] = True
                 break
 
@@ -103,7 +109,8 @@ def agents_connected(graph: CSRGraph, agents: np.ndarray, bases: np.ndarray, net
     """Which agents have a multi-hop path to a base station through the AMRoNet.
 
     An agent counts as connected when it hears a router or base node that itself has a path to a base station
-    through routers and base nodes (``network``); agents are endpoints, not relays.
+    through routers and base nodes (``network``); agents are endpoints, not relays. One compiled call: it runs
+    every step.
 
     Args:
         graph: This step's neighbour table.
@@ -114,7 +121,7 @@ def agents_connected(graph: CSRGraph, agents: np.ndarray, bases: np.ndarray, net
     Returns:
         Boolean mask ``(A,)``.
     """
-    linked = connected_to(graph, bases, network)
     out = np.empty(len(agents), dtype=np.bool_)
-    _hears_any(graph.indptr, graph.indices, np.asarray(agents, dtype=np.int64), linked, out)
+    _agents_linked(graph.indptr, graph.indices, np.asarray(agents, dtype=np.int64),
+                   np.asarray(bases, dtype=np.int64), np.asarray(network, dtype=np.bool_), out)
     return out

@@ -138,6 +138,18 @@ def _passable(score, seen, rb, r, c, off_r, off_c):  # pragma: no cover - numba
     return True
 
 
+@njit(cache=True, inline="always")
+def _edge_cell(out, r, c, off_r, off_c):  # pragma: no cover - numba
+    """Knock out cell ``(r, c)`` of ``out`` when its clearance reaches beyond the grid's edge."""
+    rows, cols = out.shape
+    for q in range(off_r.shape[0]):
+        rr = r + off_r[q]
+        cc = c + off_c[q]
+        if rr < 0 or rr >= rows or cc < 0 or cc >= cols:
+            out[r, c] = False
+            return
+
+
 @njit(cache=True)
 def _passable_mask(score, seen, rb, off_r, off_c, out):  # pragma: no cover - numba
     """``out``: :func:`_passable` of every cell (free cells, then occupied cells knock out their neighbourhood)."""
@@ -154,13 +166,19 @@ def _passable_mask(score, seen, rb, off_r, off_c, out):  # pragma: no cover - nu
                 cc = c - off_c[q]
                 if 0 <= rr < rows and 0 <= cc < cols:
                     out[rr, cc] = False
-    for q in range(off_r.shape[0]):  # cells whose clearance reaches beyond the grid's edge
-        for r in range(rows):
+    # cells whose clearance reaches beyond the grid's edge: only those within k cells of it can
+    k = 0
+    for q in range(off_r.shape[0]):
+        k = max(k, abs(off_r[q]), abs(off_c[q]))
+    for r in range(rows):
+        if r < k or r >= rows - k:
             for c in range(cols):
-                rr = r + off_r[q]
-                cc = c + off_c[q]
-                if rr < 0 or rr >= rows or cc < 0 or cc >= cols:
-                    out[r, c] = False
+                _edge_cell(out, r, c, off_r, off_c)
+        else:
+            for c in range(min(k, cols)):
+                _edge_cell(out, r, c, off_r, off_c)
+            for c in range(max(k, cols - k), cols):
+                _edge_cell(out, r, c, off_r, off_c)
 
 
 _NO_NODES = np.zeros((0, 2))
