@@ -20,8 +20,14 @@ from amronet.algorithms.frontier import (
     gap_to_uncovered,
     target_kinds,
 )
-from amronet.algorithms.frontier.knowledge import _passable
-from amronet.algorithms.frontier.planning import _integrals, _is_frontier
+from amronet.algorithms.frontier.knowledge import _paint_covered, _paint_nodes, _passable, _passable_rows
+from amronet.algorithms.frontier.planning import (
+    _bfs,
+    _is_frontier,
+    _search_buffers,
+    _window_buffers,
+    _window_counts,
+)
 
 RES = 0.25
 
@@ -306,24 +312,91 @@ def test_gap_to_uncovered_equals_scipys_distance_transform(seed):
             assert gap.tobytes() == ndimage.distance_transform_edt(covered).tobytes()
 
 
+def window_counts(marks, rows, win):
+    """``counts[r, j]``: ``marks`` summed over the rows within ``win`` of ``r`` and the columns ``< j``."""
+    out = np.zeros((rows, marks.shape[1] + 1), dtype=np.int64)
+    for r in range(rows):
+        out[r, 1:] = marks[max(0, r - win):r + win + 1].sum(0).cumsum()
+    return out
+
+
 @pytest.mark.parametrize("seed", range(4))
-def test_integral_images_and_traversable_mask_match_their_definitions(seed):
+def test_window_counts_and_traversable_mask_match_their_definitions_also_when_rows_change(seed):
     rng = np.random.default_rng(seed)
     for _ in range(15):
         rows, cols = (int(v) for v in rng.integers(1, 25, size=2))
+        win = int(rng.integers(0, 4))
         score, seen, covered = random_grid(rng, rows, cols)
-        fr_ii = np.full((rows + 1, cols + 1), 9, dtype=np.int32)
-        us_ii = np.full((rows + 1, cols + 1), 9, dtype=np.int32)
-        _integrals(score, seen, covered, fr_ii, us_ii)
-        frontier = np.array([[_is_frontier(score, seen, r, c) for c in range(cols)] for r in range(rows)])
-        expect_fr = np.zeros((rows + 1, cols + 1), dtype=np.int64)
-        expect_fr[1:, 1:] = frontier.cumsum(0).cumsum(1)
-        expect_us = np.zeros((rows + 1, cols + 1), dtype=np.int64)
-        expect_us[1:, 1:] = (seen & ~covered).cumsum(0).cumsum(1)
-        assert (fr_ii == expect_fr).all() and (us_ii == expect_us).all()
         rb = rng.random((rows, cols)) < 0.1
         off_r, off_c = _offsets(float(rng.choice([0.1, 0.3, 0.6])), RES)
-        out = np.ones((rows, cols), dtype=bool)
-        _passable_mask(score, seen, rb, off_r, off_c, out)
-        expect = [[_passable(score, seen, rb, r, c, off_r, off_c) for c in range(cols)] for r in range(rows)]
-        assert (out == np.array(expect, dtype=bool)).all()
+        marks, counts = _window_buffers((rows, cols))
+        trav = np.ones((rows, cols), dtype=bool)
+        changed_fr = changed_us = np.ones(rows, dtype=bool)  # first everything, then a few rows at a time
+        for _ in range(4):
+            _window_counts(score, seen, covered, win, changed_fr, changed_us, marks, counts)
+            _passable_rows(score, seen, rb, off_r, off_c, changed_fr, trav)
+            frontier = np.array([[_is_frontier(score, seen, r, c) for c in range(cols)] for r in range(rows)])
+            assert (counts[0] == window_counts(frontier.astype(np.int64), rows, win)).all()
+            assert (counts[1] == window_counts((seen & ~covered).astype(np.int64), rows, win)).all()
+            expect = [[_passable(score, seen, rb, r, c, off_r, off_c) for c in range(cols)] for r in range(rows)]
+            assert (trav == np.array(expect, dtype=bool)).all()
+            full = np.zeros((rows, cols), dtype=bool)
+            _passable_mask(score, seen, rb, off_r, off_c, full)
+            assert (full == trav).all()
+            changed_fr = rng.random(rows) < 0.2
+            changed_cov = rng.random(rows) < 0.2
+            new_score, new_seen, new_covered = random_grid(rng, rows, cols)
+            score[changed_fr] = new_score[changed_fr]
+            seen[changed_fr] = new_seen[changed_fr]
+            covered[changed_cov] = new_covered[changed_cov]
+            changed_us = changed_fr | changed_cov
+
+
+def test_integrating_flags_exactly_the_rows_that_changed():
+    rng = np.random.default_rng(3)
+    grid = KnowledgeGrid((0.0, 6.0, 0.0, 5.0), RES)
+    for step in range(1, 40):
+        before = grid.score.copy(), grid.seen.copy()
+        stamps = grid.row_stamp.copy()
+        xy = rng.uniform(0.5, 4.5, size=(2, 2))
+        grid.integrate(xy, rng.uniform(-np.pi, np.pi, 2), rng.uniform(0.1, 2.0, (2, 8)), 2.0, xy[:1] + 0.7)
+        changed = (grid.score != before[0]).any(1) | (grid.seen != before[1]).any(1)
+        assert grid.stamp == step
+        assert (grid.row_stamp == np.where(changed, step, stamps)).all()
+
+
+def test_painting_only_new_nodes_gives_the_same_cells():
+    rng = np.random.default_rng(5)
+    nodes = rng.uniform(-1.0, 9.0, size=(12, 2))
+    grown = np.zeros((20, 24), dtype=bool)
+    for j in range(len(nodes)):
+        _paint_nodes(grown, 0.0, 0.0, RES, nodes[j:j + 1], 1.3)
+        whole = np.ones((20, 24), dtype=bool)
+        _paint_covered(whole, 0.0, 0.0, RES, nodes[:j + 1], 1.3)
+        assert (grown == whole).all()
+
+
+def test_the_search_leaves_its_scratch_buffers_as_it_found_them():
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        rows, cols = (int(v) for v in rng.integers(3, 20, size=2))
+        score, seen, covered = random_grid(rng, rows, cols)
+        seen |= rng.random((rows, cols)) < 0.5
+        trav = np.zeros((rows, cols), dtype=bool)
+        _passable_mask(score, seen, np.zeros((rows, cols), bool), *_offsets(0.3, RES), trav)
+        marks, counts = _window_buffers((rows, cols))
+        every = np.ones(rows, dtype=bool)
+        _window_counts(score, seen, covered, 2, every, every, marks, counts)
+        visited = np.zeros((rows, cols), dtype=bool)
+        gap = rng.random((rows, cols))
+        claims = np.full((0, 2), -1, dtype=np.int64)
+        search = _search_buffers(rows * cols)
+        kept = trav.copy()
+        for _ in range(3):
+            sr, sc = int(rng.integers(rows)), int(rng.integers(cols))
+            fresh = _bfs(score, seen, visited, trav, counts, gap, 2, sr, sc, 3, claims, 1.0,
+                         _search_buffers(rows * cols), np.zeros(rows * cols, np.int64))
+            reused = _bfs(score, seen, visited, trav, counts, gap, 2, sr, sc, 3, claims, 1.0, search,
+                          np.zeros(rows * cols, np.int64))
+            assert fresh == reused
+            assert (search[0] == -1).all() and (trav == kept).all()

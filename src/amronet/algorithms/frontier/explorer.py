@@ -7,9 +7,9 @@ import math
 import numpy as np
 
 from amronet.algorithms.explorers import Explorer, register_explorer
-from amronet.algorithms.frontier.knowledge import KnowledgeGrid, _offsets, _paint_covered
+from amronet.algorithms.frontier.knowledge import KnowledgeGrid, _offsets, _paint_covered, _paint_nodes
 from amronet.algorithms.frontier.navigation import _navigate
-from amronet.algorithms.frontier.planning import _integral_buffers, _search_buffers, gap_to_uncovered
+from amronet.algorithms.frontier.planning import _search_buffers, _window_buffers, gap_to_uncovered
 from amronet.algorithms.frontier.state import _APPR, _GOAL, _I_LOOK, _KIND, _LAST_PLAN, _N_STATE, _REASON, STUCK_RADIUS
 from amronet.motion import random_walk
 from amronet.sensing import beam_angles
@@ -91,12 +91,13 @@ class FrontierExplorer(Explorer):
         self.robots = np.zeros((rows, cols), dtype=np.bool_)
         self.gap = gap_to_uncovered(self.covered)
         self.visited = np.zeros((rows, cols), dtype=np.bool_)
-        self._trav = np.zeros((rows, cols), dtype=np.bool_)
-        self._trav_soft = np.zeros((rows, cols), dtype=np.bool_)
-        self._open = np.zeros((rows, cols), dtype=np.bool_)
-        self._fr_ii, self._us_ii = _integral_buffers((rows, cols))
-        self._parent, self._depth, self._queue = _search_buffers(rows * cols)
+        self._no_robots = np.zeros((rows, cols), dtype=np.bool_)
+        self._trav = np.zeros((2, rows, cols), dtype=np.bool_)
+        self._marks, self._counts = _window_buffers((rows, cols))
+        self._synced = np.full(4, -1, dtype=np.int64)  # see _navigate
+        self._search = _search_buffers(rows * cols)
         self._nodes_key: tuple[int, float] | None = None
+        self._nodes = np.zeros((0, 2))
         self._reals_for: tuple[float, np.ndarray, float] | None = None
         self.steps = 0
         self._start(0)
@@ -137,23 +138,41 @@ class FrontierExplorer(Explorer):
         refresh = key != self._nodes_key
         if refresh:
             self._nodes_key = key
-            nodes = np.ascontiguousarray(deployed_xy, dtype=float).reshape(-1, 2)
-            _paint_covered(self.covered, grid.origin[0], grid.origin[1], res, nodes, self.cover_radius)
-            _paint_covered(self.robots, grid.origin[0], grid.origin[1], res, nodes, self.clearance)
+            self._paint(np.ascontiguousarray(deployed_xy, dtype=float).reshape(-1, 2))
             self.gap = self.gap_weight * gap_to_uncovered(self.covered)
+            self._synced[1:3] = -1  # the uncovered counts and the traversable cells must be computed again
         reals, avoid = self._reals(sensor_range)
         fresh = rng.uniform(-np.pi, np.pi, size=m)
         buf_r, buf_c = grid.buffers(max(sensor_range, (self.settings[_I_LOOK] + 2) * res * 1.5))
         _navigate(self.steps, refresh, xy, heading, who, np.minimum(scans, avoid), beam_angles(scans.shape[1]),
-                  np.asarray(refused, dtype=np.bool_), fresh, grid.score, grid.seen, self.robots, self.covered,
-                  self.gap, self.visited, self.off_r, self.off_c, self.settings, reals, self.state, self.anchor,
-                  self.paths, self._open, self._parent, self._depth, self._queue, self._trav, self._trav_soft,
-                  self._fr_ii, self._us_ii, buf_r, buf_c, self.active)
+                  np.asarray(refused, dtype=np.bool_), fresh, grid.score, grid.seen, self.robots, self._no_robots,
+                  self.covered, self.gap, self.visited, self.off_r, self.off_c, self.settings, reals, self.state,
+                  self.anchor, self.paths, self._search, self._trav, self._marks, self._counts, grid.row_stamp,
+                  grid.stamp, self._synced, buf_r, buf_c, self.active)
         self.steps += 1
         if not self.active.all():
             idle = ~self.active
             random_walk(heading, who[idle], np.minimum(scans[idle], avoid), avoid, np.asarray(refused)[idle], rng,
                         self.turn_noise * np.sqrt(self.dt))
+
+    def _paint(self, nodes: np.ndarray) -> None:
+        """Paint :attr:`covered` and :attr:`robots` for the deployed ``nodes`` ``(D, 2)``.
+
+        When the nodes only grew (the last ones painted come first, unchanged) only the new ones are painted:
+        painting is a union of disks, so the cells are the same.
+        """
+        grid = self.grid
+        ox, oy = grid.origin
+        res = grid.resolution
+        old = self._nodes
+        if len(nodes) >= len(old) and np.array_equal(nodes[:len(old)], old):
+            new = nodes[len(old):]
+            _paint_nodes(self.covered, ox, oy, res, new, self.cover_radius)
+            _paint_nodes(self.robots, ox, oy, res, new, self.clearance)
+        else:
+            _paint_covered(self.covered, ox, oy, res, nodes, self.cover_radius)
+            _paint_covered(self.robots, ox, oy, res, nodes, self.clearance)
+        self._nodes = nodes.copy()
 
     def _reals(self, sensor_range: float) -> tuple[np.ndarray, float]:
         """The navigation kernel's real settings (``_F_*``) and the avoidance reach, for this sensor range."""

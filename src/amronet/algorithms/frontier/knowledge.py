@@ -60,11 +60,12 @@ def _near_any(x, y, pts, skip, rr2):  # pragma: no cover - numba
 
 @njit(cache=True)
 def _integrate(score, seen, ox, oy, res, pos, heading, scans, angles, max_range, nodes, robot_r,
-               hit_gain, cap, floor, buf_r, buf_c):  # pragma: no cover - numba
+               hit_gain, cap, floor, buf_r, buf_c, row_stamp, stamp):  # pragma: no cover - numba
     """Add the evidence of every beam of every sensing robot (row ``a`` of ``pos`` and ``heading``) to the grid.
 
     A reading that ends within ``robot_r`` of another sensing robot or of one of ``nodes`` marks no obstacle (a
-    robot's own position never hides its reading).
+    robot's own position never hides its reading). ``row_stamp[r]`` becomes ``stamp`` when a cell of row ``r``
+    changes.
     """
     rows, cols = score.shape
     rr2 = robot_r * robot_r
@@ -88,21 +89,26 @@ def _integrate(score, seen, ox, oy, res, pos, heading, scans, angles, max_range,
             for q in range(last):
                 r = buf_r[q]
                 c = buf_c[q]
-                seen[r, c] = True
                 if score[r, c] > -floor:
                     score[r, c] -= 1
+                    row_stamp[r] = stamp
+                if not seen[r, c]:
+                    seen[r, c] = True
+                    row_stamp[r] = stamp
             if hit and n > 0 and not on_robot:
                 r = buf_r[n - 1]
                 c = buf_c[n - 1]
-                seen[r, c] = True
-                score[r, c] = min(score[r, c] + hit_gain, cap)
+                new = min(score[r, c] + hit_gain, cap)
+                if not seen[r, c] or new != score[r, c]:
+                    seen[r, c] = True
+                    score[r, c] = new
+                    row_stamp[r] = stamp
 
 
 @njit(cache=True)
-def _paint_covered(covered, ox, oy, res, nodes, radius):  # pragma: no cover - numba
-    """``covered[r, c]``: some node lies within ``radius`` of the cell's centre."""
+def _paint_nodes(covered, ox, oy, res, nodes, radius):  # pragma: no cover - numba
+    """Set ``covered[r, c]`` where one of ``nodes`` lies within ``radius`` of the cell's centre (others stay)."""
     rows, cols = covered.shape
-    covered[:, :] = False
     r2 = radius * radius
     for j in range(nodes.shape[0]):
         x = nodes[j, 0]
@@ -117,6 +123,13 @@ def _paint_covered(covered, ox, oy, res, nodes, radius):  # pragma: no cover - n
                 dx = ox + (c + 0.5) * res - x
                 if dx * dx + dy * dy <= r2:
                     covered[r, c] = True
+
+
+@njit(cache=True)
+def _paint_covered(covered, ox, oy, res, nodes, radius):  # pragma: no cover - numba
+    """``covered[r, c]``: some node lies within ``radius`` of the cell's centre."""
+    covered[:, :] = False
+    _paint_nodes(covered, ox, oy, res, nodes, radius)
 
 
 @njit(cache=True, inline="always")
@@ -138,47 +151,49 @@ def _passable(score, seen, rb, r, c, off_r, off_c):  # pragma: no cover - numba
     return True
 
 
-@njit(cache=True, inline="always")
-def _edge_cell(out, r, c, off_r, off_c):  # pragma: no cover - numba
-    """Knock out cell ``(r, c)`` of ``out`` when its clearance reaches beyond the grid's edge."""
-    rows, cols = out.shape
+@njit(cache=True)
+def _passable_rows(score, seen, rb, off_r, off_c, changed, out):  # pragma: no cover - numba
+    """Bring ``out`` (:func:`_passable` of every cell) up to date after the rows flagged in ``changed`` changed.
+
+    Only the rows within the clearance of a changed row are computed again; with every row flagged, this is
+    :func:`_passable_mask`.
+    """
+    rows, cols = score.shape
+    k = 0
     for q in range(off_r.shape[0]):
-        rr = r + off_r[q]
-        cc = c + off_c[q]
-        if rr < 0 or rr >= rows or cc < 0 or cc >= cols:
-            out[r, c] = False
-            return
+        k = max(k, abs(off_r[q]))
+    for r in range(rows):
+        stale = False
+        for rr in range(max(0, r - k), min(rows, r + k + 1)):
+            if changed[rr]:
+                stale = True
+                break
+        if not stale:
+            continue
+        o = out[r]
+        s_row = score[r]
+        v_row = seen[r]
+        b_row = rb[r]
+        for c in range(cols):
+            o[c] = v_row[c] and s_row[c] <= 0 and not b_row[c]
+        for q in range(off_r.shape[0]):
+            rr = r + off_r[q]
+            dc = off_c[q]
+            if rr < 0 or rr >= rows:  # the clearance reaches beyond the grid's edge
+                for c in range(cols):
+                    o[c] = False
+                break
+            s_near = score[rr]
+            for c in range(cols):
+                cc = c + dc
+                if cc < 0 or cc >= cols or s_near[cc] > 0:
+                    o[c] = False
 
 
 @njit(cache=True)
 def _passable_mask(score, seen, rb, off_r, off_c, out):  # pragma: no cover - numba
-    """``out``: :func:`_passable` of every cell (free cells, then occupied cells knock out their neighbourhood)."""
-    rows, cols = score.shape
-    for r in range(rows):
-        for c in range(cols):
-            out[r, c] = seen[r, c] and score[r, c] <= 0 and not rb[r, c]
-    for r in range(rows):
-        for c in range(cols):
-            if score[r, c] <= 0:
-                continue
-            for q in range(off_r.shape[0]):
-                rr = r - off_r[q]
-                cc = c - off_c[q]
-                if 0 <= rr < rows and 0 <= cc < cols:
-                    out[rr, cc] = False
-    # cells whose clearance reaches beyond the grid's edge: only those within k cells of it can
-    k = 0
-    for q in range(off_r.shape[0]):
-        k = max(k, abs(off_r[q]), abs(off_c[q]))
-    for r in range(rows):
-        if r < k or r >= rows - k:
-            for c in range(cols):
-                _edge_cell(out, r, c, off_r, off_c)
-        else:
-            for c in range(min(k, cols)):
-                _edge_cell(out, r, c, off_r, off_c)
-            for c in range(max(k, cols - k), cols):
-                _edge_cell(out, r, c, off_r, off_c)
+    """``out``: :func:`_passable` of every cell."""
+    _passable_rows(score, seen, rb, off_r, off_c, np.ones(score.shape[0], dtype=np.bool_), out)
 
 
 _NO_NODES = np.zeros((0, 2))
@@ -196,6 +211,10 @@ class KnowledgeGrid:
         seen: Whether a beam ever crossed or ended in the cell ``(rows, cols)``.
         origin: World ``(x, y)`` of the lower-left corner of cell ``(0, 0)``.
         resolution: Cell size in metres.
+        stamp: How many times :meth:`integrate` added evidence (or :meth:`mark_changed` was called).
+        row_stamp: Per row, the :attr:`stamp` at which a cell of the row last changed ``(rows,)``; users that
+            keep things derived from the grid bring only the rows changed since then up to date. Change
+            ``score`` and ``seen`` through :meth:`integrate`, or call :meth:`mark_changed` after changing them.
     """
 
     def __init__(self, extent: tuple[float, float, float, float], resolution: float) -> None:
@@ -208,6 +227,8 @@ class KnowledgeGrid:
         rows = max(1, math.ceil((ymax - ymin) / resolution - 1e-9))
         self.score = np.zeros((rows, cols), dtype=np.int16)
         self.seen = np.zeros((rows, cols), dtype=np.bool_)
+        self.stamp = 0
+        self.row_stamp = np.zeros(rows, dtype=np.int64)
         self._buf_r = np.zeros(0, dtype=np.int64)
         self._buf_c = np.zeros(0, dtype=np.int64)
 
@@ -274,7 +295,13 @@ class KnowledgeGrid:
         _integrate(self.score, self.seen, self.origin[0], self.origin[1], self.resolution, xy,
                    np.ascontiguousarray(heading, dtype=float), np.ascontiguousarray(scans, dtype=float),
                    beam_angles(scans.shape[1]), float(sensor_range), nodes, float(robot_radius), HIT_GAIN,
-                   OCCUPIED_CAP, FREE_FLOOR, buf_r, buf_c)
+                   OCCUPIED_CAP, FREE_FLOOR, buf_r, buf_c, self.row_stamp, self.stamp + 1)
+        self.stamp += 1
+
+    def mark_changed(self) -> None:
+        """Flag every row as changed (after ``score`` or ``seen`` were written directly)."""
+        self.stamp += 1
+        self.row_stamp[:] = self.stamp
 
     def covered_by(self, nodes_xy: np.ndarray, radius: float) -> np.ndarray:
         """Cells whose centre lies within ``radius`` of one of the nodes ``(D, 2)``."""

@@ -13,8 +13,8 @@ import math
 import numpy as np
 from numba import njit
 
-from amronet.algorithms.frontier.knowledge import _passable, _passable_mask, _trace
-from amronet.algorithms.frontier.planning import _bfs, _integrals, _kind_direct, _nearest_uncovered
+from amronet.algorithms.frontier.knowledge import _passable, _passable_rows, _trace
+from amronet.algorithms.frontier.planning import _bfs, _kind_direct, _nearest_uncovered, _window_counts
 from amronet.algorithms.frontier.state import (
     _APPR,
     _APPR_UNTIL,
@@ -94,14 +94,20 @@ def _clear_heading(want, heading, scans, angles, reach, half_width):  # pragma: 
 
 
 @njit(cache=True)
-def _navigate(now, refresh, xy, heading, who, scans, angles, refused, fresh, score, seen, rb, covered, gap, visited,
-              off_r, off_c, ip, fp, st, anchor, paths, openm, parent, depth, queue, trav, trav_soft, fr_ii, us_ii,
+def _navigate(now, refresh, xy, heading, who, scans, angles, refused, fresh, score, seen, rb, no_rb, covered, gap,
+              visited, off_r, off_c, ip, fp, st, anchor, paths, search, trav, marks, counts, row_stamp, stamp, synced,
               buf_r, buf_c, active):  # pragma: no cover - numba
     """Replan where needed, then set the heading of every agent that has a path; ``active[m]``: it has one.
 
     ``st`` holds the per-agent state (columns ``_GOAL`` ...), ``ip`` and ``fp`` the settings (``_I_*``,
-    ``_F_*``). An agent first plans around the deployed nodes; when that finds no target it plans through them
-    (``st[m, _SOFT]``).
+    ``_F_*``). An agent first plans around the deployed nodes ``rb``; when that finds no target it plans through
+    them (``st[m, _SOFT]``; ``no_rb`` is all ``False``).
+
+    The search's views are kept between calls and brought up to date when an agent plans, for the rows
+    changed since: ``trav[0]`` (traversable cells) and ``trav[1]`` (the same through the nodes) by
+    :func:`_passable_rows`, ``marks`` and ``counts`` by :func:`_window_counts`. ``synced`` holds the grid's
+    stamp (``stamp`` now, ``row_stamp`` per row) each reflects: frontier counts, uncovered counts, ``trav[0]``,
+    ``trav[1]``; -1 when all must be computed again (the caller's business when ``covered`` or ``rb`` change).
     """
     rows, cols = score.shape
     win = ip[_I_WINDOW]
@@ -111,7 +117,6 @@ def _navigate(now, refresh, xy, heading, who, scans, angles, refused, fresh, sco
     res = fp[_F_RES]
     n_agents = who.shape[0]
     claims = np.full((n_agents, 2), -1, dtype=np.int64)
-    no_rb = np.zeros_like(rb)
     ready = False
     ready_soft = False
     for m in range(n_agents):
@@ -187,8 +192,11 @@ def _navigate(now, refresh, xy, heading, who, scans, angles, refused, fresh, sco
         if need:
             st[m, _REASON] = need
             if not ready:
-                _integrals(score, seen, covered, fr_ii, us_ii)
-                _passable_mask(score, seen, rb, off_r, off_c, trav)
+                _window_counts(score, seen, covered, win, row_stamp > synced[0], row_stamp > synced[1], marks, counts)
+                _passable_rows(score, seen, rb, off_r, off_c, row_stamp > synced[2], trav[0])
+                synced[0] = stamp
+                synced[1] = stamp
+                synced[2] = stamp
                 ready = True
             for j in range(n_agents):
                 claims[j, 0] = -1
@@ -196,15 +204,16 @@ def _navigate(now, refresh, xy, heading, who, scans, angles, refused, fresh, sco
                 if j != m and st[j, _GOAL] >= 0:
                     claims[j, 0] = st[j, _GOAL] // cols
                     claims[j, 1] = st[j, _GOAL] - claims[j, 0] * cols
-            n, g, k = _bfs(score, seen, visited, trav, fr_ii, us_ii, gap, win, sr, sc, escape, claims,
-                           fp[_F_CLAIM_R2], openm, parent, depth, queue, paths[m])
+            n, g, k = _bfs(score, seen, visited, trav[0], counts, gap, win, sr, sc, escape, claims, fp[_F_CLAIM_R2],
+                           search, paths[m])
             st[m, _SOFT] = 0
             if g < 0:
                 if not ready_soft:
-                    _passable_mask(score, seen, no_rb, off_r, off_c, trav_soft)
+                    _passable_rows(score, seen, no_rb, off_r, off_c, row_stamp > synced[3], trav[1])
+                    synced[3] = stamp
                     ready_soft = True
-                n, g, k = _bfs(score, seen, visited, trav_soft, fr_ii, us_ii, gap, win, sr, sc, escape, claims,
-                               fp[_F_CLAIM_R2], openm, parent, depth, queue, paths[m])
+                n, g, k = _bfs(score, seen, visited, trav[1], counts, gap, win, sr, sc, escape, claims,
+                               fp[_F_CLAIM_R2], search, paths[m])
                 st[m, _SOFT] = 1 if g >= 0 else 0
             rbm = no_rb if st[m, _SOFT] else rb
             st[m, _LAST_PLAN] = now

@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
-from amronet.algorithms.frontier.knowledge import KnowledgeGrid, _free, _offsets, _passable, _passable_mask
+from amronet.algorithms.frontier.knowledge import KnowledgeGrid, _free, _offsets, _passable, _passable_rows
 
 __all__ = ["FRONTIER", "UNCOVERED", "find_path", "gap_to_uncovered", "target_kinds"]
 
@@ -21,17 +21,6 @@ UNCOVERED = 1
 """Target kind: a seen, uncovered cell is near (going there releases a router)."""
 FRONTIER = 2
 """Target kind: a frontier cell is near, and everything seen around it is covered."""
-
-
-@njit(cache=True, inline="always")
-def _box(ii, r, c, rad):  # pragma: no cover - numba
-    rows = ii.shape[0] - 1
-    cols = ii.shape[1] - 1
-    r0 = max(0, r - rad)
-    r1 = min(rows, r + rad + 1)
-    c0 = max(0, c - rad)
-    c1 = min(cols, c + rad + 1)
-    return ii[r1, c1] - ii[r0, c1] - ii[r1, c0] + ii[r0, c0]
 
 
 @njit(cache=True, inline="always")
@@ -45,50 +34,101 @@ def _is_frontier(score, seen, r, c):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _integrals(score, seen, covered, fr_ii, us_ii):  # pragma: no cover - numba
-    """Integral images (``ii[r, c]`` counts rows ``< r``, columns ``< c``) of frontier and seen uncovered cells.
+def _window_counts(score, seen, covered, win, changed_fr, changed_us, marks, counts):  # pragma: no cover - numba
+    """Bring the window counts of frontier and seen uncovered cells up to date after some rows changed.
 
-    A frontier cell is a free cell with an unknown 4-neighbour. Row by row, through row views; a neighbour
-    beyond the grid's edge is replaced by the cell itself (seen when it matters), which spares the bounds tests.
+    ``marks[0]`` flags the frontier cells (free, with an unknown 4-neighbour), ``marks[1]`` the seen uncovered
+    cells; ``counts[k, r, j]`` sums ``marks[k]`` over the rows within ``win`` of row ``r`` and the columns
+    ``< j``, so that a window's count is the difference of two entries. ``changed_fr`` flags the rows whose
+    ``score`` or ``seen`` changed, ``changed_us`` those whose ``seen`` or ``covered`` changed: only the marks
+    and counts that depend on them are computed again (every row flagged: all of them).
     """
     rows, cols = seen.shape
-    for c in range(cols + 1):
-        fr_ii[0, c] = 0
-        us_ii[0, c] = 0
+    mark_fr = np.zeros(rows, dtype=np.bool_)
+    count_fr = np.zeros(rows, dtype=np.bool_)
+    count_us = np.zeros(rows, dtype=np.bool_)
     for r in range(rows):
-        s_row = seen[r]
-        s_up = seen[r - 1 if r > 0 else r]
-        s_down = seen[r + 1 if r + 1 < rows else r]
-        sc_row = score[r]
-        cv_row = covered[r]
-        f_prev = fr_ii[r]
-        u_prev = us_ii[r]
-        f_cur = fr_ii[r + 1]
-        u_cur = us_ii[r + 1]
-        f_cur[0] = 0
-        u_cur[0] = 0
-        run_f = 0
-        run_u = 0
-        for c in range(cols):
-            if s_row[c]:
-                known4 = (s_up[c] and s_down[c] and s_row[c - 1 if c > 0 else c]
-                          and s_row[c + 1 if c + 1 < cols else c])
-                if sc_row[c] <= 0 and not known4:
-                    run_f += 1
-                if not cv_row[c]:
-                    run_u += 1
-            f_cur[c + 1] = f_prev[c + 1] + run_f
-            u_cur[c + 1] = u_prev[c + 1] + run_u
+        # a frontier mark depends on the rows beside it, a count on the marks within ``win`` rows
+        for rr in range(max(0, r - 1), min(rows, r + 2)):
+            if changed_fr[rr]:
+                mark_fr[r] = True
+        if mark_fr[r]:
+            for rr in range(max(0, r - win), min(rows, r + win + 1)):
+                count_fr[rr] = True
+        if changed_us[r]:
+            for rr in range(max(0, r - win), min(rows, r + win + 1)):
+                count_us[rr] = True
+    for r in range(rows):
+        if mark_fr[r]:
+            _frontier_row(score, seen, r, marks[0, r])
+        if changed_us[r]:
+            s_row = seen[r]
+            cv_row = covered[r]
+            m_us = marks[1, r]
+            for c in range(cols):
+                m_us[c] = s_row[c] & ~cv_row[c]
+    col = np.empty(cols, dtype=np.int32)
+    for k in range(2):
+        stale = count_fr if k == 0 else count_us
+        r = 0
+        while r < rows:  # a run of stale rows: a window sliding down the columns
+            if not stale[r]:
+                r += 1
+                continue
+            col[:] = 0
+            for rr in range(max(0, r - win - 1), min(rows, r + win)):  # one row is taken off below
+                _add_row(col, marks[k, rr], 1)
+            while r < rows and stale[r]:
+                if r + win < rows:
+                    _add_row(col, marks[k, r + win], 1)
+                if r - win - 1 >= 0:
+                    _add_row(col, marks[k, r - win - 1], -1)
+                out = counts[k, r]
+                out[0] = 0
+                run = 0
+                for c in range(cols):
+                    run += col[c]
+                    out[c + 1] = run
+                r += 1
 
 
 @njit(cache=True, inline="always")
-def _kind_of(trav, visited, fr_ii, us_ii, win, r, c):  # pragma: no cover - numba
-    """Target kind of a cell (0: not a target) from the traversable mask and the integral images."""
-    if visited[r, c] or not trav[r, c]:
+def _add_row(col, row, sign):  # pragma: no cover - numba
+    for c in range(col.shape[0]):
+        col[c] += sign * row[c]
+
+
+@njit(cache=True)
+def _frontier_row(score, seen, r, out):  # pragma: no cover - numba
+    """``out[c]``: cell ``(r, c)`` is free with an unknown 4-neighbour (:func:`_is_frontier`), as 0 or 1."""
+    rows, cols = seen.shape
+    s_row = seen[r]
+    s_up = seen[r - 1 if r > 0 else r]  # a neighbour beyond the edge: the cell itself (seen when it matters)
+    s_down = seen[r + 1 if r + 1 < rows else r]
+    sc_row = score[r]
+    out[0] = s_row[0] and sc_row[0] <= 0 and not (s_up[0] and s_down[0] and s_row[min(1, cols - 1)])
+    for c in range(1, cols - 1):
+        out[c] = s_row[c] & (sc_row[c] <= 0) & ~(s_up[c] & s_down[c] & s_row[c - 1] & s_row[c + 1])
+    if cols > 1:
+        c = cols - 1
+        out[c] = s_row[c] and sc_row[c] <= 0 and not (s_up[c] and s_down[c] and s_row[c - 1])
+
+
+@njit(cache=True, inline="always")
+def _in_window(counts, k, r, c, win):  # pragma: no cover - numba
+    """How many cells of ``marks[k]`` (see :func:`_window_counts`) lie within ``win`` cells of ``(r, c)``."""
+    cols = counts.shape[2] - 1
+    return counts[k, r, min(cols, c + win + 1)] - counts[k, r, max(0, c - win)]
+
+
+@njit(cache=True, inline="always")
+def _kind_of(traversable, visited, counts, win, r, c):  # pragma: no cover - numba
+    """Target kind of a cell (0: not a target) from whether it is traversable and the window counts."""
+    if visited[r, c] or not traversable:
         return 0
-    if _box(us_ii, r, c, win) > 0:
+    if _in_window(counts, 1, r, c, win) > 0:
         return 1
-    if _box(fr_ii, r, c, win) > 0:
+    if _in_window(counts, 0, r, c, win) > 0:
         return 2
     return 0
 
@@ -110,13 +150,14 @@ def _kind_direct(score, seen, rb, covered, visited, off_r, off_c, win, r, c):  #
 
 
 @njit(cache=True)
-def _all_kinds(score, seen, rb, covered, visited, off_r, off_c, win, trav, fr_ii, us_ii, out):  # pragma: no cover
+def _all_kinds(score, seen, rb, covered, visited, off_r, off_c, win, trav, marks, counts, out):  # pragma: no cover
     rows, cols = score.shape
-    _integrals(score, seen, covered, fr_ii, us_ii)
-    _passable_mask(score, seen, rb, off_r, off_c, trav)
+    every = np.ones(rows, dtype=np.bool_)
+    _window_counts(score, seen, covered, win, every, every, marks, counts)
+    _passable_rows(score, seen, rb, off_r, off_c, every, trav)
     for r in range(rows):
         for c in range(cols):
-            out[r, c] = _kind_of(trav, visited, fr_ii, us_ii, win, r, c)
+            out[r, c] = _kind_of(trav[r, c], visited, counts, win, r, c)
 
 
 @njit(cache=True, inline="always")
@@ -130,26 +171,34 @@ def _push(parent, depth, queue, tail, u, v, d):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _bfs(score, seen, visited, trav, fr_ii, us_ii, gap, win, sr, sc, escape, claims, claim_r2, openm, parent, depth,
-         queue, path):  # pragma: no cover - numba
+def _bfs(score, seen, visited, trav, counts, gap, win, sr, sc, escape, claims, claim_r2, search,
+         path):  # pragma: no cover - numba
     """Breadth-first search from ``(sr, sc)`` for the best target; its path (start excluded) goes to ``path``.
 
     A path may enter traversable cells, and free cells within ``escape`` cells (Chebyshev) of the start; it
     steps diagonally only when both cells beside the step are open too. A target's score is its depth plus
     ``gap``; the best unclaimed target wins (the first of equal scores), else the best claimed one.
+    ``search`` holds the scratch parent, depth and queue of every cell (:func:`_search_buffers`); the parents
+    must be -1 on entry, and are again on return. ``trav`` holds the traversable cells; the search opens the
+    free cells near the start in it, and closes them again on return.
 
     Returns:
         ``(n, goal, kind)``: path length, flat goal cell (-1: none) and its target kind.
     """
     rows, cols = score.shape
-    for r in range(rows):
-        for c in range(cols):
-            openm[r, c] = trav[r, c]
-    for r in range(max(0, sr - escape), min(rows, sr + escape + 1)):
-        for c in range(max(0, sc - escape), min(cols, sc + escape + 1)):
+    parent = search[0]
+    depth = search[1]
+    queue = search[2]
+    r0 = max(0, sr - escape)
+    r1 = min(rows, sr + escape + 1)
+    c0 = max(0, sc - escape)
+    c1 = min(cols, sc + escape + 1)
+    saved = np.empty((r1 - r0, c1 - c0), dtype=np.bool_)  # the traversable cells near the start
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            saved[r - r0, c - c0] = trav[r, c]
             if _free(score, seen, r, c):
-                openm[r, c] = True
-    parent[:] = -1
+                trav[r, c] = True
     start = sr * cols + sc
     parent[start] = start
     depth[start] = 0
@@ -170,7 +219,10 @@ def _bfs(score, seen, visited, trav, fr_ii, us_ii, gap, win, sr, sc, escape, cla
             break  # nothing farther out can score better
         r = u // cols
         c = u - r * cols
-        kind = _kind_of(trav, visited, fr_ii, us_ii, win, r, c) if u != start else 0
+        kind = 0
+        if u != start:
+            near = r0 <= r < r1 and c0 <= c < c1
+            kind = _kind_of(saved[r - r0, c - c0] if near else trav[r, c], visited, counts, win, r, c)
         if kind:
             s = d + gap[r, c]
             claimed = False
@@ -188,10 +240,10 @@ def _bfs(score, seen, visited, trav, fr_ii, us_ii, gap, win, sr, sc, escape, cla
             elif s < best_score:
                 best, best_score, best_kind = u, s, kind
         # neighbours in a fixed order: E, N, W, S, then NE, NW, SW, SE (no corner cutting)
-        e = c + 1 < cols and openm[r, c + 1]
-        n = r + 1 < rows and openm[r + 1, c]
-        w = c > 0 and openm[r, c - 1]
-        so = r > 0 and openm[r - 1, c]
+        e = c + 1 < cols and trav[r, c + 1]
+        n = r + 1 < rows and trav[r + 1, c]
+        w = c > 0 and trav[r, c - 1]
+        so = r > 0 and trav[r - 1, c]
         if e:
             tail = _push(parent, depth, queue, tail, u, u + 1, d)
         if n:
@@ -200,23 +252,28 @@ def _bfs(score, seen, visited, trav, fr_ii, us_ii, gap, win, sr, sc, escape, cla
             tail = _push(parent, depth, queue, tail, u, u - 1, d)
         if so:
             tail = _push(parent, depth, queue, tail, u, u - cols, d)
-        if n and e and openm[r + 1, c + 1]:
+        if n and e and trav[r + 1, c + 1]:
             tail = _push(parent, depth, queue, tail, u, u + cols + 1, d)
-        if n and w and openm[r + 1, c - 1]:
+        if n and w and trav[r + 1, c - 1]:
             tail = _push(parent, depth, queue, tail, u, u + cols - 1, d)
-        if so and w and openm[r - 1, c - 1]:
+        if so and w and trav[r - 1, c - 1]:
             tail = _push(parent, depth, queue, tail, u, u - cols - 1, d)
-        if so and e and openm[r - 1, c + 1]:
+        if so and e and trav[r - 1, c + 1]:
             tail = _push(parent, depth, queue, tail, u, u - cols + 1, d)
     if best < 0:
         best, best_kind = backup, backup_kind
-    if best < 0:
-        return 0, -1, 0
-    n_path = depth[best]
-    v = best
-    for q in range(n_path - 1, -1, -1):
-        path[q] = v
-        v = parent[v]
+    n_path = 0
+    if best >= 0:
+        n_path = depth[best]
+        v = best
+        for q in range(n_path - 1, -1, -1):
+            path[q] = v
+            v = parent[v]
+    for q in range(tail):  # every cell with a parent was queued
+        parent[queue[q]] = -1
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            trav[r, c] = saved[r - r0, c - c0]
     return n_path, best, best_kind
 
 
@@ -304,15 +361,17 @@ def gap_to_uncovered(covered: np.ndarray) -> np.ndarray:
     return out
 
 
-def _integral_buffers(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Scratch integral images of frontier and seen uncovered cells for :func:`_integrals`."""
+def _window_buffers(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Scratch ``(marks, counts)`` of :func:`_window_counts`."""
     rows, cols = shape
-    return np.zeros((rows + 1, cols + 1), dtype=np.int32), np.zeros((rows + 1, cols + 1), dtype=np.int32)
+    return np.zeros((2, rows, cols), dtype=np.int32), np.zeros((2, rows, cols + 1), dtype=np.int32)
 
 
-def _search_buffers(n_cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Scratch ``(parent, depth, queue)`` of :func:`_bfs` on a grid of ``n_cells`` cells."""
-    return np.zeros(n_cells, dtype=np.int64), np.zeros(n_cells, dtype=np.int64), np.zeros(n_cells, dtype=np.int64)
+def _search_buffers(n_cells: int) -> np.ndarray:
+    """Scratch parent (all -1), depth and queue ``(3, n_cells)`` of :func:`_bfs` on a grid of ``n_cells`` cells."""
+    search = np.zeros((3, n_cells), dtype=np.int64)
+    search[0] = -1
+    return search
 
 
 def _mask(grid: KnowledgeGrid, mask: np.ndarray | None) -> np.ndarray:
@@ -343,7 +402,7 @@ def target_kinds(grid: KnowledgeGrid, covered: np.ndarray, visited: np.ndarray |
     off_r, off_c = _offsets(clearance, grid.resolution)
     out = np.zeros(grid.shape, dtype=np.int8)
     _all_kinds(grid.score, grid.seen, _mask(grid, robots), _mask(grid, covered), _mask(grid, visited), off_r,
-               off_c, int(window), np.zeros(grid.shape, dtype=np.bool_), *_integral_buffers(grid.shape), out)
+               off_c, int(window), np.zeros(grid.shape, dtype=np.bool_), *_window_buffers(grid.shape), out)
     return out
 
 
@@ -374,15 +433,16 @@ def find_path(grid: KnowledgeGrid, start: tuple[int, int], covered: np.ndarray,
     covered = _mask(grid, covered)
     claims = np.full((0, 2), -1, dtype=np.int64) if claims is None else np.asarray(claims, dtype=np.int64)
     off_r, off_c = _offsets(clearance, grid.resolution)
-    fr_ii, us_ii = _integral_buffers(grid.shape)
-    _integrals(grid.score, grid.seen, covered, fr_ii, us_ii)
+    marks, counts = _window_buffers(grid.shape)
+    every = np.ones(rows, dtype=np.bool_)
+    _window_counts(grid.score, grid.seen, covered, int(window), every, every, marks, counts)
     trav = np.zeros(grid.shape, dtype=np.bool_)
-    _passable_mask(grid.score, grid.seen, _mask(grid, robots), off_r, off_c, trav)
+    _passable_rows(grid.score, grid.seen, _mask(grid, robots), off_r, off_c, every, trav)
     n_cells = rows * cols
     path = np.zeros(n_cells, dtype=np.int64)
-    n, _, kind = _bfs(grid.score, grid.seen, _mask(grid, visited), trav, fr_ii, us_ii,
+    n, _, kind = _bfs(grid.score, grid.seen, _mask(grid, visited), trav, counts,
                       gap_weight * gap_to_uncovered(covered), int(window), int(start[0]), int(start[1]), int(escape),
-                      claims.reshape(-1, 2), float((claim_radius / grid.resolution) ** 2),
-                      np.zeros(grid.shape, dtype=np.bool_), *_search_buffers(n_cells), path)
+                      claims.reshape(-1, 2), float((claim_radius / grid.resolution) ** 2), _search_buffers(n_cells),
+                      path)
     cells = path[:n]
     return np.stack([cells // cols, cells % cols], axis=1), int(kind)
