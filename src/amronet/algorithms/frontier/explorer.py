@@ -7,9 +7,10 @@ import math
 import numpy as np
 
 from amronet.algorithms.explorers import Explorer, register_explorer
+from amronet.algorithms.frontier.distance import gap_to_uncovered
 from amronet.algorithms.frontier.knowledge import KnowledgeGrid, _offsets, _paint_covered, _paint_nodes
 from amronet.algorithms.frontier.navigation import _navigate
-from amronet.algorithms.frontier.planning import _search_buffers, _window_buffers, gap_to_uncovered
+from amronet.algorithms.frontier.planning import _search_buffers, _window_buffers
 from amronet.algorithms.frontier.state import _APPR, _GOAL, _I_LOOK, _KIND, _LAST_PLAN, _N_STATE, _REASON, STUCK_RADIUS
 from amronet.motion import random_walk
 from amronet.sensing import beam_angles
