@@ -32,12 +32,22 @@ from amronet.sim import Simulation, move, sense
 from amronet.streams import RunStreams
 from amronet.world.occupancy import OccupancyMap
 
-__all__ = ["BatchSimulation", "batchable"]
+__all__ = ["BatchSimulation", "batchable", "run_seeds"]
 
 
 def batchable(scenario: Scenario) -> bool:
     """Whether runs of ``scenario`` can be stepped together by :class:`BatchSimulation`."""
     return ALGORITHMS[scenario.algorithm.name].batchable and scenario.agents.per_base == 0
+
+
+def run_seeds(scenario: Scenario, seeds: list[int]) -> list[RunResult]:
+    """Run ``scenario`` once per seed: stepped together when it is :func:`batchable`, else one by one.
+
+    Either way every result is the one :meth:`Simulation.run <amronet.sim.Simulation.run>` gives for its seed.
+    """
+    if len(seeds) > 1 and batchable(scenario):
+        return BatchSimulation(scenario, seeds).run()
+    return [Simulation(scenario, int(seed)).run() for seed in seeds]
 
 
 class BatchSimulation:

@@ -32,7 +32,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictInt
 from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
 from amronet.algorithms.explorers import EXPLORERS
 from amronet.algorithms.goto import GoalSteering
-from amronet.algorithms.references import _track_row, check_loss_band
+from amronet.algorithms.references import check_loss_band, track_row
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.errors import ScenarioError
 from amronet.motion import path_clear
@@ -73,7 +73,7 @@ def _track_agents(agents, current, is_reference, status, indptr, indices, dist, 
     """Track the agents' references in place and count who must act this step.
 
     For every agent ``agents[m]``: its current reference ``current[agents[m]]`` is updated
-    (:func:`~amronet.algorithms.references._track_row`), it takes that reference's status (when it has one), and
+    (:func:`~amronet.algorithms.references.track_row`), it takes that reference's status (when it has one), and
     ``nearest_d[m]`` and ``other[m]`` get the distance to the nearest reference in range and the nearest
     reference of another status. Agents are never references, so adopting a status does not change what the
     other agents see.
@@ -86,7 +86,7 @@ def _track_agents(agents, current, is_reference, status, indptr, indices, dist, 
     n_losing = 0
     for m in range(agents.shape[0]):
         a = agents[m]
-        cur, near, o, _ = _track_row(a, current[a], is_reference, status, indptr, indices, dist, want_other)
+        cur, near, o, _ = track_row(a, current[a], is_reference, status, indptr, indices, dist, want_other)
         current[a] = cur
         nearest_d[m] = near
         other[m] = o

@@ -35,7 +35,7 @@ def check_loss_band(loss_margin: float, r_c: float, step: float, who: str) -> fl
         )
     return r_c - band
 
-__all__ = ["ReferenceView", "check_loss_band", "track_references"]
+__all__ = ["ReferenceView", "check_loss_band", "track_references", "track_row"]
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ def _nearest_other(lo, hi, s_cur, is_reference, status, indices, dist):  # pragm
 
 
 @njit(cache=True)
-def _track_row(i, cur, is_reference, status, indptr, indices, dist, want_other):  # pragma: no cover - numba
+def track_row(i, cur, is_reference, status, indptr, indices, dist, want_other):  # pragma: no cover - numba
     """Track one robot ``i`` whose current reference is ``cur``: ``(current, nearest_distance, other, other_d)``.
 
     One pass over the row; a second only when the current reference changed (rare in steady state).
@@ -114,9 +114,9 @@ def _track_row(i, cur, is_reference, status, indptr, indices, dist, want_other):
 @njit(cache=True)
 def _track(who, current, is_reference, status, indptr, indices, dist, want_other,
            new_current, nearest_d, other, other_d):  # pragma: no cover - numba
-    """:func:`_track_row` for every robot of ``who``."""
+    """:func:`track_row` for every robot of ``who``."""
     for m in range(who.shape[0]):
-        new_current[m], nearest_d[m], other[m], other_d[m] = _track_row(
+        new_current[m], nearest_d[m], other[m], other_d[m] = track_row(
             who[m], current[m], is_reference, status, indptr, indices, dist, want_other)
 
 

@@ -34,16 +34,10 @@ def run_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
     Returns:
         One :func:`run_job` result per job, in order.
     """
-    from amronet.batch import BatchSimulation, batchable
+    from amronet.batch import run_seeds
     from amronet.scenario import load_scenario
-    from amronet.sim import Simulation
 
-    scenario = load_scenario(jobs[0]["scenario"])
-    seeds = [job["seed"] for job in jobs]
-    if len(jobs) > 1 and batchable(scenario):
-        results = BatchSimulation(scenario, seeds).run()
-    else:
-        results = [Simulation(scenario, seed).run() for seed in seeds]
+    results = run_seeds(load_scenario(jobs[0]["scenario"]), [job["seed"] for job in jobs])
     outs = []
     for job, result in zip(jobs, results, strict=True):
         out = {"labels": job.get("labels", {}), "seed": job["seed"], "summary": result.summary}

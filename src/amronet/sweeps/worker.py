@@ -68,10 +68,10 @@ def execute_batch(job: dict[str, Any]) -> list[dict[str, Any]]:
     if len(seeds) > 1:
         out: dict[str, Any] = {"host": socket.gethostname(), "amronet_version": __version__}
         try:
-            from amronet.batch import BatchSimulation
+            from amronet.batch import run_seeds
             from amronet.scenario import load_scenario
 
-            results = BatchSimulation(load_scenario(job["scenario"]), seeds).run()
+            results = run_seeds(load_scenario(job["scenario"]), seeds)
         except Exception:
             pass  # each run again on its own, below, so that it records its own outcome
         else:
