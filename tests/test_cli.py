@@ -24,8 +24,8 @@ def test_run_preset_writes_all_outputs(tmp_path, capsys):
     code, cap = run_cli("run", "--preset", "self-spreading-6x6", "--seed", "3", "--out", str(out), *FAST,
                         capsys=capsys)
     assert code == 0, cap.err
-    assert sorted(p.name for p in out.iterdir()) == ["network.json", "snapshot.png", "summary.json",
-                                                      "timeseries.csv"]
+    assert sorted(p.name for p in out.iterdir()) == [".amronet-manifest.json", "network.json", "snapshot.png",
+                                                      "summary.json", "timeseries.csv"]
     s = json.loads((out / "summary.json").read_text())
     for key in ("algorithm", "map", "seed", "r_c", "sim_time_s", "steps", "terminated", "routers_deployed",
                 "nodes_total", "coverage", "connected_coverage", "coverage_method", "agents_connected_fraction",

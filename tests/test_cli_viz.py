@@ -40,7 +40,8 @@ def _error(capsys) -> str:
 
 def test_run_record_writes_the_recording_with_the_other_files(recorded, plain):
     names = sorted(p.name for p in recorded.iterdir())
-    assert names == ["network.json", "recording.npz", "snapshot.png", "summary.json", "timeseries.csv"]
+    assert names == [".amronet-manifest.json", "network.json", "recording.npz", "snapshot.png", "summary.json",
+                     "timeseries.csv"]
     with np.load(recorded / "recording.npz") as data:
         assert data["steps"].tolist() == list(range(0, 201, 5))
     assert not (plain / "recording.npz").exists()

@@ -90,7 +90,7 @@ def test_reproduce_retries_failed_runs_only_with_retry_failed(tmp_path, capsys):
 def test_outputs_get_the_usual_permissions(tmp_path):
     import stat
 
-    from amronet.results import write_file_atomically, write_files_atomically
+    from amronet.outputs.files import write_file_atomically, write_files_atomically
 
     def mode(path):
         return stat.S_IMODE(path.stat().st_mode)

@@ -21,12 +21,14 @@ __all__ = ["main"]
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from amronet.outputs.files import check_output_folder
     from amronet.results import RunResult  # noqa: F401 - import cost paid here, not for --help
     from amronet.scenario import load_scenario, parse_override
     from amronet.sim import Simulation
 
     if (args.scenario is None) == (args.preset is None):
         raise AmronetError("run: give either a scenario file or --preset NAME (amronet presets lists them)")
+    check_output_folder(args.out)
     overrides = dict(parse_override(item) for item in args.set or [])
     scenario = load_scenario(args.scenario if args.scenario is not None else args.preset, overrides)
     sim = Simulation(scenario, args.seed)
@@ -74,7 +76,7 @@ def _cmd_maps_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_maps_show(args: argparse.Namespace) -> int:
-    from amronet.results import write_file_atomically
+    from amronet.outputs.files import write_file_atomically
     from amronet.viz import save_map_picture
     from amronet.world.builtin import resolve_map
 
@@ -110,15 +112,20 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from amronet.experiments.common import STORE_FILES
     from amronet.experiments.registry import FIGURES
+    from amronet.outputs.files import check_output_folder
 
     if args.workers is not None and args.workers < 1:
         raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
     names = list(FIGURES) if args.figure == "all" else [args.figure]
+    outs = {name: Path(args.out or "runs") / name if args.figure == "all" else Path(args.out or f"runs/{name}")
+            for name in names}
+    for out in outs.values():  # before any run: a folder that holds a user's files is refused, untouched
+        check_output_folder(out, keep=STORE_FILES)
     dask = args.scheduler is not None or args.cluster is not None
     with make_executor_from_args(args) if dask else contextlib.nullcontext() as executor:
-        for name in names:
-            out = Path(args.out or "runs") / name if args.figure == "all" else Path(args.out or f"runs/{name}")
+        for name, out in outs.items():
             store = Path(args.store) if args.store else out / "results.sqlite"
             report = FIGURES[name].run(out, quick=args.quick, workers=args.workers, show_progress=not args.quiet,
                                        explorer=args.explorer, time_limit=args.time_limit, store=store,

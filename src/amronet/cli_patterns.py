@@ -102,7 +102,7 @@ def cmd_patterns(args: argparse.Namespace) -> int:
     area, what = _area(args, r)
     placements = place_all(area, r, steps=args.steps, tol=args.tol)
     if out is not None:
-        from amronet.results import write_file_atomically
+        from amronet.outputs.files import write_file_atomically
         from amronet.viz.patterns import save_patterns_figure
 
         write_file_atomically(out, lambda tmp: save_patterns_figure(placements, area, r, tmp))

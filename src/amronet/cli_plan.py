@@ -24,8 +24,12 @@ __all__ = ["add_parsers", "cmd_plan"]
 
 def cmd_plan(args: argparse.Namespace) -> int:
     """Run ``amronet plan`` (see the module docstring)."""
+    from amronet.outputs.files import check_output_folder
     from amronet.planning import plan, write_plan
 
+    keep = _store_in(args.store, args.out)
+    if args.out is not None:
+        check_output_folder(args.out, keep=keep)
     bases = [parse_base(b) for b in args.base or []]
     if not bases:
         raise AmronetError("--base: give at least one base station as --base X,Y")
@@ -38,7 +42,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                  retry_failed=args.retry_failed)
     picture = None
     if args.out:
-        write_plan(p, args.out)
+        write_plan(p, args.out, keep=keep)
         if p.typical_seed is not None:
             picture = str(Path(args.out) / "typical.png")
     if args.json:
@@ -50,6 +54,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
     for line in p.warnings if not args.json else []:
         print(f"amronet: warning: {line}", file=sys.stderr)
     return 0 if p.recommended is not None else 1
+
+
+def _store_in(store: str | None, out: str | None) -> tuple[str, ...]:
+    """The store's file name when ``--store`` lies in the ``--out`` folder (it is kept there), else nothing."""
+    if store is None or out is None or Path(store).resolve().parent != Path(out).resolve():
+        return ()
+    return (Path(store).name,)
 
 
 def add_parsers(subparsers: argparse._SubParsersAction) -> None:

@@ -94,6 +94,7 @@ def cmd_results(args: argparse.Namespace) -> int:
     """Run ``amronet results`` (see the module docstring)."""
     from rich.table import Table
 
+    from amronet.outputs.files import check_output_folder
     from amronet.sweeps import ResultStore
     from amronet.sweeps.tables import export_tables
 
@@ -104,6 +105,7 @@ def cmd_results(args: argparse.Namespace) -> int:
     with ResultStore(args.store, must_exist=True, option="STORE") as store:
         sweep_id = store.find_sweep(args.sweep) if args.sweep else None
         if args.export:
+            check_output_folder(args.out)
             counts = export_tables(store, args.export, args.out, sweep_id)
             print(f"wrote {args.out}/: " + ", ".join(f"{name} ({n} rows)" for name, n in counts.items()))
             return 0

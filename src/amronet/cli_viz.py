@@ -141,8 +141,8 @@ def _snapshot_from_network(folder: Path, dpi: float) -> Figure:
 
 
 def _cmd_snapshot(args: argparse.Namespace) -> int:
+    from amronet.outputs.files import write_file_atomically
     from amronet.recording import load_recording
-    from amronet.results import write_file_atomically
     from amronet.viz.decorations import save_figure
     from amronet.viz.recorded import recording_snapshot
 
@@ -170,8 +170,8 @@ def _cmd_snapshot(args: argparse.Namespace) -> int:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
+    from amronet.outputs.files import write_file_atomically
     from amronet.recording import load_recording
-    from amronet.results import write_file_atomically
     from amronet.viz.recorded import check_animation_options, write_animation
 
     folder = _run_folder(args.run)
@@ -192,8 +192,8 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
+    from amronet.outputs.files import write_file_atomically
     from amronet.recording import load_recording
-    from amronet.results import write_file_atomically
     from amronet.viz.recorded import check_frame_options
     from amronet.viz.replay import replay_html
 

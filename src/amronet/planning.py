@@ -277,15 +277,21 @@ def typical_picture(p: Plan) -> bytes | None:
     return result.snapshot_png()
 
 
-def write_plan(p: Plan, out_dir: str | Path) -> Path:
-    """Write ``plan.json``, ``plan.md`` and ``typical.png`` into ``out_dir`` (replaced atomically)."""
+def write_plan(p: Plan, out_dir: str | Path, keep: tuple[str, ...] = ()) -> Path:
+    """Write ``plan.json``, ``plan.md`` and ``typical.png`` into ``out_dir`` (replaced atomically).
+
+    Args:
+        p: The plan.
+        out_dir: The folder (see :func:`amronet.outputs.files.write_files_atomically`).
+        keep: Files of the folder to keep (a result store that lies in it).
+    """
     import json
 
-    from amronet.results import write_files_atomically
+    from amronet.outputs.files import write_files_atomically
 
     picture = typical_picture(p)
     files = {"plan.json": (json.dumps(p.to_dict(), indent=2) + "\n").encode(),
              "plan.md": p.markdown("typical.png" if picture else None).encode()}
     if picture is not None:
         files["typical.png"] = picture
-    return write_files_atomically(Path(out_dir), files)
+    return write_files_atomically(Path(out_dir), files, keep=keep)

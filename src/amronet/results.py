@@ -1,18 +1,14 @@
 """The result of a run and its files: ``summary.json``, ``timeseries.csv``, ``network.json``, ``snapshot.png``.
 
-Files are written atomically as a set: everything is rendered in memory, written into a hidden staging folder
-beside the output folder and renamed into place at the end, so an interrupted or failed run leaves either the
-previous output or the complete new one, never half-written files.
+Files are written atomically as a set, and never over files amronet did not write
+(:mod:`amronet.outputs.files`): an interrupted or failed run leaves either the previous output or the complete new
+one, never half-written files.
 """
 
 from __future__ import annotations
 
-import functools
 import io
 import json
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -20,14 +16,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from amronet import __version__
-from amronet.errors import AmronetError
+from amronet.outputs.files import write_files_atomically
 from amronet.robots import KIND_NAMES, STATE_NAMES, Kind
 
 if TYPE_CHECKING:
     from amronet.recording import Recorder
     from amronet.sim import Metrics, Simulation
 
-__all__ = ["RunResult", "write_file_atomically", "write_files_atomically"]
+__all__ = ["RunResult"]
 
 TIMESERIES_COLUMNS = ("t", "coverage", "connected_coverage", "routers_deployed", "components")
 
@@ -164,84 +160,6 @@ class RunResult:
     def save(self, out_dir: str | Path, snapshot: bool = True) -> Path:
         """Write the output files into ``out_dir`` atomically (see the module docstring)."""
         return write_files_atomically(Path(out_dir), self.files(snapshot=snapshot))
-
-
-def write_files_atomically(out_dir: Path, files: dict[str, bytes], keep: tuple[str, ...] = ()) -> Path:
-    """Write ``files`` as the complete content of ``out_dir``, all at once.
-
-    An existing ``out_dir`` is replaced only after the new content is complete on disk. Files of the old
-    folder named in ``keep`` (e.g. a result store) are carried over by hard link (or copy), so they exist at
-    every moment.
-
-    Raises:
-        AmronetError: ``out_dir`` exists and is not a folder, or cannot be written.
-    """
-    out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise AmronetError(f"--out: {str(out_dir)!r} exists and is not a folder; choose another path")
-    parent = out_dir.parent if str(out_dir.parent) else Path(".")
-    try:
-        parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=parent))
-    except OSError as exc:
-        raise AmronetError(f"--out: cannot write to {str(parent)!r}: {exc.strerror}") from None
-    try:
-        os.chmod(staging, _permissions(0o777))  # mkdtemp makes it private; results are as shareable as any file
-        for name, content in files.items():
-            with open(staging / name, "wb") as fh:
-                fh.write(content)
-                fh.flush()
-                os.fsync(fh.fileno())
-        for name in keep:
-            if name not in files and (out_dir / name).is_file():
-                try:
-                    os.link(out_dir / name, staging / name)
-                except OSError:
-                    shutil.copy2(out_dir / name, staging / name)
-        old = None
-        if out_dir.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=parent))
-            os.replace(out_dir, old / "previous")
-        os.replace(staging, out_dir)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    return out_dir
-
-
-def write_file_atomically(path: Path, write) -> Path:
-    """Create ``path`` by calling ``write(tmp_path)`` on a temporary sibling and renaming it into place."""
-    path = Path(path)
-    if path.exists() and path.is_dir():
-        raise AmronetError(f"--out: {str(path)!r} is a folder; give a file name")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.tmp-", suffix=path.suffix, dir=path.parent)
-        os.close(fd)
-    except OSError as exc:
-        raise AmronetError(f"--out: cannot write {str(path)!r}: {exc.strerror}") from None
-    try:
-        write(Path(tmp))
-        os.chmod(tmp, _permissions(0o666))  # mkstemp makes it private
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-@functools.cache
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def _permissions(mode: int) -> int:
-    """``mode`` as the user's umask leaves it: what a plain ``open()`` or ``mkdir()`` would have given."""
-    return mode & ~_umask()
 
 
 def _routers_connected(sim: Simulation) -> float:

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from amronet.results import write_files_atomically
+from amronet.outputs.files import write_files_atomically
 
 __all__ = ["STORE_FILES", "Claim", "agent_scenario", "claims_markdown", "csv_text", "write_outputs"]
 

@@ -81,7 +81,7 @@ def save_plot(rows: list[dict[str, Any]], x: str, y: str, out: str | Path, hue: 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from amronet.results import write_file_atomically
+    from amronet.outputs.files import write_file_atomically
     from amronet.viz.decorations import save_figure
 
     out = Path(out)

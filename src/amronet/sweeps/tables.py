@@ -153,7 +153,7 @@ def tables(store: ResultStore, sweep_id: int | None = None) -> dict[str, tuple[l
 def export_tables(store: ResultStore, fmt: str, out_dir: str | Path, sweep_id: int | None = None) -> dict[str, int]:
     """Write ``runs``, ``sweeps``, ``sweep_runs`` and ``timeseries`` as ``.csv`` or ``.parquet`` into ``out_dir``.
 
-    The folder is written atomically as a whole (:func:`amronet.results.write_files_atomically`).
+    The folder is written atomically as a whole (:func:`amronet.outputs.files.write_files_atomically`).
 
     Returns:
         File name → number of rows.
@@ -161,7 +161,7 @@ def export_tables(store: ResultStore, fmt: str, out_dir: str | Path, sweep_id: i
     Raises:
         AmronetError: An unknown format, or Parquet without pyarrow.
     """
-    from amronet.results import write_files_atomically
+    from amronet.outputs.files import write_files_atomically
 
     if fmt not in ("csv", "parquet"):
         raise AmronetError(f"--export: unknown format {fmt!r}; choose csv or parquet")
