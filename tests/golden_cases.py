@@ -1,0 +1,112 @@
+"""Fixed-seed runs whose outputs must stay bit for bit what they were (see ``tests/test_golden.py``).
+
+Every case is a scenario, a seed and a short time limit, chosen to exercise every algorithm, explorer, the
+batched path and every paper figure. A case's fingerprint is the SHA-256 of ``network.json``, of
+``timeseries.csv`` and of ``summary.json`` without its wall-clock fields; a figure's is that of its runs table
+without the wall-time column and of its other CSV files.
+
+Regenerate ``tests/golden/outputs.json`` only for a change that is meant to change results, and say so in the
+commit: ``python tests/golden_cases.py > tests/golden/outputs.json``.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+RUNS = {
+    "self-spreading-6x6": ("self-spreading-6x6", 3, {"sim.time_limit": 60}),
+    "self-spreading-obstacles-global": ("self-spreading-obstacles-6x6", 5,
+                                        {"sim.time_limit": 60, "algorithm.params.triangular": "global"}),
+    "self-spreading-autolab": ("self-spreading-autolab", 1, {"sim.time_limit": 30}),
+    "self-spreading-office-2bs": ("self-spreading-office", 2, {"sim.time_limit": 30}),
+    "agent-assisted-random": ("agent-assisted-office", 1, {"sim.time_limit": 40}),
+    "agent-assisted-frontier-4bs": ("agent-assisted-office-4bs", 2,
+                                    {"sim.time_limit": 30, "algorithm.params.explorer": "frontier"}),
+    "agent-assisted-carried": ("agent-assisted-office", 4, {"sim.time_limit": 30, "agents.routers_carried": 3}),
+    "dssa-obstacles": ("dssa-obstacles-6x6", 1, {"sim.time_limit": 30}),
+    "dssa-open": ("dssa-6x6", 2, {"sim.time_limit": 20}),
+    "potential-field-obstacles": ("potential-field-obstacles-6x6", 1, {"sim.time_limit": 30}),
+}
+"""Single runs: name → (preset, seed, overrides)."""
+
+BATCHES = {
+    "batch-self-spreading-obstacles": ("self-spreading-obstacles-6x6", (1, 2, 3), {"sim.time_limit": 40}),
+    "batch-potential-field": ("potential-field-6x6", (4, 5, 6), {"sim.time_limit": 20}),
+}
+"""Batched runs (``amronet.batch.run_seeds``): name → (preset, seeds, overrides)."""
+
+FIGURES = ("fig5", "fig7", "fig10", "fig11")
+"""Paper figures, run with ``--quick``."""
+
+_WALL_FIELDS = ("wall_time_s",)
+
+
+def _sha(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def result_fingerprint(result) -> dict[str, str]:
+    """Digests of a run's ``network.json``, ``timeseries.csv`` and ``summary.json`` (less wall-clock fields)."""
+    files = result.files(snapshot=False)
+    summary = {k: v for k, v in json.loads(files["summary.json"]).items() if k not in _WALL_FIELDS}
+    return {"network.json": _sha(files["network.json"]), "timeseries.csv": _sha(files["timeseries.csv"]),
+            "summary": _sha(json.dumps(summary, sort_keys=True).encode()),
+            "coverage": f"{summary['coverage']:.6f}", "nodes_total": str(summary["nodes_total"])}
+
+
+def run_case(name: str) -> dict[str, str]:
+    """The fingerprint of single-run case ``name``."""
+    import amronet
+
+    preset, seed, overrides = RUNS[name]
+    return result_fingerprint(amronet.run(amronet.load_scenario(preset, overrides=overrides), seed=seed))
+
+
+def batch_case(name: str) -> list[dict[str, str]]:
+    """The fingerprints of batched case ``name``, in seed order."""
+    import amronet
+    from amronet.batch import run_seeds
+
+    preset, seeds, overrides = BATCHES[name]
+    return [result_fingerprint(r) for r in run_seeds(amronet.load_scenario(preset, overrides=overrides),
+                                                      list(seeds))]
+
+
+def _csv_without_wall_time(text: str) -> bytes:
+    rows = list(csv.reader(io.StringIO(text)))
+    if not rows or "wall_time_s" not in rows[0]:
+        return text.encode()
+    drop = rows[0].index("wall_time_s")
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerows([r[:drop] + r[drop + 1:] for r in rows])
+    return buf.getvalue().encode()
+
+
+def figure_case(name: str) -> dict[str, str]:
+    """Digests of the CSV files ``amronet reproduce NAME --quick`` writes (runs tables less wall time)."""
+    from amronet.experiments.registry import FIGURES as KNOWN
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / name
+        if name == "fig11":  # fig11 compares with a fig10 of the same runs in a sibling folder
+            KNOWN["fig10"].run(Path(tmp) / "fig10", quick=True, workers=1, show_progress=False)
+        KNOWN[name].run(out, quick=True, workers=1, show_progress=False)
+        return {p.name: _sha(_csv_without_wall_time(p.read_text())) for p in sorted(out.glob("*.csv"))}
+
+
+def all_cases() -> dict[str, object]:
+    """Every case's fingerprint (the content of ``tests/golden/outputs.json``)."""
+    return {"runs": {name: run_case(name) for name in RUNS},
+            "batches": {name: batch_case(name) for name in BATCHES},
+            "figures": {name: figure_case(name) for name in FIGURES}}
+
+
+if __name__ == "__main__":
+    json.dump(all_cases(), sys.stdout, indent=1, sort_keys=True)
+    sys.stdout.write("\n")
