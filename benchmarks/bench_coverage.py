@@ -1,4 +1,4 @@
-"""Time amronet.coverage: raster and exact coverage per call, and the alternative raster design.
+"""Time amronet.engine.coverage: raster and exact coverage per call, and the alternative raster design.
 
 Run: ``.venv/bin/python benchmarks/bench_coverage.py``. Prints one table; times are per call, the best of
 several batches after a warm-up call (numba compiles, or loads its cache, on the warm-up).
@@ -15,7 +15,7 @@ import time
 import numpy as np
 from numba import njit
 
-from amronet.coverage import CoverageArea
+from amronet.engine.coverage import CoverageArea
 from amronet.world.occupancy import OCCUPIED, OccupancyMap
 
 

@@ -1,4 +1,4 @@
-"""Benchmark the radio medium's neighbour table: amronet.neighbours.neighbour_csr vs cKDTree + csr_matrix.
+"""Benchmark the radio medium's neighbour table: amronet.engine.neighbours.neighbour_csr vs cKDTree + csr_matrix.
 
 Points are uniform in a square sized for a density of 3.5 points per r**2 (r = 1, mean degree ~11). The
 baseline is what the unit-disk medium did before: ``cKDTree(xy).query_pairs(r, output_type='ndarray')``, link
@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from amronet.neighbours import neighbour_csr
+from amronet.engine.neighbours import neighbour_csr
 
 DENSITY = 3.5  # points per r**2
 R = 1.0

@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from amronet.bench import _largest_free_region
-from amronet.recording import Recorder, Recording
+from amronet.outputs.recording import Recorder, Recording
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
+from amronet.sim.bench import _largest_free_region
 from amronet.world.builtin import resolve_map
 
 

@@ -15,12 +15,18 @@ from pathlib import Path
 from amronet.experiments.fig5 import run_fig5
 from amronet.experiments.fig7 import run_fig7
 from amronet.experiments.fig10 import run_coverage_over_time
+from amronet.experiments.options import RunOptions
+
+
+def _options(store: Path) -> RunOptions:
+    return RunOptions(show_progress=False, store=store)
+
 
 FIGURES = {
-    "fig5": lambda out, store: run_fig5(out, show_progress=False, store=store),
-    "fig7": lambda out, store: run_fig7(out, show_progress=False, store=store),
-    "fig10": lambda out, store: run_coverage_over_time("fig10", out, show_progress=False, store=store),
-    "fig11": lambda out, store: run_coverage_over_time("fig11", out, show_progress=False, store=store),
+    "fig5": lambda out, store: run_fig5(out, options=_options(store)),
+    "fig7": lambda out, store: run_fig7(out, options=_options(store)),
+    "fig10": lambda out, store: run_coverage_over_time("fig10", out, options=_options(store)),
+    "fig11": lambda out, store: run_coverage_over_time("fig11", out, options=_options(store)),
 }
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from amronet.bench import run_bench
+from amronet.sim.bench import run_bench
 
 CASES = ((30, 5000), (3000, 1000), (100_000, 30))
 

@@ -40,7 +40,7 @@ BATCHES = {
     "batch-self-spreading-obstacles": ("self-spreading-obstacles-6x6", (1, 2, 3), {"sim.time_limit": 40}),
     "batch-potential-field": ("potential-field-6x6", (4, 5, 6), {"sim.time_limit": 20}),
 }
-"""Batched runs (``amronet.batch.run_seeds``): name → (preset, seeds, overrides)."""
+"""Batched runs (``amronet.sim.batch.run_seeds``): name → (preset, seeds, overrides)."""
 
 FIGURES = ("fig5", "fig7", "fig10", "fig11")
 """Paper figures, run with ``--quick``."""
@@ -72,7 +72,7 @@ def run_case(name: str) -> dict[str, str]:
 def batch_case(name: str) -> list[dict[str, str]]:
     """The fingerprints of batched case ``name``, in seed order."""
     import amronet
-    from amronet.batch import run_seeds
+    from amronet.sim.batch import run_seeds
 
     preset, seeds, overrides = BATCHES[name]
     return [result_fingerprint(r) for r in run_seeds(amronet.load_scenario(preset, overrides=overrides),

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from amronet.engine.network import agents_connected, connected_to
+from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
-from amronet.network import agents_connected, connected_to
-from amronet.robots import Kind, State
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.world.space import clearance
@@ -28,7 +28,7 @@ def check_every_step(sim: Simulation, steps: int) -> None:
     for _ in range(steps):
         sim.step()
         sw = sim.swarm
-        network = sw.kind != Kind.AGENT
+        network = sw.role != Role.AGENT
         assert agents_connected(sim.table, sim.agents, sim.bases, network).all(), "an agent lost its connection"
         deployed = sw.deployed
         assert connected_to(sim.table, sim.bases, deployed)[deployed].all(), "a deployed router is cut off"
@@ -52,7 +52,7 @@ def test_agents_never_lose_their_connection(map_name, bases):
     assert (sw.state == State.REFERENCE).sum() >= 3
     assert sim.agents_connected_fraction == 1.0 and sim.agents_connected_min == 1.0
     # every released router carries a base station's status
-    routers = sw.kind == Kind.ROUTER
+    routers = sw.role == Role.ROUTER
     assert (sw.status[routers] >= 0).all() and set(sw.status[routers]) <= set(range(len(bases)))
 
 
@@ -80,16 +80,16 @@ def test_limited_routers_tether_the_agents():
     sc = agent_scenario(**{"agents.routers_carried": 2, "sim.time_limit": 300.0})
     sim = Simulation(sc, seed=4)
     check_every_step(sim, 1200)
-    assert (sim.swarm.kind == Kind.ROUTER).sum() <= 2 * 2
+    assert (sim.swarm.role == Role.ROUTER).sum() <= 2 * 2
     assert sim.controller.left[sim.agents].min() >= 0
 
 
 def test_released_router_is_next_to_the_agent_and_linked_to_its_reference():
     sim = Simulation(agent_scenario(), seed=5)
-    while (sim.swarm.kind == Kind.ROUTER).sum() == 0:
+    while (sim.swarm.role == Role.ROUTER).sum() == 0:
         sim.step()
     sw = sim.swarm
-    router = np.flatnonzero(sw.kind == Kind.ROUTER)[0]
+    router = np.flatnonzero(sw.role == Role.ROUTER)[0]
     gaps = np.linalg.norm(sw.xy[sim.agents] - sw.xy[router], axis=1)
     assert gaps.min() < 0.5
     assert np.linalg.norm(sw.xy[router] - sw.xy[sim.bases[0]]) <= sim.scenario.radio.r_c

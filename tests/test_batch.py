@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from amronet.batch import BatchSimulation, batchable
+from amronet.engine.radio import make_medium
+from amronet.engine.robots import Swarm
+from amronet.engine.streams import RunStreams, draw_per_run
 from amronet.errors import ScenarioError
 from amronet.experiments.fig10 import spreading_scenario
-from amronet.radio import make_medium
-from amronet.robots import Swarm
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
-from amronet.streams import RunStreams, draw_per_run
+from amronet.sim.batch import BatchSimulation, batchable
 from amronet.sweeps.engine import plan_batches
 from amronet.sweeps.worker import execute_batch, execute_job
 
@@ -31,7 +31,7 @@ def assert_same_run(alone, batched) -> None:
     for key, column in alone.timeseries.items():
         np.testing.assert_array_equal(column, batched.timeseries[key])
     assert alone.network == batched.network  # every robot's final position, state and status, bit for bit
-    sa, sb = alone.simulation, batched.simulation
+    sa, sb = alone.run, batched.run
     for field in ("xy", "heading", "state", "status", "distance"):
         np.testing.assert_array_equal(getattr(sa.swarm, field), getattr(sb.swarm, field))
     np.testing.assert_array_equal(sa.table.indices, sb.table.indices)

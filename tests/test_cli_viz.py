@@ -199,12 +199,12 @@ def test_mp4_without_encoder(recorded, tmp_path, capsys, monkeypatch):
     ],
 )
 def test_cheap_options_are_checked_before_the_recording_is_loaded(argv, message, tmp_path, capsys, monkeypatch):
-    import amronet.recording
+    import amronet.outputs.recording
 
     def never(*args, **kwargs):
         raise AssertionError("the recording was loaded before the options were checked")
 
-    monkeypatch.setattr(amronet.recording, "load_recording", never)
+    monkeypatch.setattr(amronet.outputs.recording, "load_recording", never)
     folder = tmp_path / "run"
     folder.mkdir()
     (folder / "recording.npz").write_bytes(b"not a recording")

@@ -1,4 +1,4 @@
-"""Tests of amronet.coverage: Eq. (1) by raster (cell centres) and exact (polygons), and how far apart."""
+"""Tests of amronet.engine.coverage: Eq. (1) by raster (cell centres) and exact (polygons), and how far apart."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from amronet.coverage import QUAD_SEGS, CoverageArea, disk_radius_area_preserving
+from amronet.engine.coverage import QUAD_SEGS, CoverageArea, disk_radius_area_preserving
 from amronet.world.loading import load_map_yaml
 from amronet.world.occupancy import OCCUPIED, OccupancyMap
 from amronet.world.space import reachable_free

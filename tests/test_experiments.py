@@ -5,8 +5,9 @@ from PIL import Image
 
 from amronet.cli import main
 from amronet.experiments.fig5 import run_fig5
+from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.experiments.stats import mean_ci
+from amronet.sweeps.stats import mean_ci
 
 
 def test_mean_ci_matches_t_interval():
@@ -28,7 +29,7 @@ def test_jobs_are_deterministic_and_ordered():
 
 def test_fig5_small_writes_runs_table_figure_and_claims(tmp_path):
     report = run_fig5(tmp_path / "f5", maps=("open-32x32",), radii=(10,), agents=(1, 2), starts=1,
-                      explorer="random", time_limit=2000.0, workers=1, show_progress=False)
+                      options=RunOptions(explorer="random", time_limit=2000.0, workers=1, show_progress=False))
     out = tmp_path / "f5"
     rows = list(csv.DictReader((out / "fig5_runs.csv").open()))
     assert len(rows) == 2 and {r["agents"] for r in rows} == {"1", "2"}

@@ -4,6 +4,11 @@ import numpy as np
 from PIL import Image
 
 from amronet.experiments.fig10 import _hold, _time_to_fraction, run_coverage_over_time
+from amronet.experiments.options import RunOptions
+
+
+def _options(time_limit: float) -> RunOptions:
+    return RunOptions(time_limit=time_limit, workers=1, show_progress=False)
 
 
 def test_hold_carries_the_last_value_past_the_end():
@@ -15,8 +20,7 @@ def test_hold_carries_the_last_value_past_the_end():
 
 
 def test_fig10_and_fig11_small(tmp_path):
-    f10 = run_coverage_over_time("fig10", tmp_path / "fig10", runs=2, time_limit=20.0, workers=1,
-                                 show_progress=False)
+    f10 = run_coverage_over_time("fig10", tmp_path / "fig10", runs=2, options=_options(20.0))
     out = tmp_path / "fig10"
     rows = list(csv.DictReader((out / "fig10_runs.csv").open()))
     assert len(rows) == 6 and {r["algorithm"] for r in rows} == {"self-spreading", "dssa", "potential-field"}
@@ -37,18 +41,16 @@ def test_fig10_and_fig11_small(tmp_path):
     assert Image.open(out / "fig10.png").size[0] > 800
 
     # Fig. 11 finds the Fig. 10 table next to it and compares final coverage
-    f11 = run_coverage_over_time("fig11", tmp_path / "fig11", runs=2, time_limit=20.0, workers=1,
-                                 show_progress=False)
+    f11 = run_coverage_over_time("fig11", tmp_path / "fig11", runs=2, options=_options(20.0))
     claims = {c.claim: c for c in f11["claims"]}
     assert "almost the same" in " ".join(c.paper for c in claims.values())
     assert all("not evaluated" not in c.verdict for c in claims.values())
-    mismatched = run_coverage_over_time("fig11", tmp_path / "fig11", runs=2, time_limit=10.0, workers=1,
-                                        show_progress=False)
+    mismatched = run_coverage_over_time("fig11", tmp_path / "fig11", runs=2, options=_options(10.0))
     verdicts = [c.verdict for c in mismatched["claims"]]
     assert any("not evaluated" in v for v in verdicts)
     assert any("20 s" in c.ours and "10 s" in c.ours for c in mismatched["claims"])
-    alone = run_coverage_over_time("fig11", tmp_path / "elsewhere" / "x", runs=1, time_limit=5.0, workers=1,
-                                   show_progress=False, algorithms=("self-spreading", "dssa"))
+    alone = run_coverage_over_time("fig11", tmp_path / "elsewhere" / "x", runs=1, options=_options(5.0),
+                                   algorithms=("self-spreading", "dssa"))
     assert any("not evaluated" in c.verdict for c in alone["claims"])
 
 

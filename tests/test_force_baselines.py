@@ -8,9 +8,9 @@ from hypothesis import strategies as st
 from amronet.algorithms.dssa import DSSA
 from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
 from amronet.algorithms.potential_field import PotentialField
+from amronet.engine.radio import UnitDisk
+from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
-from amronet.radio import UnitDisk
-from amronet.robots import Kind, State
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.world.space import clearance
@@ -87,7 +87,7 @@ def test_dssa_spreads_and_converges_by_its_stop_rules(map_name):
     assert s["stop_reason"] == "settled" and s["settled_at_s"] is not None and s["settled_at_s"] < 100
     assert s["coverage"] > start + 0.4
     assert s["stopped_by_oscillation"] + s["stopped_by_stability"] == 30
-    assert (sim.swarm.state[sim.swarm.kind == Kind.ROUTER] == State.REFERENCE).all()
+    assert (sim.swarm.state[sim.swarm.role == Role.ROUTER] == State.REFERENCE).all()
     # every move was limited by the robots' maximum speed
     assert (sim.swarm.distance <= sim.swarm.max_speed * s["sim_time_s"] + 1e-9).all()
 
@@ -103,7 +103,7 @@ def test_dssa_isolated_router_stops_by_the_stability_rule():
     # one router far from everybody feels no force, stands still and stops after stable_steps steps
     sc = scenario("dssa", params={"stable_steps": 7}, count=1, region=(0.6, 0.6), base=(2.0, 2.0))
     sim = Simulation(sc, seed=0)
-    router = np.flatnonzero(sim.swarm.kind == Kind.ROUTER)[0]
+    router = np.flatnonzero(sim.swarm.role == Role.ROUTER)[0]
     sim.swarm.xy[router] = (-2.0, -2.0)
     sim.table = sim.medium.update(sim.swarm.xy)
     for _ in range(6):
@@ -119,7 +119,7 @@ def test_dssa_oscillating_router_stops_at_the_centre_of_its_oscillation():
     sim = Simulation(sc, seed=0)
     ctl: DSSA = sim.controller
     sw = sim.swarm
-    r = np.flatnonzero(sw.kind == Kind.ROUTER)
+    r = np.flatnonzero(sw.role == Role.ROUTER)
     sw.xy[r] = (0.0, 0.0)
     ctl.anchor[r] = sw.xy[r]
     ctl.visit_sum[r] = sw.xy[r]
@@ -150,7 +150,7 @@ def test_constrained_coverage_router_settles_at_the_balance_distance():
     sim = Simulation(sc, seed=2)
     result = sim.run()
     assert result.summary["stop_reason"] == "settled"
-    router = np.flatnonzero(sim.swarm.kind == Kind.ROUTER)[0]
+    router = np.flatnonzero(sim.swarm.role == Role.ROUTER)[0]
     d = np.hypot(*(sim.swarm.xy[router] - sim.swarm.xy[sim.bases[0]]))
     assert d == pytest.approx(0.6, abs=0.03)
     assert result.summary["routers_connected_fraction"] == 1.0
@@ -170,7 +170,7 @@ def test_howard_field_pushes_a_router_out_of_range():
                   region=(0.3, 0.3))
     sim = Simulation(sc, seed=2)
     result = sim.run()
-    router = np.flatnonzero(sim.swarm.kind == Kind.ROUTER)[0]
+    router = np.flatnonzero(sim.swarm.role == Role.ROUTER)[0]
     assert np.hypot(*(sim.swarm.xy[router] - sim.swarm.xy[sim.bases[0]])) > 1.0
     assert result.summary["routers_connected_fraction"] == 0.0
 
@@ -181,7 +181,7 @@ def test_obstacle_forces_push_a_router_off_a_wall():
         sc = scenario("potential-field", params={"connectivity_k": 0, "obstacle_forces": obstacle_forces},
                       count=1, region=(0.6, 0.6), base=(2.0, 2.0), time_limit=5.0)
         sim = Simulation(sc, seed=0)
-        r = np.flatnonzero(sim.swarm.kind == Kind.ROUTER)[0]
+        r = np.flatnonzero(sim.swarm.role == Role.ROUTER)[0]
         x_wall = sim.world.omap.extent[0]
         sim.swarm.xy[r] = (x_wall + 0.13, -2.0)
         sim.swarm.heading[r] = np.pi
@@ -197,7 +197,7 @@ def test_obstacle_forces_push_a_router_off_a_wall():
 def test_same_seed_same_run(algorithm):
     a = Simulation(scenario(algorithm, map_name="obstacles-6x6", time_limit=20.0), seed=5).run()
     b = Simulation(scenario(algorithm, map_name="obstacles-6x6", time_limit=20.0), seed=5).run()
-    np.testing.assert_array_equal(a.simulation.swarm.xy, b.simulation.swarm.xy)
+    np.testing.assert_array_equal(a.run.swarm.xy, b.run.swarm.xy)
     np.testing.assert_array_equal(a.timeseries["coverage"], b.timeseries["coverage"])
 
 

@@ -7,29 +7,44 @@ import pytest
 
 import amronet
 from amronet.algorithms.explorers import EXPLORERS
-from amronet.algorithms.frontier import (
+from amronet.algorithms.explorers.frontier import (
     FRONTIER,
     HIT_GAIN,
+    REPLAN_REASONS,
     UNCOVERED,
     FrontierExplorer,
     KnowledgeGrid,
-    _kind_direct,
-    _offsets,
-    _passable_mask,
-    find_path,
     gap_to_uncovered,
-    target_kinds,
 )
-from amronet.algorithms.frontier.knowledge import _paint_covered, _paint_nodes, _passable, _passable_rows
-from amronet.algorithms.frontier.planning import (
-    _bfs,
-    _is_frontier,
-    _search_buffers,
-    _window_buffers,
-    _window_counts,
+from amronet.algorithms.explorers.frontier.knowledge import clearance_offsets, paint_covered, update_passable
+from amronet.algorithms.explorers.frontier.planning import (
+    kind_at,
+    search_buffers,
+    search_target,
+    update_window_counts,
+    window_buffers,
 )
 
 RES = 0.25
+
+
+def occupied(grid):
+    return grid.score > 0
+
+
+def free(grid):
+    return grid.seen & (grid.score <= 0)
+
+
+def unknown(grid):
+    return ~grid.seen
+
+
+def centres(grid, rows, cols):
+    """World centres ``(..., 2)`` of cells."""
+    ox, oy = grid.origin
+    return np.stack([ox + (np.asarray(cols) + 0.5) * grid.resolution,
+                     oy + (np.asarray(rows) + 0.5) * grid.resolution], axis=-1)
 
 
 def hand_grid(rows, cols, occupied=(), unknown=()):
@@ -46,10 +61,45 @@ def hand_grid(rows, cols, occupied=(), unknown=()):
 
 
 def traversable(grid, clearance, robots=None):
-    off_r, off_c = _offsets(clearance, grid.resolution)
+    off_r, off_c = clearance_offsets(clearance, grid.resolution)
     out = np.zeros(grid.shape, dtype=bool)
-    _passable_mask(grid.score, grid.seen, np.zeros(grid.shape, bool) if robots is None else robots, off_r, off_c, out)
+    update_passable(grid.score, grid.seen, mask(grid, robots), off_r, off_c, np.ones(grid.shape[0], dtype=bool), out)
     return out
+
+
+def mask(grid, cells):
+    return np.zeros(grid.shape, dtype=bool) if cells is None else np.asarray(cells, dtype=bool)
+
+
+def target_kinds(grid, covered, visited=None, robots=None, *, clearance=0.3, window=2):
+    """Target kind of every cell as the search sees it: from the traversable cells and the window counts."""
+    rows, cols = grid.shape
+    marks, counts = window_buffers(grid.shape)
+    every = np.ones(rows, dtype=bool)
+    update_window_counts(grid.score, grid.seen, mask(grid, covered), window, every, every, marks, counts)
+    c = np.arange(cols)
+    near = counts[:, :, np.minimum(cols, c + window + 1)] - counts[:, :, np.maximum(0, c - window)]
+    kinds = np.where(near[1] > 0, UNCOVERED, np.where(near[0] > 0, FRONTIER, 0)).astype(np.int8)
+    kinds[~traversable(grid, clearance, robots) | mask(grid, visited)] = 0
+    return kinds
+
+
+def find_path(grid, start, covered, visited=None, robots=None, claims=None, *, clearance=0.3, window=2,
+              claim_radius=0.0, escape=1, gap_weight=1.5):
+    """Plan as an agent does: ``(cells (n, 2), kind)`` of the path to the best target (empty, 0: none)."""
+    rows, cols = grid.shape
+    covered = mask(grid, covered)
+    claims = np.full((0, 2), -1, dtype=np.int64) if claims is None else np.asarray(claims, dtype=np.int64)
+    marks, counts = window_buffers(grid.shape)
+    every = np.ones(rows, dtype=bool)
+    update_window_counts(grid.score, grid.seen, covered, window, every, every, marks, counts)
+    path = np.zeros(rows * cols, dtype=np.int64)
+    n, _, kind = search_target(grid.score, grid.seen, mask(grid, visited), traversable(grid, clearance, robots),
+                               counts, gap_weight * gap_to_uncovered(covered), window, start[0], start[1], escape,
+                               claims.reshape(-1, 2), float((claim_radius / grid.resolution) ** 2),
+                               search_buffers(rows * cols), path)
+    cells = path[:n]
+    return np.stack([cells // cols, cells % cols], axis=1), int(kind)
 
 
 def only_uncovered(grid, *cells):
@@ -75,45 +125,46 @@ def assert_valid_path(path, start, trav, escape=1):
 
 def test_a_beam_marks_the_cells_before_its_reading_free_and_the_cell_at_it_occupied():
     grid = KnowledgeGrid((0.0, 4.0, 0.0, 4.0), RES)
-    assert grid.shape == (16, 16) and grid.unknown.all()
+    assert grid.shape == (16, 16) and unknown(grid).all()
     # beams east, north, west, south; the north one sees nothing within its 3 m
     grid.integrate(np.array([[0.6, 0.6]]), np.array([0.0]), np.array([[2.0, 3.0, 0.3, 0.3]]), 3.0)
-    occupied = {tuple(rc) for rc in np.argwhere(grid.occupied)}
-    assert occupied == {(2, 10), (2, 1), (1, 2)}
-    assert grid.free[2, 2:10].all()  # east, up to the hit
-    assert grid.free[2:15, 2].all()  # north, to the end of the range: free, not occupied
-    assert grid.unknown[8, 8] and grid.unknown[2, 11] and grid.unknown[15, 2]
-    assert grid.free.sum() == 8 + 12  # the agent's own cell once
+    hits = {tuple(rc) for rc in np.argwhere(occupied(grid))}
+    assert hits == {(2, 10), (2, 1), (1, 2)}
+    assert free(grid)[2, 2:10].all()  # east, up to the hit
+    assert free(grid)[2:15, 2].all()  # north, to the end of the range: free, not occupied
+    assert unknown(grid)[8, 8] and unknown(grid)[2, 11] and unknown(grid)[15, 2]
+    assert free(grid).sum() == 8 + 12  # the agent's own cell once
 
 
 def test_a_reading_that_ends_on_a_known_robot_marks_no_obstacle():
     grid = KnowledgeGrid((0.0, 4.0, 0.0, 4.0), RES)
     grid.integrate(np.array([[0.6, 0.6]]), np.array([0.0]), np.array([[2.0]]), 3.0,
                    robots_xy=np.array([[2.7, 0.6]]), robot_radius=0.3)
-    assert not grid.occupied.any()
-    assert grid.free[2, 2:10].all()
+    assert not occupied(grid).any()
+    assert free(grid)[2, 2:10].all()
 
 
 def test_walls_outlast_grazing_beams_and_transient_obstacles_are_cleared():
     grid = KnowledgeGrid((0.0, 4.0, 0.0, 4.0), RES)
     pos, heading = np.array([[0.6, 0.6]]), np.array([0.0])
     grid.integrate(pos, heading, np.array([[2.0]]), 3.0)  # something seen once at (2, 10) ...
-    assert grid.occupied[2, 10]
+    assert occupied(grid)[2, 10]
     for _ in range(HIT_GAIN + 1):  # ... and gone: beams now pass through its cell
         grid.integrate(pos, heading, np.array([[3.0]]), 3.0)
-    assert grid.free[2, 10]
+    assert free(grid)[2, 10]
     for _ in range(5):  # a wall, hit again and again ...
         grid.integrate(pos, heading, np.array([[2.0]]), 3.0)
     for _ in range(2):  # ... survives a couple of grazes
         grid.integrate(pos, heading, np.array([[3.0]]), 3.0)
-    assert grid.occupied[2, 10]
+    assert occupied(grid)[2, 10]
 
 
-def test_covered_by_paints_the_disks_of_the_nodes():
+def test_painting_covers_the_disks_of_the_nodes():
     grid = KnowledgeGrid((0.0, 4.0, 0.0, 4.0), RES)
-    covered = grid.covered_by(np.array([[1.0, 1.0]]), 0.5)
-    centres = grid.centre(*np.indices(grid.shape))
-    expect = np.hypot(centres[..., 0] - 1.0, centres[..., 1] - 1.0) <= 0.5
+    covered = np.ones(grid.shape, dtype=bool)
+    paint_covered(covered, *grid.origin, grid.resolution, np.array([[1.0, 1.0]]), 0.5)
+    at = centres(grid, *np.indices(grid.shape))
+    expect = np.hypot(at[..., 0] - 1.0, at[..., 1] - 1.0) <= 0.5
     assert np.array_equal(covered, expect) and covered.sum() == 12
 
 
@@ -204,8 +255,8 @@ def test_direct_check_agrees_with_the_search_view():
         visited = rng.random(grid.shape) < 0.05
         robots = rng.random(grid.shape) < 0.05
         kinds = target_kinds(grid, covered, visited, robots)
-        off_r, off_c = _offsets(0.3, RES)
-        direct = np.array([[_kind_direct(grid.score, grid.seen, robots, covered, visited, off_r, off_c, 2, r, c)
+        off_r, off_c = clearance_offsets(0.3, RES)
+        direct = np.array([[kind_at(grid.score, grid.seen, robots, covered, visited, off_r, off_c, 2, r, c)
                             for c in range(24)] for r in range(20)])
         assert np.array_equal(kinds, direct)
 
@@ -246,8 +297,10 @@ def test_registered_and_heads_for_a_target():
     heading = np.zeros(2)
     scans = np.full((1, 16), 2.0)
     ex.steer(heading, np.array([1]), scans, 2.0, np.array([False]), np.random.default_rng(0), xy, xy[:1])
-    assert ex.active[0] and ex.goal[0] >= 0
-    goal = ex.goals_xy()[0]
+    plans = ex.plans
+    assert plans.active[0] and plans.goal[0] >= 0 and plans.path_len[0] > 0 and plans.last_plan[0] == 0
+    assert REPLAN_REASONS[plans.reason[0]] == "no goal"
+    goal = centres(ex.grid, *divmod(plans.goal[0], ex.grid.shape[1]))
     to_goal = np.arctan2(goal[1] - 1.0, goal[0] - 4.0)
     assert abs(np.angle(np.exp(1j * (heading[1] - to_goal)))) < np.pi / 3
     assert heading[0] == 0.0  # only the agents are steered
@@ -260,7 +313,7 @@ def test_without_targets_it_explores_at_random():
     heading = np.zeros(2)
     ex.steer(heading, np.array([1]), np.full((1, 16), 2.0), 2.0, np.array([True]), np.random.default_rng(0), xy,
              xy[:1])
-    assert not ex.active[0] and ex.goal[0] == -1
+    assert not ex.plans.active[0] and ex.plans.goal[0] == -1
     assert heading[1] != 0.0  # a refused move: a fresh random heading
 
 
@@ -285,118 +338,3 @@ def test_frontier_agents_cover_the_office_quickly_and_stay_connected(seed):
     assert s["stop_reason"] == "coverage_target", s
     assert s["coverage"] >= 0.99
     assert s["agents_connected_fraction"] == 1.0
-
-
-# -- kernels against their plain definitions ------------------------------------------------------------------
-
-def random_grid(rng, rows, cols):
-    score = (rng.integers(-4, 12, (rows, cols)) * (rng.random((rows, cols)) < rng.random())).astype(np.int16)
-    return score, rng.random((rows, cols)) < rng.random(), rng.random((rows, cols)) < 0.5
-
-
-@pytest.mark.parametrize("seed", range(6))
-def test_gap_to_uncovered_equals_scipys_distance_transform(seed):
-    from scipy import ndimage
-
-    rng = np.random.default_rng(seed)
-    for _ in range(40):
-        rows, cols = rng.integers(1, 60, size=2)
-        covered = rng.random((rows, cols)) < rng.random() ** 0.2
-        yy, xx = np.mgrid[:rows, :cols]
-        for _ in range(rng.integers(0, 6)):  # disks, like the nodes' coverage
-            covered |= (yy - rng.uniform(0, rows)) ** 2 + (xx - rng.uniform(0, cols)) ** 2 <= rng.uniform(1, 25) ** 2
-        gap = gap_to_uncovered(covered)
-        if covered.all():
-            assert (gap == rows + cols).all()
-        else:
-            assert gap.tobytes() == ndimage.distance_transform_edt(covered).tobytes()
-
-
-def window_counts(marks, rows, win):
-    """``counts[r, j]``: ``marks`` summed over the rows within ``win`` of ``r`` and the columns ``< j``."""
-    out = np.zeros((rows, marks.shape[1] + 1), dtype=np.int64)
-    for r in range(rows):
-        out[r, 1:] = marks[max(0, r - win):r + win + 1].sum(0).cumsum()
-    return out
-
-
-@pytest.mark.parametrize("seed", range(4))
-def test_window_counts_and_traversable_mask_match_their_definitions_also_when_rows_change(seed):
-    rng = np.random.default_rng(seed)
-    for _ in range(15):
-        rows, cols = (int(v) for v in rng.integers(1, 25, size=2))
-        win = int(rng.integers(0, 4))
-        score, seen, covered = random_grid(rng, rows, cols)
-        rb = rng.random((rows, cols)) < 0.1
-        off_r, off_c = _offsets(float(rng.choice([0.1, 0.3, 0.6])), RES)
-        marks, counts = _window_buffers((rows, cols))
-        trav = np.ones((rows, cols), dtype=bool)
-        changed_fr = changed_us = np.ones(rows, dtype=bool)  # first everything, then a few rows at a time
-        for _ in range(4):
-            _window_counts(score, seen, covered, win, changed_fr, changed_us, marks, counts)
-            _passable_rows(score, seen, rb, off_r, off_c, changed_fr, trav)
-            frontier = np.array([[_is_frontier(score, seen, r, c) for c in range(cols)] for r in range(rows)])
-            assert (counts[0] == window_counts(frontier.astype(np.int64), rows, win)).all()
-            assert (counts[1] == window_counts((seen & ~covered).astype(np.int64), rows, win)).all()
-            expect = [[_passable(score, seen, rb, r, c, off_r, off_c) for c in range(cols)] for r in range(rows)]
-            assert (trav == np.array(expect, dtype=bool)).all()
-            full = np.zeros((rows, cols), dtype=bool)
-            _passable_mask(score, seen, rb, off_r, off_c, full)
-            assert (full == trav).all()
-            changed_fr = rng.random(rows) < 0.2
-            changed_cov = rng.random(rows) < 0.2
-            new_score, new_seen, new_covered = random_grid(rng, rows, cols)
-            score[changed_fr] = new_score[changed_fr]
-            seen[changed_fr] = new_seen[changed_fr]
-            covered[changed_cov] = new_covered[changed_cov]
-            changed_us = changed_fr | changed_cov
-
-
-def test_integrating_flags_exactly_the_rows_that_changed():
-    rng = np.random.default_rng(3)
-    grid = KnowledgeGrid((0.0, 6.0, 0.0, 5.0), RES)
-    for step in range(1, 40):
-        before = grid.score.copy(), grid.seen.copy()
-        stamps = grid.row_stamp.copy()
-        xy = rng.uniform(0.5, 4.5, size=(2, 2))
-        grid.integrate(xy, rng.uniform(-np.pi, np.pi, 2), rng.uniform(0.1, 2.0, (2, 8)), 2.0, xy[:1] + 0.7)
-        changed = (grid.score != before[0]).any(1) | (grid.seen != before[1]).any(1)
-        assert grid.stamp == step
-        assert (grid.row_stamp == np.where(changed, step, stamps)).all()
-
-
-def test_painting_only_new_nodes_gives_the_same_cells():
-    rng = np.random.default_rng(5)
-    nodes = rng.uniform(-1.0, 9.0, size=(12, 2))
-    grown = np.zeros((20, 24), dtype=bool)
-    for j in range(len(nodes)):
-        _paint_nodes(grown, 0.0, 0.0, RES, nodes[j:j + 1], 1.3)
-        whole = np.ones((20, 24), dtype=bool)
-        _paint_covered(whole, 0.0, 0.0, RES, nodes[:j + 1], 1.3)
-        assert (grown == whole).all()
-
-
-def test_the_search_leaves_its_scratch_buffers_as_it_found_them():
-    rng = np.random.default_rng(11)
-    for _ in range(20):
-        rows, cols = (int(v) for v in rng.integers(3, 20, size=2))
-        score, seen, covered = random_grid(rng, rows, cols)
-        seen |= rng.random((rows, cols)) < 0.5
-        trav = np.zeros((rows, cols), dtype=bool)
-        _passable_mask(score, seen, np.zeros((rows, cols), bool), *_offsets(0.3, RES), trav)
-        marks, counts = _window_buffers((rows, cols))
-        every = np.ones(rows, dtype=bool)
-        _window_counts(score, seen, covered, 2, every, every, marks, counts)
-        visited = np.zeros((rows, cols), dtype=bool)
-        gap = rng.random((rows, cols))
-        claims = np.full((0, 2), -1, dtype=np.int64)
-        search = _search_buffers(rows * cols)
-        kept = trav.copy()
-        for _ in range(3):
-            sr, sc = int(rng.integers(rows)), int(rng.integers(cols))
-            fresh = _bfs(score, seen, visited, trav, counts, gap, 2, sr, sc, 3, claims, 1.0,
-                         _search_buffers(rows * cols), np.zeros(rows * cols, np.int64))
-            reused = _bfs(score, seen, visited, trav, counts, gap, 2, sr, sc, 3, claims, 1.0, search,
-                          np.zeros(rows * cols, np.int64))
-            assert fresh == reused
-            assert (search[0] == -1).all() and (trav == kept).all()

@@ -2,7 +2,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.motion import avoidance_heading, integrate, path_clear, random_walk
+from amronet.engine.motion import avoidance_heading, integrate, path_clear, random_walk
 from amronet.world.space import clearance
 from helpers import box_map, diagonal_wall_map
 

@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from amronet.neighbours import neighbour_csr, pairs_from_csr
+from amronet.engine.neighbours import neighbour_csr, pairs_from_csr
 
 
 def brute(xy: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray]:

@@ -2,8 +2,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.network import agents_connected, components, connected_to, hop_counts
-from amronet.radio import UnitDisk
+from amronet.engine.network import agents_connected, components, connected_to, hop_counts
+from amronet.engine.radio import UnitDisk
 
 
 def chain_table():

@@ -1,4 +1,4 @@
-"""Tests of amronet.patterns, its figure (amronet.viz.patterns) and its subcommand (amronet.cli_patterns)."""
+"""Tests of amronet.patterns, its figure (amronet.viz.patterns) and its subcommand (amronet.cli.patterns)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from amronet.cli_patterns import add_parser
+from amronet.cli.patterns import add_parser
 from amronet.errors import AmronetError
 from amronet.patterns import (
     DENSITY,

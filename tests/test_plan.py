@@ -6,13 +6,14 @@ from PIL import Image
 
 from amronet.cli import main
 from amronet.errors import AmronetError
+from amronet.experiments.options import RunOptions
 from amronet.planning import plan, write_plan
 from amronet.sweeps import ResultStore
 
 
 @pytest.fixture(scope="module")
 def office_plan():
-    return plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=5, workers=2)
+    return plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=5, options=RunOptions(workers=2))
 
 
 def test_plan_has_estimate_patterns_distribution_and_recommendation(office_plan):
@@ -32,7 +33,8 @@ def test_plan_has_estimate_patterns_distribution_and_recommendation(office_plan)
 
 
 def test_confidence_changes_the_recommendation(office_plan):
-    low = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=5, workers=1, confidence=0.5)
+    low = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=5, confidence=0.5,
+               options=RunOptions(workers=1))
     assert low.recommended == math.ceil(office_plan.distribution["median"])
     assert low.runs == office_plan.runs  # same seeds, same runs
 
@@ -106,7 +108,8 @@ def test_plan_retries_failed_runs_only_with_retry_failed(tmp_path, capsys):
     assert main(args) == 0
     runs = json.loads(capsys.readouterr().out)["agent_assisted"]["runs"]
     assert [r["status"] for r in runs if r["seed"] == seed] == ["failed"]
-    p = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=1, runs=2, workers=1, store=store)
+    p = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=1, runs=2,
+             options=RunOptions(workers=1, store=store))
     assert any("1 of 2 runs failed (--retry-failed runs them again): boom" in w for w in p.warnings)
     assert main([*args, "--retry-failed"]) == 0
     assert json.loads(capsys.readouterr().out)["agent_assisted"]["runs"] == first

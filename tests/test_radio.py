@@ -2,7 +2,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.radio import MEDIA, UnitDisk, make_medium
+from amronet.engine.radio import MEDIA, UnitDisk, make_medium
 
 
 def test_unit_disk_links_exactly_within_r_c():

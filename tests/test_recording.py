@@ -1,4 +1,4 @@
-"""Tests of amronet.recording: what a Recorder keeps, the recording.npz format, and its errors."""
+"""Tests of amronet.outputs.recording: what a Recorder keeps, the recording.npz format, and its errors."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import json
 import numpy as np
 import pytest
 
+from amronet.engine.radio import MEDIA, UnitDisk
+from amronet.engine.robots import Role
 from amronet.errors import AmronetError
-from amronet.radio import UnitDisk, register_medium
-from amronet.recording import Recorder, Recording, decode_positions, encode_positions, load_recording
-from amronet.robots import Kind
+from amronet.outputs.recording import Recorder, Recording, decode_positions, encode_positions, load_recording
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 
@@ -56,7 +56,7 @@ def test_round_trip_positions_states_and_links(spread):
     np.testing.assert_allclose(loaded.xy[last], sim.swarm.xy, atol=loaded.xy_quantum)
     np.testing.assert_array_equal(loaded.state[last], sim.swarm.state)
     np.testing.assert_array_equal(loaded.status[last], sim.swarm.status)
-    np.testing.assert_array_equal(loaded.kind, sim.swarm.kind)
+    np.testing.assert_array_equal(loaded.kind, sim.swarm.role)
     # links are recomputed from positions and r_c (unit disk) and agree with the run's
     np.testing.assert_array_equal(loaded.links(last), sim.table.pairs)
     assert loaded.link_offsets is None
@@ -91,7 +91,7 @@ def test_growing_swarm_and_agent_trails(agents):
     assert first > 0
     np.testing.assert_array_equal(loaded.xy[:first, newest], np.repeat(loaded.xy[first:first + 1, newest], first, 0))
     trails = loaded.trails(last)
-    agent_ids = np.flatnonzero(sim.swarm.kind == Kind.AGENT)
+    agent_ids = np.flatnonzero(sim.swarm.role == Role.AGENT)
     assert sorted(trails) == agent_ids.tolist()
     assert all(p.shape == (loaded.frames, 2) for p in trails.values())
     live = rec.trails()
@@ -123,7 +123,7 @@ def test_encode_decode_wraps_modulo_2_16():
     np.testing.assert_allclose(decode_positions(delta, np.zeros(2), quantum), xy, atol=quantum)
 
 
-@register_medium("test-recording-medium")
+@MEDIA.register("test-recording-medium")
 class _EveryOtherLink(UnitDisk):
     """A medium whose links are not the unit-disk graph: links between even ids only."""
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from amronet.algorithms.triangular import select_triangles, triangle_goal
+from amronet.engine.network import connected_to
+from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
-from amronet.network import connected_to
-from amronet.robots import Kind, State
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.world.space import clearance
@@ -108,7 +108,7 @@ def test_triangle_goal_geometry():
 
 
 def test_select_triangles_rules():
-    from amronet.radio import UnitDisk
+    from amronet.engine.radio import UnitDisk
 
     xy = np.array([[0, 0], [1.6, 0], [0.8, 0.5], [0.8, -0.5], [5, 5], [5.5, 5]], dtype=float)
     table = UnitDisk(1.0).update(xy)
@@ -134,7 +134,7 @@ def test_select_triangles_rules():
 def test_routers_start_near_their_base_with_status_minus_one():
     sim = Simulation(load_scenario("self-spreading-6x6"), 0)
     sw = sim.swarm
-    routers = sw.kind == Kind.ROUTER
+    routers = sw.role == Role.ROUTER
     assert (sw.status[routers] == -1).all() and (sw.state[routers] == State.EXPLORE).all()
     assert (np.abs(sw.xy[routers]) <= 0.5 + 1e-9).all()
     assert (np.linalg.norm(sw.xy[routers], axis=1) <= 0.95).all()

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from amronet.radio import UnitDisk
-from amronet.sensing import beam_angles, range_scan
+from amronet.engine.radio import UnitDisk
+from amronet.engine.sensing import beam_angles, range_scan
 from helpers import box_map
 
 

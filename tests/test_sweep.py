@@ -6,7 +6,6 @@ from PIL import Image
 
 from amronet.cli import main
 from amronet.errors import AmronetError
-from amronet.experiments.registry import FIGURES, Figure
 from amronet.experiments.runner import run_jobs
 from amronet.sweeps import ResultStore
 from sweep_helpers import tiny_sweep, write_sweep
@@ -132,49 +131,6 @@ def test_reproduce_keeps_its_store_in_the_output_folder(tmp_path, capsys):
     assert (out / "fig7_runs.csv").read_text() == first
     with ResultStore(out / "results.sqlite") as st:
         assert {(r["scenario_hash"], r["seed"]): r["wall_time_s"] for r in st.runs()} == stamps
-
-
-def _fake_module(monkeypatch, seen):
-    import sys
-    import types
-
-    def fake(out_dir, figure="a", runs=1, workers=None, time_limit=10.0, store=None):
-        seen.append({"out_dir": out_dir, "figure": figure, "runs": runs, "workers": workers,
-                     "time_limit": time_limit, "store": store})
-        return {"markdown": f"# {figure}"}
-
-    module = types.ModuleType("amronet_fake_fig")
-    module.run_fake = fake
-    monkeypatch.setitem(sys.modules, "amronet_fake_fig", module)
-
-
-def test_figure_registry_passes_only_accepted_options(tmp_path, monkeypatch):
-    assert {"fig5", "fig7"} <= set(FIGURES)
-    seen = []
-    _fake_module(monkeypatch, seen)
-    fig = Figure("amronet_fake_fig:run_fake", kwargs={"figure": "b"}, quick={"runs": 2, "time_limit": 3.0})
-    fig.run(tmp_path, quick=True, workers=3, explorer="x", time_limit=None)
-    fig.run(tmp_path, quick=True, time_limit=5.0)  # a given option wins over quick's
-    assert seen == [{"out_dir": tmp_path, "figure": "b", "runs": 2, "workers": 3, "time_limit": 3.0, "store": None},
-                    {"out_dir": tmp_path, "figure": "b", "runs": 2, "workers": None, "time_limit": 5.0,
-                     "store": None}]
-
-
-def test_reproduce_all_runs_every_registered_figure(tmp_path, monkeypatch, capsys):
-    from amronet.experiments import registry
-
-    seen = []
-    _fake_module(monkeypatch, seen)
-    monkeypatch.setattr(registry, "FIGURES", {"f1": Figure("amronet_fake_fig:run_fake", kwargs={"figure": "f1"}),
-                                              "f2": Figure("amronet_fake_fig:run_fake", kwargs={"figure": "f2"})})
-    assert main(["reproduce", "all", "--out", str(tmp_path), "--workers", "1"]) == 0
-    assert [(s["figure"], s["out_dir"], s["store"]) for s in seen] == [
-        ("f1", tmp_path / "f1", tmp_path / "f1" / "results.sqlite"),
-        ("f2", tmp_path / "f2", tmp_path / "f2" / "results.sqlite")]
-    assert "# f1" in capsys.readouterr().out
-    seen.clear()
-    assert main(["reproduce", "f2", "--store", str(tmp_path / "s.sqlite"), "-q"]) == 0
-    assert seen[0]["store"] == tmp_path / "s.sqlite" and seen[0]["out_dir"].name == "f2"
 
 
 def test_parquet_without_pyarrow_is_one_line(swept, tmp_path, capsys, monkeypatch):

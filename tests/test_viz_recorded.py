@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from amronet.engine.robots import Role, State
 from amronet.errors import AmronetError
-from amronet.recording import Recorder, Recording
-from amronet.robots import Kind, State
+from amronet.outputs.recording import Recorder, Recording
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.viz.nodestyle import PALETTE
@@ -59,7 +59,7 @@ def test_snapshot_png_shows_routers_in_their_status_colour(spread):
     img = _png(fig)
     fr = spread.frame(f)
     blue = np.rint(255 * PALETTE[0])
-    base = np.flatnonzero(fr["kind"] == Kind.BASE)[0]
+    base = np.flatnonzero(fr["kind"] == Role.BASE)[0]
     r, c = _pixel(fig, fr["xy"][base])
     assert np.abs(img[r, c] - blue).max() <= 12  # the base station's square, status 0
     refs = np.flatnonzero(fr["state"] == State.REFERENCE)

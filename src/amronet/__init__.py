@@ -9,10 +9,10 @@ Example:
 
 __version__ = "0.1.0"
 
-from amronet.api import run
 from amronet.errors import AmronetError, MapError, ScenarioError
 from amronet.scenario import Scenario, list_presets, load_scenario
 from amronet.sim import Simulation
+from amronet.sim.api import run
 
 __all__ = [
     "AmronetError",

@@ -16,7 +16,8 @@ the team does not carry, so "routers to carry" is nodes minus base stations for 
 by the agents for agent-assisted deployment.
 
 Example:
-    >>> p = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=3, workers=1)
+    >>> from amronet.experiments.options import RunOptions
+    >>> p = plan("office-32x32", [(1.0, 1.0)], r_c=8.0, agents_per_base=2, runs=3, options=RunOptions(workers=1))
     >>> p.recommended >= p.distribution["median"] > 0
     True
 """
@@ -32,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from amronet.errors import AmronetError, MapError
+from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 
 __all__ = ["PLAN_ESTIMATE_DENSITY", "Plan", "plan", "write_plan"]
 
@@ -151,15 +153,8 @@ def plan(
     agents_per_base: int,
     runs: int = 20,
     confidence: float = 0.95,
-    explorer: str = "frontier",
-    time_limit: float = 6000.0,
     dt: float = 0.25,
-    seed: int = 0,
-    store: str | Path | None = None,
-    workers: int | None = None,
-    executor: Any = None,
-    show_progress: bool = False,
-    retry_failed: bool = False,
+    options: RunOptions | None = None,
 ) -> Plan:
     """Plan a deployment (see the module docstring).
 
@@ -170,16 +165,14 @@ def plan(
         agents_per_base: Agents per base station (>= 1).
         runs: Agent-assisted runs ``K``.
         confidence: Quantile of the recommendation, in (0, 1].
-        explorer: The agents' exploration strategy.
-        time_limit: Simulated seconds per run at most.
         dt: Simulation step.
-        seed: First seed (runs use ``seed .. seed + K - 1``).
-        store: Result store to keep the runs in (and reuse); ``None`` for a temporary one.
-        workers: Local worker processes (when no ``executor``).
-        executor: An :class:`~amronet.sweeps.executors.Executor` (e.g. Dask).
-        show_progress: Draw the sweep's progress bar.
-        retry_failed: Run again the runs that ``store`` holds as failed (otherwise they stay failed, as with
-            ``amronet sweep``, and the plan warns about them).
+        options: How the runs are made (default ``RunOptions(show_progress=False)``): the agents' ``explorer``;
+            ``time_limit`` (default :data:`~amronet.experiments.options.AGENT_TIME_LIMIT_S`); ``seed``, the first
+            seed (runs use ``seed .. seed + K - 1``); ``store``, the result store to keep the runs in (and reuse),
+            ``None`` for a temporary one; ``workers`` (local processes, when there is no ``executor``);
+            ``executor`` (e.g. Dask); ``show_progress`` (the sweep's progress bar); ``retry_failed``: run again
+            the runs that ``store`` holds as failed (otherwise they stay failed, as with ``amronet sweep``, and the
+            plan warns about them).
 
     Raises:
         AmronetError: Bad input, with one line naming the option.
@@ -191,6 +184,9 @@ def plan(
     from amronet.sweeps.store import check_store_path
     from amronet.world import reachable_free, resolve_map
 
+    options = options or RunOptions(show_progress=False)
+    explorer, seed, store = options.explorer, options.seed, options.store
+    time_limit = options.time_limit_or(AGENT_TIME_LIMIT_S)
     _check("--rc", math.isfinite(r_c) and r_c > 0, f"must be a finite number > 0 (metres), got {r_c:g}")
     _check("--agents", agents_per_base >= 1, f"must be >= 1 agent per base station, got {agents_per_base}")
     _check("--runs", runs >= 1, f"must be >= 1, got {runs}")
@@ -217,8 +213,8 @@ def plan(
                              "seeds": runs, "seed_start": seed})
     with tempfile.TemporaryDirectory(prefix="amronet-plan-") as tmp:
         store_path = Path(store) if store is not None else Path(tmp) / "results.sqlite"
-        run_sweep(sweep, store_path, executor or LocalExecutor(workers), retry_failed=retry_failed,
-                  show_progress=show_progress)
+        run_sweep(sweep, store_path, options.executor or LocalExecutor(options.workers),
+                  retry_failed=options.retry_failed, show_progress=options.show_progress)
         point = sweep.points[0]
         with ResultStore(store_path, must_exist=True) as st:
             outcomes = {s: st.load(point.hash, s, timeseries=False) for s in sweep.seeds}

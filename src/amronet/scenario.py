@@ -23,6 +23,8 @@ from typing import Annotated, Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt, ValidationError, model_validator
 
+from amronet.algorithms import ALGORITHMS
+from amronet.engine.radio import MEDIA
 from amronet.errors import ScenarioError
 
 __all__ = [
@@ -135,15 +137,11 @@ class Scenario(_Strict):
 
     @model_validator(mode="after")
     def _check_algorithm(self) -> Scenario:
-        from amronet.algorithms import ALGORITHMS
-
         if self.algorithm.name not in ALGORITHMS:
             raise ValueError(
                 f"@algorithm.name@unknown algorithm {self.algorithm.name!r}; choose one of: "
                 + ", ".join(sorted(ALGORITHMS))
             )
-        from amronet.radio import MEDIA
-
         if self.radio.model not in MEDIA:
             raise ValueError(f"@radio.model@unknown radio model {self.radio.model!r}; choose one of: "
                              + ", ".join(sorted(MEDIA)))
@@ -151,13 +149,11 @@ class Scenario(_Strict):
 
     def algorithm_params(self) -> BaseModel:
         """The algorithm's parameters, validated by the algorithm's own parameter model."""
-        from amronet.algorithms import ALGORITHMS
-
         model = ALGORITHMS[self.algorithm.name].Params
         try:
             return model.model_validate(self.algorithm.params)
         except ValidationError as exc:
-            raise _to_scenario_error(exc, prefix="algorithm.params", model=model) from None
+            raise to_scenario_error(exc, prefix="algorithm.params", model=model) from None
 
     def to_dict(self) -> dict[str, Any]:
         """The scenario as plain data (what a YAML file would hold)."""
@@ -196,7 +192,7 @@ def _allowed_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
     return [k for k in getattr(current, "model_fields", {}) if k != "base_dir"]
 
 
-def _to_scenario_error(exc: ValidationError, prefix: str = "", model: type[BaseModel] = Scenario) -> ScenarioError:
+def to_scenario_error(exc: ValidationError, prefix: str = "", model: type[BaseModel] = Scenario) -> ScenarioError:
     err = exc.errors()[0]
     msg = str(err.get("msg", "invalid"))
     if msg.startswith("Value error, @"):
@@ -222,7 +218,7 @@ def _validate(data: Any, base_dir: str | None) -> Scenario:
     try:
         scenario = Scenario.model_validate({**data, "base_dir": base_dir})
     except ValidationError as exc:
-        raise _to_scenario_error(exc) from None
+        raise to_scenario_error(exc) from None
     scenario.algorithm_params()
     return scenario
 

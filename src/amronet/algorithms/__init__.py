@@ -1,4 +1,4 @@
-"""Deployment algorithms, one module each, registered by name."""
+"""Deployment algorithms, one module each, registered by name in :data:`ALGORITHMS`."""
 
 from amronet.algorithms import (  # noqa: F401  (register themselves)
     agent_assisted,
@@ -6,6 +6,15 @@ from amronet.algorithms import (  # noqa: F401  (register themselves)
     potential_field,
     self_spreading,
 )
-from amronet.algorithms.base import ALGORITHMS, Command, Controller, Readings, StepInput, register_algorithm
+from amronet.algorithms.base import (
+    ALGORITHMS,
+    AreaKnowledge,
+    Command,
+    Controller,
+    Readings,
+    RouterStock,
+    Setup,
+    StepInput,
+)
 
-__all__ = ["ALGORITHMS", "Command", "Controller", "Readings", "StepInput", "register_algorithm"]
+__all__ = ["ALGORITHMS", "AreaKnowledge", "Command", "Controller", "Readings", "RouterStock", "Setup", "StepInput"]

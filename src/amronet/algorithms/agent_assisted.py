@@ -29,14 +29,13 @@ import numpy as np
 from numba import njit
 from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
-from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.explorers import EXPLORERS
 from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.references import check_loss_band, track_row
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
+from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
-from amronet.motion import path_clear
-from amronet.robots import Kind, State
 
 __all__ = ["AgentAssisted", "AgentAssistedParams"]
 
@@ -99,7 +98,7 @@ def _track_agents(agents, current, is_reference, status, indptr, indices, dist, 
     return n_cand, n_losing
 
 
-@register_algorithm("agent-assisted")
+@ALGORITHMS.register("agent-assisted")
 class AgentAssisted(Controller):
     """Controller of agents that carry and release routers."""
 
@@ -107,16 +106,15 @@ class AgentAssisted(Controller):
     params: AgentAssistedParams
     default_coverage_target = DEFAULT_COVERAGE_TARGET
 
-    def __init__(self, *args, **kwargs) -> None:
-        super().__init__(*args, **kwargs)
-        from amronet.assemble import robot_kind
-
-        sw, sc = self.swarm, self.scenario
-        assert sc is not None
-        agents = sw.kind == Kind.AGENT
+    def __init__(self, params: AgentAssistedParams, setup: Setup) -> None:
+        super().__init__(params, setup)
+        sw, stock = self.swarm, setup.stock
+        if stock is None:
+            raise ScenarioError("agents.per_base", "agent-assisted deployment needs agents; set agents.per_base >= 1")
+        agents = sw.role == Role.AGENT
         if not agents.any():
             raise ScenarioError("agents.per_base", "agent-assisted deployment needs agents; set agents.per_base >= 1")
-        if (sw.kind == Kind.ROUTER).any():
+        if (sw.role == Role.ROUTER).any():
             raise ScenarioError("routers.count", "agents release the routers in agent-assisted deployment; "
                                                  "set routers.count to 0")
         if self.params.explorer not in EXPLORERS:
@@ -124,8 +122,9 @@ class AgentAssisted(Controller):
                                 f"of: {', '.join(sorted(EXPLORERS))}")
         step = float(sw.max_speed[agents].max()) * self.dt
         self.r_eff = check_loss_band(self.params.loss_margin, self.r_c, step, "agent")
-        self.router_kind = robot_kind(sc.routers.robot, "routers.robot")
-        carried = sc.agents.routers_carried
+        self.router_model = stock.robot
+        self.path_clear = stock.path_clear
+        carried = stock.per_agent
         n = len(sw)
         self.left = np.where(agents, np.inf if carried is None else float(carried), 0.0)
         self.current = np.full(n, -1, dtype=np.int64)
@@ -133,10 +132,10 @@ class AgentAssisted(Controller):
         self.refused = np.zeros(n, dtype=bool)
         self.steering = GoalSteering(n, n_anchors=2, give_up_steps=self.params.give_up_steps)
         self.explorer = EXPLORERS[self.params.explorer](self.params.turn_noise, self.params.avoid_range, self.dt,
-                                                        self.r_c, self.omap.extent)
+                                                        self.r_c, self.area.extent)
         self.agents = np.flatnonzero(agents)
         self.agent_model = int(sw.model[self.agents[0]])
-        self.several_statuses = len(np.unique(sw.status[sw.kind == Kind.BASE])) > 1
+        self.several_statuses = len(np.unique(sw.status[sw.role == Role.BASE])) > 1
         self.released = 0
         self.agent_speed = sw.max_speed[self.agents]
         self.moving_triangles = 0
@@ -146,9 +145,13 @@ class AgentAssisted(Controller):
         self._deployed: np.ndarray | None = None
         self._deployed_xy: np.ndarray | None = None
 
-    @property
-    def settled(self) -> bool:  # noqa: D102 - agents never settle; the coverage target ends the run
-        return False
+    @classmethod
+    def start_range(cls, params: AgentAssistedParams, r_c: float) -> float:  # noqa: D102
+        return (1.0 - params.loss_margin) * r_c
+
+    def unsettled(self) -> np.ndarray:
+        """Agents never settle (the coverage target ends the run); released routers are not driven after settling."""
+        return self.swarm.role == Role.AGENT
 
     # -- growing per-robot state when routers are released --------------------------------------------------
     def _grow(self, n_new: int) -> None:
@@ -248,24 +251,23 @@ class AgentAssisted(Controller):
         sw = self.swarm
         p = sw.xy[agent]
         ref = sw.xy[toward]
-        gap = sw.radius[agent] + self.router_kind.radius + self.params.release_gap
+        gap = sw.radius[agent] + self.router_model.radius + self.params.release_gap
         base = np.arctan2(ref[1] - p[1], ref[0] - p[0])
         turns = np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6]) * (np.pi / 6)
         cand = p + gap * np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
         ok = np.linalg.norm(cand - ref, axis=1) <= self.r_c
-        ok &= path_clear(self.omap, np.repeat(p[None], len(cand), axis=0), cand,
-                         np.full(len(cand), self.router_kind.radius))
+        ok &= self.path_clear(np.repeat(p[None], len(cand), axis=0), cand, np.full(len(cand), self.router_model.radius))
         others = np.delete(np.arange(len(sw)), agent)
         if len(others):
             d = np.linalg.norm(cand[:, None, :] - sw.xy[None, others, :], axis=2)
-            ok &= (d >= self.router_kind.radius + sw.radius[others][None, :]).all(axis=1)
+            ok &= (d >= self.router_model.radius + sw.radius[others][None, :]).all(axis=1)
         hit = np.flatnonzero(ok)
         return cand[hit[0]] if len(hit) else p.copy()
 
     def _add_router(self, agent: int, toward: int, state: int) -> int:
         sw = self.swarm
         spot = self._release_spot(agent, toward)
-        new = sw.extend(self.router_kind, Kind.ROUTER, state, spot[None], np.array([sw.status[agent]]),
+        new = sw.extend(self.router_model, Role.ROUTER, state, spot[None], np.array([sw.status[agent]]),
                         heading=np.array([sw.heading[agent]]))
         self._grow(len(new))
         self._nodes_changed()

@@ -1,8 +1,15 @@
 """What a deployment algorithm is: a controller that turns one step's local information into motion.
 
-Controllers see only what the robots can sense or hear: their own range readings and their own row of the
-radio medium's neighbour table (who is within ``r_c``, how far, and what those neighbours announce: state and
-status). Metrics and stop conditions live in :mod:`amronet.sim`, not here.
+A controller is given, once, a :class:`Setup`: the state arrays of the robots it drives (each robot's own
+position, heading, state and status, and what it announces on the air), the radio range, the step length, the
+run's random generator, what the algorithm may know of the area beforehand (:class:`AreaKnowledge`: its bounding
+box and free floor area, never the map) and, for agents that carry routers, their :class:`RouterStock`. Each
+step it is given a :class:`StepInput`: the range readings of its robots and the radio medium's neighbour table
+(who hears whom, how far). A robot's decision reads its own rows and the rows of the nodes it hears; nothing
+else of the world reaches a controller: not the map, not the scenario, not the loop. Metrics and stop conditions
+live in :mod:`amronet.sim`, not here. What the loop needs to know of an algorithm it asks through the
+declared interface below (:meth:`Controller.start_range`, :attr:`Controller.default_coverage_target`,
+:meth:`Controller.unsettled`).
 """
 
 from __future__ import annotations
@@ -15,15 +22,14 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from pydantic import BaseModel
 
-from amronet.radio import NeighbourTable
-from amronet.robots import Swarm
-from amronet.world.occupancy import OccupancyMap
+from amronet.engine.radio import NeighbourTable
+from amronet.engine.robots import RobotModel, Swarm
+from amronet.registry import Registry
 
 if TYPE_CHECKING:
-    from amronet.scenario import Scenario
-    from amronet.streams import RunStreams
+    from amronet.engine.streams import RunStreams
 
-__all__ = ["ALGORITHMS", "Command", "Controller", "Readings", "StepInput", "register_algorithm"]
+__all__ = ["ALGORITHMS", "AreaKnowledge", "Command", "Controller", "Readings", "RouterStock", "Setup", "StepInput"]
 
 
 @dataclass(frozen=True)
@@ -72,47 +78,91 @@ class Command:
     speed: np.ndarray
 
 
+@dataclass(frozen=True)
+class AreaKnowledge:
+    """What an algorithm may know of the area before it starts: its size, never its obstacles.
+
+    Attributes:
+        extent: ``(xmin, xmax, ymin, ymax)`` of the area in metres (e.g. the size of the map agents build).
+        free_area_m2: The free floor area, m² (e.g. DSSA's field area for its expected density).
+    """
+
+    extent: tuple[float, float, float, float]
+    free_area_m2: float
+
+
+@dataclass(frozen=True)
+class RouterStock:
+    """The routers that agents carry and release.
+
+    Attributes:
+        robot: The released routers' robot model.
+        per_agent: Routers each agent carries (``None``: unlimited).
+        path_clear: The agent's hand: ``path_clear(start (M, 2), end (M, 2), radius (M,))`` says which bodies of
+            the given radii could be put down along those segments without touching an obstacle.
+    """
+
+    robot: RobotModel
+    per_agent: int | None
+    path_clear: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Setup:
+    """Everything a controller is given when its run starts.
+
+    Attributes:
+        robots: The state arrays of the robots (positions, headings, states, statuses; one row per node on the
+            air). The controller updates headings, states and statuses of the robots it drives in place, and
+            reads other nodes' rows only for the nodes its robots hear (the neighbour table's rows).
+        r_c: Communication radius, metres.
+        dt: Step length, seconds.
+        rng: The run's random generator; for a batch of runs, their :class:`~amronet.engine.streams.RunStreams`.
+        area: What the algorithm may know of the area beforehand.
+        stock: The routers agents carry (``None`` without agents).
+    """
+
+    robots: Swarm
+    r_c: float
+    dt: float
+    rng: np.random.Generator | RunStreams
+    area: AreaKnowledge
+    stock: RouterStock | None = None
+
+
 class Controller(ABC):
     """Base class of deployment algorithms.
 
     Args:
         params: Validated parameters (an instance of :attr:`Params`).
-        swarm: The run's robots; the controller updates headings, states and statuses in place.
-        omap: The map (for nothing but its geometry's sake; controllers do not read obstacles from it).
-        r_c: Communication radius.
-        dt: Step length.
-        rng: The run's random generator; for a batch of runs, their :class:`~amronet.streams.RunStreams`.
-        scenario: The whole scenario, for controllers that need more (e.g. the robot kind agents release).
+        setup: The robots and what the algorithm is given (:class:`Setup`).
 
-    Batching (:mod:`amronet.batch`): a controller with :attr:`batchable` set can drive several runs at once, their
+    Batching (:mod:`amronet.sim.batch`): a controller with :attr:`batchable` set can drive several runs at once, their
     robots concatenated into one swarm and one neighbour table that never links robots of different runs. It
     must then keep every run independent of the others: per-robot state only, no reductions over all robots that
-    feed back into decisions, every random draw through :func:`~amronet.streams.draw_per_run`, and
-    :meth:`unsettled` and :meth:`report_run` to answer per run.
+    feed back into decisions, every random draw through :func:`~amronet.engine.streams.draw_per_run`, and
+    :meth:`report_run` to answer per run.
     """
 
     name: ClassVar[str]
     Params: ClassVar[type[BaseModel]]
     batchable: ClassVar[bool] = False
     """Whether the controller can step several runs in one swarm (see the class docstring)."""
+    default_coverage_target: ClassVar[float | None] = None
+    """The coverage at which a run of this algorithm ends when the scenario sets none (``None``: no target)."""
 
-    def __init__(
-        self,
-        params: BaseModel,
-        swarm: Swarm,
-        omap: OccupancyMap,
-        r_c: float,
-        dt: float,
-        rng: np.random.Generator | RunStreams,
-        scenario: Scenario | None = None,
-    ) -> None:
-        self.scenario = scenario
+    def __init__(self, params: BaseModel, setup: Setup) -> None:
         self.params = params
-        self.swarm = swarm
-        self.omap = omap
-        self.r_c = r_c
-        self.dt = dt
-        self.rng = rng
+        self.swarm = setup.robots
+        self.r_c = setup.r_c
+        self.dt = setup.dt
+        self.rng = setup.rng
+        self.area = setup.area
+
+    @classmethod
+    def start_range(cls, params: BaseModel, r_c: float) -> float:
+        """How far from its base node a robot may start, so that it hears the base (default ``0.95 r_c``)."""
+        return (1.0 - 0.05) * r_c
 
     @abstractmethod
     def decide(self, step: StepInput) -> Command:
@@ -133,29 +183,19 @@ class Controller(ABC):
         """Algorithm-specific numbers for the run's summary (default: none)."""
         return {}
 
-    def unsettled(self) -> np.ndarray:
-        """Mask ``(N,)`` of the robots that may still move (batchable controllers; :attr:`settled` per run)."""
-        raise NotImplementedError(f"{type(self).__name__} does not step runs in batches")
-
     def report_run(self, robots: slice) -> dict[str, object]:
         """:meth:`report` of the run whose robots are ``robots`` in a batch (default: :meth:`report`)."""
         return self.report()
 
-    @property
     @abstractmethod
+    def unsettled(self) -> np.ndarray:
+        """Mask ``(N,)`` of the robots that may still move; a run whose robots are all settled has ended."""
+
+    @property
     def settled(self) -> bool:
         """``True`` when no robot of the algorithm will move again."""
+        return not self.unsettled().any()
 
 
-ALGORITHMS: dict[str, type[Controller]] = {}
-
-
-def register_algorithm(name: str) -> Callable[[type[Controller]], type[Controller]]:
-    """Class decorator that registers a controller under ``name`` for scenarios and the CLI."""
-
-    def deco(cls: type[Controller]) -> type[Controller]:
-        cls.name = name
-        ALGORITHMS[name] = cls
-        return cls
-
-    return deco
+ALGORITHMS: Registry[type[Controller]] = Registry("algorithm")
+"""Deployment algorithms by name; a controller registers itself with ``@ALGORITHMS.register(name)``."""

@@ -39,9 +39,9 @@ from typing import Annotated
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
-from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
-from amronet.robots import Kind, State
+from amronet.engine.robots import Role, State
 
 __all__ = ["DSSA", "DSSAParams"]
 
@@ -74,21 +74,20 @@ class DSSAParams(BaseModel):
     stable_steps: Annotated[StrictInt, Field(ge=1)] = 20
 
 
-@register_algorithm("dssa")
+@ALGORITHMS.register("dssa")
 class DSSA(Controller):
     """Controller of DSSA routers."""
 
     Params = DSSAParams
     params: DSSAParams
 
-    def __init__(self, *args, **kwargs) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(self, params: DSSAParams, setup: Setup) -> None:
+        super().__init__(params, setup)
         sw, p = self.swarm, self.params
         n = len(sw)
-        self.routers = np.flatnonzero(sw.kind == Kind.ROUTER)
-        area = p.field_area if p.field_area is not None else float(np.count_nonzero(self.omap.free)) * (
-            self.omap.resolution**2)
-        nodes = int(np.count_nonzero(sw.kind != Kind.AGENT))
+        self.routers = np.flatnonzero(sw.role == Role.ROUTER)
+        area = p.field_area if p.field_area is not None else self.area.free_area_m2
+        nodes = int(np.count_nonzero(sw.role != Role.AGENT))
         r_s = p.sensing_radius_factor * self.r_c
         self.mu = nodes * np.pi * r_s**2 / area
         self.last_step = np.zeros((n, 2))
@@ -106,9 +105,8 @@ class DSSA(Controller):
     def needs_range_readings(self) -> bool:  # noqa: D102
         return self.params.obstacle_forces and self.params.obstacle_gain > 0
 
-    @property
-    def settled(self) -> bool:  # noqa: D102
-        return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
+    def unsettled(self) -> np.ndarray:  # noqa: D102
+        return (self.swarm.state == State.EXPLORE) & (self.swarm.role == Role.ROUTER)
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from amronet.radio import NeighbourTable
-from amronet.sensing import beam_angles
+from amronet.engine.radio import NeighbourTable
+from amronet.engine.sensing import beam_angles
 
 __all__ = ["Links", "ObstacleHits", "clamp_norm", "constrained_coverage_force", "constrained_coverage_forces",
            "inverse_square_obstacle_forces", "links_of", "obstacle_hits", "sum_per_node"]

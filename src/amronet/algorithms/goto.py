@@ -1,7 +1,7 @@
 """Go-to-goal for deploying routers: drive to a goal point without losing given anchors, give up when blocked.
 
 Used by the triangular deployment (self-spreading and agent-assisted): a router drives to its goal with
-obstacle avoidance (:func:`amronet.motion.go_to_goal`'s blend of goal and escape directions), never makes a
+obstacle avoidance (:func:`amronet.engine.motion.go_to_goal`'s blend of goal and escape directions), never makes a
 move that would take it farther than ``r_keep`` from one of its anchors (the two references it bridges) unless
 it is already farther and the move brings it closer, and stops where it is once it has made no real progress
 for ``give_up_steps`` steps in a row — the paper's "obstacle that cannot be avoided in few steps".
@@ -14,8 +14,8 @@ import math
 import numpy as np
 from numba import njit
 
-from amronet.motion import _escape_one
-from amronet.sensing import beam_angles
+from amronet.engine.motion import escape_one
+from amronet.engine.sensing import beam_angles
 
 __all__ = ["GoalSteering"]
 
@@ -42,7 +42,7 @@ def _steer(who, xy, heading, goal, anchors, scans, angles, sensor_range, max_ste
             done[m] = True
             continue
         want = math.atan2(gy, gx)
-        escape, alarm = _escape_one(heading[i], scans[m], angles, sensor_range)
+        escape, alarm = escape_one(heading[i], scans[m], angles, sensor_range)
         if alarm:
             want = math.atan2(math.sin(want) + math.sin(escape), math.cos(want) + math.cos(escape))
         heading[i] = want

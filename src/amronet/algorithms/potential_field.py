@@ -49,9 +49,9 @@ import numba
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
-from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.forces import constrained_coverage_force, inverse_square_obstacle_forces
-from amronet.robots import Kind, State
+from amronet.engine.robots import Role, State
 
 __all__ = ["PotentialField", "PotentialFieldParams"]
 
@@ -96,7 +96,7 @@ class PotentialFieldParams(BaseModel):
     force_cap_factor: Annotated[float, Field(gt=0, allow_inf_nan=False)] = 4.0
 
 
-@register_algorithm("potential-field")
+@ALGORITHMS.register("potential-field")
 class PotentialField(Controller):
     """Controller of potential-field routers."""
 
@@ -104,11 +104,11 @@ class PotentialField(Controller):
     params: PotentialFieldParams
     batchable = True
 
-    def __init__(self, *args, **kwargs) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(self, params: PotentialFieldParams, setup: Setup) -> None:
+        super().__init__(params, setup)
         sw, p = self.swarm, self.params
         n = len(sw)
-        self.routers = np.flatnonzero(sw.kind == Kind.ROUTER)
+        self.routers = np.flatnonzero(sw.role == Role.ROUTER)
         v_max = float(sw.max_speed[self.routers].max(initial=0.0))
         r_s = p.sensing_radius_factor * self.r_c
         self.k_cover = p.k_cover if p.k_cover is not None else p.damping * v_max * r_s**2
@@ -131,12 +131,8 @@ class PotentialField(Controller):
     def needs_range_readings(self) -> bool:  # noqa: D102
         return self.params.obstacle_forces
 
-    @property
-    def settled(self) -> bool:  # noqa: D102
-        return not np.any(self.swarm.state[self.routers] == State.EXPLORE)
-
     def unsettled(self) -> np.ndarray:  # noqa: D102
-        return (self.swarm.state == State.EXPLORE) & (self.swarm.kind == Kind.ROUTER)
+        return (self.swarm.state == State.EXPLORE) & (self.swarm.role == Role.ROUTER)
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from amronet.engine.radio import NeighbourTable
 from amronet.errors import ScenarioError
-from amronet.radio import NeighbourTable
 
 
 def check_loss_band(loss_margin: float, r_c: float, step: float, who: str) -> float:

@@ -27,12 +27,12 @@ from typing import Annotated
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
-from amronet.algorithms.base import Command, Controller, StepInput, register_algorithm
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.references import check_loss_band, track_references
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
-from amronet.motion import random_walk
-from amronet.robots import SETTLING_STATES, Kind, State
+from amronet.engine.motion import random_walk
+from amronet.engine.robots import SETTLING_STATES, Role, State
 
 __all__ = ["SelfSpreading", "SelfSpreadingParams"]
 
@@ -56,7 +56,7 @@ class SelfSpreadingParams(BaseModel):
     give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
 
 
-@register_algorithm("self-spreading")
+@ALGORITHMS.register("self-spreading")
 class SelfSpreading(Controller):
     """Controller of self-spreading routers."""
 
@@ -64,11 +64,11 @@ class SelfSpreading(Controller):
     params: SelfSpreadingParams
     batchable = True
 
-    def __init__(self, *args, **kwargs) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(self, params: SelfSpreadingParams, setup: Setup) -> None:
+        super().__init__(params, setup)
         sw = self.swarm
         n = len(sw)
-        routers = sw.kind == Kind.ROUTER
+        routers = sw.role == Role.ROUTER
         step = float(sw.max_speed[routers].max(initial=0.0)) * self.dt
         self.r_eff = check_loss_band(self.params.loss_margin, self.r_c, step, "router")
         self.current = np.full(n, -1, dtype=np.int64)
@@ -76,11 +76,11 @@ class SelfSpreading(Controller):
         self.disabled = np.zeros(n, dtype=bool)
         self.refused = np.zeros(n, dtype=bool)
         self.router_model = int(sw.model[routers][0]) if routers.any() else 0
-        self.several_statuses = len(np.unique(sw.status[sw.kind == Kind.BASE])) > 1
+        self.several_statuses = len(np.unique(sw.status[sw.role == Role.BASE])) > 1
 
-    @property
-    def settled(self) -> bool:  # noqa: D102
-        return not self.swarm.in_states(SETTLING_STATES).any()
+    @classmethod
+    def start_range(cls, params: SelfSpreadingParams, r_c: float) -> float:  # noqa: D102
+        return (1.0 - params.loss_margin) * r_c
 
     def unsettled(self) -> np.ndarray:  # noqa: D102
         return self.swarm.in_states(SETTLING_STATES)

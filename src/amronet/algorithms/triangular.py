@@ -24,8 +24,8 @@ from typing import Literal
 
 import numpy as np
 
-from amronet.network import components
-from amronet.radio import NeighbourTable
+from amronet.engine.network import components
+from amronet.engine.radio import NeighbourTable
 
 __all__ = ["TriangularMode", "select_triangles", "triangle_goal"]
 

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from amronet.experiments.common import Claim, claims_markdown, csv_text, write_outputs
+from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.experiments.stats import mean_ci, mean_ci_columns
-from amronet.sweeps.executors import Executor
+from amronet.sweeps.stats import mean_ci, mean_ci_columns
 
 __all__ = ["ALGORITHMS", "run_coverage_over_time"]
 
@@ -55,15 +55,9 @@ def run_coverage_over_time(
     figure: str,
     out_dir: Path,
     runs: int = 50,
-    time_limit: float | None = None,
     algorithms: tuple[str, ...] = ALGORITHMS,
-    workers: int | None = None,
-    show_progress: bool = True,
-    seed: int = 0,
     baseline_dir: Path | None = None,
-    store: Path | None = None,
-    executor: Executor | None = None,
-    retry_failed: bool = False,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
     """Run Fig. 10 or Fig. 11 and write its files to ``out_dir``.
 
@@ -75,30 +69,27 @@ def run_coverage_over_time(
         figure: ``"fig10"`` (no obstacles) or ``"fig11"`` (obstacles).
         out_dir: Output folder (replaced atomically).
         runs: Runs per algorithm (the paper: 50).
-        time_limit: Horizon in simulated seconds (default :data:`DEFAULT_HORIZON_S`, 900).
         algorithms: Which algorithms to compare.
-        workers: Worker processes (default: all cores).
-        show_progress: Draw a progress bar.
-        seed: Base seed; run ``k`` uses ``seed * 100000 + k`` for every algorithm.
         baseline_dir: For Fig. 11, the folder of a Fig. 10 run to compare final coverage with (default: the
             sibling folder ``fig10`` of ``out_dir``, when it has a table).
-        store: Result store (SQLite) that finished runs are kept in and loaded from.
-        executor: Where the runs execute (default: a local process pool with ``workers`` processes).
-        retry_failed: Run again the runs the store holds as failed (otherwise they stay failed and this raises).
+        options: How the runs are made (default :class:`RunOptions`): ``time_limit``, the horizon in simulated
+            seconds (default :data:`DEFAULT_HORIZON_S`, 900), and ``seed``: run ``k`` uses ``seed * 100000 + k``
+            for every algorithm; the others say where the runs execute (:func:`run_jobs`). ``explorer`` is not
+            used: these figures run no agents.
     """
     if figure not in MAPS:
         raise ValueError(f"figure must be one of {sorted(MAPS)}, not {figure!r}")
     map_name = MAPS[figure]
-    time_limit = DEFAULT_HORIZON_S if time_limit is None else float(time_limit)
+    options = options or RunOptions()
+    time_limit = float(options.time_limit_or(DEFAULT_HORIZON_S))
     obstacles = figure == "fig11"
     jobs = []
     for algorithm in algorithms:
         scenario = spreading_scenario(map_name, algorithm, obstacles, time_limit)
         for k in range(runs):
-            jobs.append({"scenario": scenario, "seed": seed * 100_000 + k, "timeseries": True,
+            jobs.append({"scenario": scenario, "seed": options.seed * 100_000 + k, "timeseries": True,
                          "labels": {"figure": figure, "map": map_name, "algorithm": algorithm, "run": k}})
-    results = run_jobs(jobs, workers=workers, description=figure, show_progress=show_progress, store=store,
-                       executor=executor, retry_failed=retry_failed)
+    results = run_jobs(jobs, options, description=figure)
 
     grid = np.arange(0.0, time_limit + 1e-9, 1.0)
     series: dict[str, dict[str, np.ndarray]] = {a: {"coverage": [], "connected_coverage": []} for a in algorithms}

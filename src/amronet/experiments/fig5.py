@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 
 from amronet.experiments.common import START_LOCATIONS, Claim, agent_scenario, claims_markdown, csv_text, write_outputs
+from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.experiments.stats import mean_ci
-from amronet.sweeps.executors import Executor
+from amronet.sweeps.stats import mean_ci
 
 __all__ = ["PATTERNS", "run_fig5"]
 
@@ -45,30 +45,34 @@ def run_fig5(
     radii: tuple[float, ...] = (4, 5, 6, 7, 8, 9, 10),
     agents: tuple[int, ...] = (1, 2, 3, 4),
     starts: int = 5,
-    explorer: str = "frontier",
-    time_limit: float = 6000.0,
-    workers: int | None = None,
-    show_progress: bool = True,
-    seed: int = 0,
-    store: str | Path | None = None,
-    executor: Executor | None = None,
-    retry_failed: bool = False,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
     """Run the Fig. 5 experiment and write ``fig5_runs.csv``, ``fig5.png`` and ``fig5_claims.md`` to ``out_dir``.
+
+    Args:
+        out_dir: Output folder (replaced atomically; its result store is kept).
+        maps: The floors.
+        radii: The communication radii ``r_c`` in metres.
+        agents: The numbers of agents ``N_a``.
+        starts: How many of the five start locations (corners, then the centre).
+        options: How the runs are made (default :class:`RunOptions`): the agents' ``explorer``, ``time_limit``
+            (default :data:`~amronet.experiments.options.AGENT_TIME_LIMIT_S`), and ``seed``: job ``k`` uses
+            ``seed * 100000 + k``; the others say where the runs execute (:func:`run_jobs`).
 
     Returns:
         ``{"rows": per-run rows, "table": per-(map, r_c) statistics, "claims": [Claim], "markdown": str}``.
     """
+    options = options or RunOptions()
+    time_limit = options.time_limit_or(AGENT_TIME_LIMIT_S)
     jobs = []
     for map_name in maps:
         for r in radii:
             for n_a in agents:
                 for s, loc in enumerate(START_LOCATIONS[:starts]):
                     labels = {"map": map_name, "r_c": float(r), "agents": n_a, "start": s}
-                    jobs.append({"scenario": agent_scenario(map_name, r, (loc,), n_a, explorer, time_limit),
-                                 "seed": seed * 100_000 + len(jobs), "labels": labels})
-    results = run_jobs(jobs, workers=workers, description="fig5", show_progress=show_progress, store=store,
-                       executor=executor, retry_failed=retry_failed)
+                    scenario = agent_scenario(map_name, r, (loc,), n_a, options.explorer, time_limit)
+                    jobs.append({"scenario": scenario, "seed": options.seed * 100_000 + len(jobs), "labels": labels})
+    results = run_jobs(jobs, options, description="fig5")
     rows = []
     for res in results:
         s = res["summary"]

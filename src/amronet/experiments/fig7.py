@@ -15,9 +15,9 @@ from typing import Any
 import numpy as np
 
 from amronet.experiments.common import CORNERS, Claim, agent_scenario, claims_markdown, csv_text, write_outputs
+from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.experiments.stats import mean_ci
-from amronet.sweeps.executors import Executor
+from amronet.sweeps.stats import mean_ci
 
 __all__ = ["run_fig7"]
 
@@ -29,25 +29,35 @@ def run_fig7(
     bases: tuple[int, ...] = (1, 2, 3, 4),
     agents: tuple[int, ...] = (1, 2, 3),
     runs: int = 5,
-    explorer: str = "frontier",
-    time_limit: float = 6000.0,
-    workers: int | None = None,
-    show_progress: bool = True,
-    seed: int = 0,
-    store: str | Path | None = None,
-    executor: Executor | None = None,
-    retry_failed: bool = False,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
-    """Run the Fig. 7 experiment and write ``fig7_runs.csv``, ``fig7.png`` and ``fig7_claims.md`` to ``out_dir``."""
+    """Run the Fig. 7 experiment and write ``fig7_runs.csv``, ``fig7.png`` and ``fig7_claims.md`` to ``out_dir``.
+
+    Args:
+        out_dir: Output folder (replaced atomically; its result store is kept).
+        map_name: The floor.
+        r_c: Communication radius in metres.
+        bases: The numbers of base stations ``n`` (at the corners, in the paper's order).
+        agents: The numbers of agents per base station ``N_apbs``.
+        runs: Seeded runs per point.
+        options: How the runs are made (default :class:`RunOptions`): the agents' ``explorer``, ``time_limit``
+            (default :data:`~amronet.experiments.options.AGENT_TIME_LIMIT_S`), and ``seed``: job ``k`` uses
+            ``seed * 100000 + 50000 + k``; the others say where the runs execute (:func:`run_jobs`).
+
+    Returns:
+        ``{"rows": per-run rows, "table": per-(n, N_apbs) statistics, "claims": [Claim], "markdown": str}``.
+    """
+    options = options or RunOptions()
+    time_limit = options.time_limit_or(AGENT_TIME_LIMIT_S)
     jobs = []
     for n in bases:
         for n_a in agents:
             for k in range(runs):
                 labels = {"map": map_name, "r_c": float(r_c), "bases": n, "agents_per_base": n_a, "run": k}
-                jobs.append({"scenario": agent_scenario(map_name, r_c, CORNERS[:n], n_a, explorer, time_limit),
-                             "seed": seed * 100_000 + 50_000 + len(jobs), "labels": labels})
-    results = run_jobs(jobs, workers=workers, description="fig7", show_progress=show_progress, store=store,
-                       executor=executor, retry_failed=retry_failed)
+                scenario = agent_scenario(map_name, r_c, CORNERS[:n], n_a, options.explorer, time_limit)
+                jobs.append({"scenario": scenario, "seed": options.seed * 100_000 + 50_000 + len(jobs),
+                             "labels": labels})
+    results = run_jobs(jobs, options, description="fig7")
     rows = []
     for res in results:
         s = res["summary"]

@@ -4,38 +4,39 @@ Each job is a plain dict (scenario data, seed and labels), so it pickles cheaply
 writing files and returns the run's summary (and, when asked, its time series). Results come back in job order
 whatever the order they finish in.
 
-With ``store`` (a path), the jobs form a sweep of the result store (:mod:`amronet.sweeps.store`): jobs whose
-resolved scenario and seed are already done there are loaded instead of run, and every new run is committed as
-it finishes, so an interrupted figure resumes where it stopped.
+With a ``store`` (a path, in :class:`~amronet.experiments.options.RunOptions`), the jobs form a sweep of the
+result store (:mod:`amronet.sweeps.store`): jobs whose resolved scenario and seed are already done there are
+loaded instead of run, and every new run is committed as it finishes, so an interrupted figure resumes where it
+stopped.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from amronet.experiments.options import RunOptions
 from amronet.sweeps.executors import Executor, LocalExecutor, default_workers
 
-__all__ = ["Job", "default_workers", "run_batch", "run_job", "run_jobs"]
+__all__ = ["Job", "run_batch", "run_jobs"]
 
 Job = dict[str, Any]
 """``{"scenario": dict, "seed": int, "labels": dict, "timeseries": bool}``."""
 
-
-def run_job(job: Job) -> dict[str, Any]:
-    """Run one job and return its labels, summary and (optionally) time series as plain data."""
-    return run_batch([job])[0]
+_EXECUTION = ("workers", "show_progress", "store", "executor", "retry_failed")
+"""The fields of :class:`RunOptions` that :func:`run_jobs` uses (the others shape the jobs, the caller's part)."""
 
 
 def run_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
     """Run jobs of one scenario that differ only in seed and labels, stepped together when the scenario allows.
 
     Returns:
-        One :func:`run_job` result per job, in order.
+        One result per job, in order: its labels, seed, summary and (when the job asks) time series, as plain data.
     """
-    from amronet.batch import run_seeds
     from amronet.scenario import load_scenario
+    from amronet.sim.batch import run_seeds
 
     results = run_seeds(load_scenario(jobs[0]["scenario"]), [job["seed"] for job in jobs])
     outs = []
@@ -49,42 +50,47 @@ def run_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
 
 def run_jobs(
     jobs: Sequence[Job],
-    workers: int | None = None,
+    options: RunOptions | None = None,
+    *,
     description: str = "runs",
-    show_progress: bool = True,
     on_result: Callable[[int, dict[str, Any]], None] | None = None,
-    store: str | Path | None = None,
-    executor: Executor | None = None,
-    retry_failed: bool = False,
+    **changes: Any,
 ) -> list[dict[str, Any]]:
-    """Run jobs, in parallel when ``workers > 1``; results in job order.
+    """Run jobs, in parallel when there is more than one worker; results in job order.
 
     Args:
         jobs: The jobs.
-        workers: Worker processes (default: the cores available); 1 runs in this process.
+        options: How the jobs run: ``workers`` (default: the cores available; 1 runs in this process),
+            ``show_progress``, ``store`` (result store to load finished runs from and commit new ones to),
+            ``executor`` (default: a local process pool with ``workers`` processes) and ``retry_failed`` (with a
+            store, run again the runs it holds as failed; otherwise they stay failed and this raises for them).
+            Its ``explorer``, ``time_limit`` and ``seed`` shape the jobs, which the caller has built.
         description: Label of the progress bar (and the sweep's name in the store).
-        show_progress: Draw a progress bar (on stderr).
         on_result: Called with ``(index, result)`` as each job finishes (or is loaded from the store).
-        store: Result store (SQLite path) to load finished runs from and commit new ones to.
-        executor: Where the jobs run (default: a local process pool with ``workers`` processes).
-        retry_failed: With a store, run again the runs it holds as failed (``--retry-failed`` of ``amronet
-            reproduce`` and ``amronet sweep``); ``False`` leaves them failed and raises for them.
+        **changes: Those five fields of ``options`` to change, for short: ``run_jobs(jobs, workers=1)`` is
+            ``run_jobs(jobs, RunOptions(workers=1))``.
 
     Raises:
         AmronetError: With a store, some runs failed (they are recorded; a call with ``retry_failed`` retries
             them); or a worker process died (:class:`~amronet.sweeps.executors.WorkerDiedError`).
+        TypeError: ``changes`` names something else.
     """
+    unknown = sorted(set(changes) - set(_EXECUTION))
+    if unknown:
+        raise TypeError(f"run_jobs() got unexpected keyword arguments {unknown}; it takes {list(_EXECUTION)}")
+    options = dataclasses.replace(options or RunOptions(), **changes)
     if jobs:  # fail fast, in this process, on a scenario that cannot start
         from amronet.scenario import load_scenario
         from amronet.sim import Simulation
 
         Simulation(load_scenario(jobs[0]["scenario"]), jobs[0]["seed"])
-    own = executor is None
-    executor = executor or LocalExecutor(workers or default_workers())
+    own = options.executor is None
+    executor: Executor = options.executor or LocalExecutor(options.workers or default_workers())
     try:
-        if store is not None:
-            return _run_with_store(jobs, Path(store), executor, description, show_progress, on_result, retry_failed)
-        return _run_plain(jobs, executor, description, show_progress, on_result)
+        if options.store is not None:
+            return _run_with_store(jobs, Path(options.store), executor, description, options.show_progress,
+                                   on_result, options.retry_failed)
+        return _run_plain(jobs, executor, description, options.show_progress, on_result)
     finally:
         if own:
             executor.close()

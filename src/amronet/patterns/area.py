@@ -9,7 +9,7 @@ from typing import TypeAlias
 
 import numpy as np
 
-from amronet.coverage import CoverageArea
+from amronet.engine.coverage import CoverageArea
 from amronet.world.occupancy import FREE, OccupancyMap
 
 __all__ = ["AreaLike", "PatternArea", "as_area", "in_rectangle"]

@@ -26,7 +26,7 @@ _S3 = math.sqrt(3.0)
 
 
 @dataclass(frozen=True)
-class _Lattice:
+class Lattice:
     """Lattice ``basis + i * (px, 0) + j * (sx, py)`` in the pattern frame."""
 
     px: float
@@ -35,17 +35,19 @@ class _Lattice:
     basis: tuple[tuple[float, float], ...]
 
 
-def _lattice(pattern: str, r: float) -> _Lattice:
+def lattice_basis(pattern: str, r: float) -> Lattice:
+    """The lattice of ``pattern`` at link length ``r`` in its own frame."""
     if pattern == "r-strip":
-        return _Lattice(r, r / 2, (1 + _S3 / 2) * r, ((0.0, 0.0),))
+        return Lattice(r, r / 2, (1 + _S3 / 2) * r, ((0.0, 0.0),))
     if pattern == "hexagonal":  # honeycomb: two nodes per cell, a vertical edge (0, 0)-(0, r)
-        return _Lattice(_S3 * r, _S3 / 2 * r, 1.5 * r, ((0.0, 0.0), (0.0, r)))
+        return Lattice(_S3 * r, _S3 / 2 * r, 1.5 * r, ((0.0, 0.0), (0.0, r)))
     if pattern == "square":
-        return _Lattice(r, 0.0, r, ((0.0, 0.0),))
-    return _Lattice(r, r / 2, _S3 / 2 * r, ((0.0, 0.0),))
+        return Lattice(r, 0.0, r, ((0.0, 0.0),))
+    return Lattice(r, r / 2, _S3 / 2 * r, ((0.0, 0.0),))
 
 
-def _check(pattern: str, r: float) -> float:
+def check_pattern(pattern: str, r: float) -> float:
+    """Check a pattern name and link length; return the length as a float (ValueError if either is bad)."""
     if pattern not in PATTERNS:
         raise ValueError(f"pattern must be one of {PATTERNS}, got {pattern!r}")
     if (
@@ -71,22 +73,24 @@ def estimate(pattern: str, area_m2: float, r: float) -> int:
     Raises:
         ValueError: Unknown pattern, or ``r`` or ``area_m2`` not finite and in range.
     """
-    r = _check(pattern, r)
+    r = check_pattern(pattern, r)
     if not (math.isfinite(area_m2) and area_m2 >= 0):
         raise ValueError(f"area_m2 must be a finite number >= 0, got {area_m2!r}")
     return math.ceil(DENSITY[pattern] * area_m2 / r**2 - 1e-9)
 
 
-def _to_world(p: np.ndarray, rotated: bool) -> np.ndarray:
+def to_world(p: np.ndarray, rotated: bool) -> np.ndarray:
+    """Pattern-frame points in the world frame (a quarter turn when ``rotated``)."""
     return np.stack([-p[..., 1], p[..., 0]], axis=-1) if rotated else p
 
 
-def _pattern_bbox(bounds: tuple[float, float, float, float], rotated: bool) -> tuple[float, float, float, float]:
+def pattern_bbox(bounds: tuple[float, float, float, float], rotated: bool) -> tuple[float, float, float, float]:
+    """A world bounding box ``(x0, y0, x1, y1)`` in the pattern frame."""
     x0, y0, x1, y1 = bounds
     return (y0, -x1, y1, -x0) if rotated else bounds
 
 
-def _points(lat: _Lattice, bbox: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def lattice_points(lat: Lattice, bbox: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lattice points (offset 0) that any offset in the fundamental cell can move into ``bbox``.
 
     Returns:
@@ -159,15 +163,15 @@ def _strip_connectors(
     return mids[out]
 
 
-def _nodes(
-    pattern: str, r: float, p: np.ndarray, u: np.ndarray, j: np.ndarray, rotated: bool, inside: Callable
+def lattice_nodes(
+    pattern: str, p: np.ndarray, u: np.ndarray, j: np.ndarray, rotated: bool, inside: Callable
 ) -> tuple[np.ndarray, np.ndarray]:
     """World positions of the selected pattern-frame nodes plus, for the r-strip, its connectors."""
-    xy = _to_world(p, rotated)
+    xy = to_world(p, rotated)
     conn = np.zeros(len(xy), dtype=bool)
     if pattern == "r-strip" and len(p):
-        c = _strip_connectors(p, u, j, lambda q: inside(_to_world(q, rotated)))
-        xy = np.concatenate([xy, _to_world(c, rotated)])
+        c = _strip_connectors(p, u, j, lambda q: inside(to_world(q, rotated)))
+        xy = np.concatenate([xy, to_world(c, rotated)])
         conn = np.concatenate([conn, np.ones(len(c), dtype=bool)])
     return xy, conn
 
@@ -188,17 +192,17 @@ def lattice(
     Returns:
         ``(xy, connector)``: positions ``(N, 2)`` and a boolean mask of the r-strip's connectors.
     """
-    r = _check(pattern, r)
+    r = check_pattern(pattern, r)
     bounds = (0.0, 0.0, float(width), float(height))
 
     def inside(q: np.ndarray) -> np.ndarray:
         return in_rectangle(q, width, height)
 
-    lat = _lattice(pattern, r)
+    lat = lattice_basis(pattern, r)
     ox, oy = (offset[1], -offset[0]) if rotated else offset
     k = math.floor(oy / lat.py)  # reduce the offset into the fundamental cell
     ox, oy = (ox - k * lat.sx) % lat.px, oy - k * lat.py
-    p, u, j = _points(lat, _pattern_bbox(bounds, rotated))
+    p, u, j = lattice_points(lat, pattern_bbox(bounds, rotated))
     p = p + np.array([ox, oy])
-    sel = inside(_to_world(p, rotated))
-    return _nodes(pattern, r, p[sel], u[sel], j[sel], rotated, inside)
+    sel = inside(to_world(p, rotated))
+    return lattice_nodes(pattern, p[sel], u[sel], j[sel], rotated, inside)

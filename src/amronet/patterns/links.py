@@ -6,7 +6,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 
-from amronet.neighbours import neighbour_csr, pairs_from_csr
+from amronet.engine.neighbours import neighbour_csr, pairs_from_csr
 
 __all__ = ["LINK_SLACK", "is_connected", "pattern_links"]
 

@@ -16,14 +16,14 @@ from amronet.patterns.area import AreaLike, PatternArea, as_area
 from amronet.patterns.lattices import (
     DENSITY,
     PATTERNS,
-    _check,
-    _Lattice,
-    _lattice,
-    _nodes,
-    _pattern_bbox,
-    _points,
-    _to_world,
+    Lattice,
+    check_pattern,
     estimate,
+    lattice_basis,
+    lattice_nodes,
+    lattice_points,
+    pattern_bbox,
+    to_world,
 )
 from amronet.patterns.links import is_connected
 
@@ -79,7 +79,7 @@ class Placement:
         }  # fmt: skip
 
 
-def _offsets(lat: _Lattice, bbox: tuple[float, float, float, float], steps: int) -> np.ndarray:
+def _offsets(lat: Lattice, bbox: tuple[float, float, float, float], steps: int) -> np.ndarray:
     """Candidate offsets: a grid over the fundamental cell plus the offsets putting a node on a bbox edge."""
     x0, y0, x1, y1 = bbox
     xs = [k * lat.px / steps for k in range(steps)]
@@ -137,13 +137,13 @@ def place(
         ValueError: Unknown pattern, ``r`` not finite and positive, ``steps < 1``, ``tol`` outside ``[0, 1)``,
             or a bad area (see :func:`as_area`).
     """
-    r = _check(pattern, r)
+    r = check_pattern(pattern, r)
     if not (isinstance(steps, int | np.integer) and steps >= 1):
         raise ValueError(f"steps must be an integer >= 1, got {steps!r}")
     if not (0 <= tol < 1):
         raise ValueError(f"tol must be in [0, 1), got {tol!r}")
     pa = as_area(area, mask=mask, r=r)
-    lat = _lattice(pattern, r)
+    lat = lattice_basis(pattern, r)
     bounds = pa.bounds
     if pa.rectangle is None:  # nodes exactly on the far edge of the mask lie in no cell: snap just inside
         eps = 1e-6 * pa.omap.resolution
@@ -152,14 +152,14 @@ def place(
     sel_of: dict[int, np.ndarray] = {}
     frames = {}
     for rotated in (False, True) if rotations else (False,):
-        bbox = _pattern_bbox(bounds, rotated)
-        p, u, j = _points(lat, bbox)
+        bbox = pattern_bbox(bounds, rotated)
+        p, u, j = lattice_points(lat, bbox)
         offs = _offsets(lat, bbox, int(steps))
         frames[rotated] = (p, u, j)
         chunk = max(1, _MAX_CANDIDATE_POINTS // max(len(p), 1))
         for s in range(0, len(offs), chunk):
             o = offs[s : s + chunk]
-            inside = pa.inside(_to_world(p[None, :, :] + o[:, None, :], rotated))
+            inside = pa.inside(to_world(p[None, :, :] + o[:, None, :], rotated))
             lower = inside.sum(axis=1)
             if pattern == "r-strip" and pa.rectangle is not None:  # one connector per gap of non-empty rows
                 rows = np.zeros((len(o), int(j.max() - j.min()) + 1), dtype=bool)
@@ -174,7 +174,7 @@ def place(
         c = cands[k]
         p, u, j = frames[c.rotated]
         sel = sel_of[k]
-        c.xy, c.connector = _nodes(pattern, r, p[sel] + c.offset, u[sel], j[sel], c.rotated, pa.inside)
+        c.xy, c.connector = lattice_nodes(pattern, p[sel] + c.offset, u[sel], j[sel], c.rotated, pa.inside)
         c.cov = pa.coverage.fraction(c.xy, r) if len(c.xy) else 0.0
         return c
 
@@ -190,7 +190,7 @@ def place(
     best, exact = _select([cands[k] for k in evaluated], r, tol, pa)
     xy = best.xy if best.xy is not None else np.empty((0, 2))
     connector = best.connector if best.connector is not None else np.zeros(0, dtype=bool)
-    ox, oy = _to_world(best.offset, best.rotated)
+    ox, oy = to_world(best.offset, best.rotated)
     return Placement(
         pattern=pattern, xy=xy, count=len(xy), coverage=exact, connected=best.connected(r),
         offset=(float(ox), float(oy)), rotated=best.rotated, r=r, estimate=estimate(pattern, pa.area_m2, r),
@@ -240,5 +240,5 @@ def place_all(
         Pattern name to placement, in the order of ``patterns``.
     """
     mask = kwargs.pop("mask", None)
-    pa = as_area(area, mask=mask, r=_check(patterns[0] if patterns else PATTERNS[0], r))
+    pa = as_area(area, mask=mask, r=check_pattern(patterns[0] if patterns else PATTERNS[0], r))
     return {name: place(name, pa, r, **kwargs) for name in patterns}

@@ -43,9 +43,9 @@ def _values(overrides: dict[str, Any]) -> str:
 
 
 def _start(resolved: dict[str, Any], seed: int, maps: dict[str, Any]) -> None:
-    from amronet.assemble import load_scenario_map
     from amronet.scenario import load_scenario
     from amronet.sim import Simulation
+    from amronet.sim.assemble import load_scenario_map
 
     scenario = load_scenario(resolved)
     ref = resolved["map"]

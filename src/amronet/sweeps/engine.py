@@ -79,7 +79,7 @@ def pending_runs(store: ResultStore, runs: Sequence[StoreJob], retry_failed: boo
 
 
 def plan_batches(pending: Sequence[StoreJob], slots: int, max_size: int = MAX_BATCH) -> list[list[int]]:
-    """Group runs into jobs: runs of one batchable scenario (:func:`amronet.batch.batchable`) share a job.
+    """Group runs into jobs: runs of one batchable scenario (:func:`amronet.sim.batch.batchable`) share a job.
 
     A scenario's ``n`` runs form ``max(ceil(n / max_size), min(slots, n))`` batches of nearly equal size, so
     that every slot gets work; any other run is a job of its own. Larger jobs come first (they take longest).
@@ -87,8 +87,8 @@ def plan_batches(pending: Sequence[StoreJob], slots: int, max_size: int = MAX_BA
     Returns:
         Lists of indices into ``pending``, one per job.
     """
-    from amronet.batch import batchable
     from amronet.scenario import load_scenario
+    from amronet.sim.batch import batchable
 
     by_hash: dict[str, list[int]] = {}
     for k, (h, _, _) in enumerate(pending):

@@ -55,7 +55,7 @@ class ClusterLostError(AmronetError):
         return type(self), (self.cause, str(self))
 
 
-def _lost_cluster_errors(distributed: Any) -> tuple[type[BaseException], ...]:
+def _lost_cluster_errors() -> tuple[type[BaseException], ...]:
     """What ``distributed`` raises when the scheduler or the workers go away under a running computation."""
     from concurrent.futures import CancelledError as FuturesCancelledError
 
@@ -232,7 +232,7 @@ class DaskExecutor(Executor):
                 info = self.client.scheduler_info(n_workers=-1)
             except TypeError:  # older distributed
                 info = self.client.scheduler_info()
-        except _lost_cluster_errors(_distributed()) as exc:
+        except _lost_cluster_errors() as exc:
             raise ClusterLostError(_cause(exc)) from None
         return max(1, sum(int(w.get("nthreads", 1)) for w in info.get("workers", {}).values()))
 
@@ -247,7 +247,7 @@ class DaskExecutor(Executor):
             ClusterLostError: The scheduler connection was lost, or workers died under a job (``KilledWorker``).
         """
         distributed = _distributed()
-        lost = _lost_cluster_errors(distributed)
+        lost = _lost_cluster_errors()
         futures: list[Any] = []
         try:
             futures = self.client.map(fn, list(jobs), pure=False)

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from amronet.errors import AmronetError
-from amronet.experiments.stats import mean_ci
+from amronet.sweeps.stats import mean_ci
 
 __all__ = ["plot_groups", "save_plot"]
 

@@ -42,7 +42,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, ValidationError, model_validator
 
 from amronet.errors import ScenarioError
-from amronet.scenario import Scenario, _to_scenario_error, load_scenario
+from amronet.scenario import Scenario, load_scenario, to_scenario_error
 from amronet.sweeps.check import check_points, owner_key
 from amronet.sweeps.identity import resolve_scenario, scenario_hash
 
@@ -223,7 +223,7 @@ def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | Non
         try:
             spec = SweepSpec.model_validate(spec)
         except ValidationError as exc:
-            raise _to_scenario_error(exc, model=SweepSpec) from None
+            raise to_scenario_error(exc, model=SweepSpec) from None
     folder = str(Path(base_dir).resolve()) if base_dir is not None else None
     base = _base_scenario(spec, folder)
     fixed = _point(base, spec.overrides, {}, "", -1)  # the fixed overrides alone, so their errors name them

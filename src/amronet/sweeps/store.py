@@ -260,10 +260,6 @@ class ResultStore:
             raise StoreError(f"--sweep: no sweep {name_or_id!r} in {str(self.path)!r}; sweeps: {names}")
         return int(row[0])
 
-    def sweep_spec(self, sweep_id: int) -> dict[str, Any]:
-        """The stored specification of a sweep."""
-        return json.loads(self.conn.execute("SELECT spec FROM sweeps WHERE id = ?", (sweep_id,)).fetchone()[0])
-
     # -- runs ------------------------------------------------------------------------------------------------
     def statuses(self) -> dict[tuple[str, int], str]:
         """``(scenario_hash, seed) -> status`` of every stored run."""
@@ -301,7 +297,7 @@ class ResultStore:
     def load(self, scenario_hash: str, seed: int, timeseries: bool = True) -> dict[str, Any] | None:
         """A stored run as ``{"status", "error", "summary", "timeseries"}``; ``None`` when it is not stored.
 
-        The summary is the one :class:`~amronet.results.RunResult` made, with ``wall_time_s``,
+        The summary is the one :class:`~amronet.sim.results.RunResult` made, with ``wall_time_s``,
         ``amronet_version`` and ``scenario`` (the resolved scenario) last.
         """
         row = self.conn.execute(

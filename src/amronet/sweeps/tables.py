@@ -67,7 +67,7 @@ def point_summary(rows: list[dict[str, Any]], keys: list[str]) -> list[dict[str,
         Per point: the swept keys' values, runs, done, failed, mean ± 95 % CI of ``nodes_total``, means of
         ``coverage`` and ``connected_coverage``, and the most common stop reason.
     """
-    from amronet.experiments.stats import mean_ci
+    from amronet.sweeps.stats import mean_ci
 
     groups: dict[Any, list[dict[str, Any]]] = {}
     for row in rows:

@@ -58,7 +58,7 @@ def _done(result: Any) -> dict[str, Any]:
 def execute_batch(job: dict[str, Any]) -> list[dict[str, Any]]:
     """Run the seeds of one job ``{"scenario": resolved dict, "seeds": [int, ...]}``; one outcome per seed.
 
-    Several seeds of a batchable scenario are stepped together (:class:`~amronet.batch.BatchSimulation`), with
+    Several seeds of a batchable scenario are stepped together (:class:`~amronet.sim.batch.BatchSimulation`), with
     the same results as one by one; a run's ``wall_time_s`` is then its share of the batch. If the batch raises,
     its seeds run again one by one, so every run gets its own outcome (and a failure names its own error).
     """
@@ -68,8 +68,8 @@ def execute_batch(job: dict[str, Any]) -> list[dict[str, Any]]:
     if len(seeds) > 1:
         out: dict[str, Any] = {"host": socket.gethostname(), "amronet_version": __version__}
         try:
-            from amronet.batch import run_seeds
             from amronet.scenario import load_scenario
+            from amronet.sim.batch import run_seeds
 
             results = run_seeds(load_scenario(job["scenario"]), seeds)
         except Exception:

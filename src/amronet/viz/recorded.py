@@ -26,9 +26,9 @@ from matplotlib.lines import Line2D
 from PIL import Image
 from scipy import sparse
 
+from amronet.engine.robots import STATE_NAMES, Role, State
 from amronet.errors import AmronetError
-from amronet.recording import Recording
-from amronet.robots import STATE_NAMES, Kind, State
+from amronet.outputs.recording import Recording
 from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, marker_handle
 from amronet.viz.nodestyle import (
     DEPLOYED,
@@ -40,7 +40,7 @@ from amronet.viz.nodestyle import (
     status_colours,
     status_handles,
 )
-from amronet.viz.snapshot import MAP_COLOURS, _map_patch, _new_figure, draw_map, snapshot_figure
+from amronet.viz.snapshot import MAP_COLOURS, draw_map, map_patch, new_map_figure, snapshot_figure
 
 __all__ = [
     "FrameRenderer",
@@ -64,9 +64,9 @@ _GIF_COLOURS = 255
 def frame_title(rec: Recording, f: int, coverage: float | None = None) -> str:
     """Title with the frame's key numbers: algorithm, map, seed, nodes, coverage (computed if not given), time."""
     fr = rec.frame(f)
-    routers = fr["kind"] == Kind.ROUTER
+    routers = fr["kind"] == Role.ROUTER
     deployed = _DEPLOYED_CODES[fr["state"]]
-    nodes = int(np.count_nonzero(deployed & routers) + np.count_nonzero(fr["kind"] == Kind.BASE))
+    nodes = int(np.count_nonzero(deployed & routers) + np.count_nonzero(fr["kind"] == Role.BASE))
     m = rec.meta
     return (f"{m['algorithm']} on {m['map']}, seed {m['seed']}: {nodes} nodes, "
             f"coverage {100 * (rec.coverage(f) if coverage is None else coverage):.1f} %, t = {rec.t[f]:g} s")
@@ -168,7 +168,7 @@ class FrameRenderer:
     def __init__(self, rec: Recording, dpi: float = 80,
                  layers: Sequence[str] = ("disks", "links", "trails", "uncovered")) -> None:
         self.rec, self.dpi, self.layers = rec, dpi, set(layers)
-        self.fig, self.ax = _new_figure(rec.omap, right=2.2, dpi=dpi)
+        self.fig, self.ax = new_map_figure(rec.omap, right=2.2, dpi=dpi)
         ax = self.ax
         image = draw_map(ax, rec.omap, reachable=rec.reachable)
         image.set_interpolation("antialiased")  # at animation sizes a cell is < 1 pixel: keep thin walls
@@ -192,12 +192,12 @@ class FrameRenderer:
                 handles.append(marker_handle(marker, math.sqrt(size), "0.45" if filled else "none", label))
         handles.append(legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {rec.r_c:g} m", edge="0.4"))
         handles.append(Line2D([], [], color=LINK_COLOUR, linewidth=1.0, label="link"))
-        if np.any(rec.kind == Kind.AGENT):
+        if np.any(rec.kind == Role.AGENT):
             handles.append(Line2D([], [], color="0.35", linewidth=1.0, label="agent trail"))
         free = rec.omap.free
         shown = {"occupied": True, "unreachable": bool((free & ~rec.reachable).any()), "covered": True,
                  "uncovered": True}
-        handles += [_map_patch(c) for c, show in shown.items() if show]
+        handles += [map_patch(c) for c, show in shown.items() if show]
         handles += status_handles(np.unique(rec.status))
         add_legend(self.fig, ax, handles)
         add_scale_bar(ax, rec.omap)
@@ -240,7 +240,7 @@ class FrameRenderer:
             self._tint_rgba[..., 3] = np.rint(255 * np.clip(alpha, 0, 1))
             self._tint.set_data(self._tint_rgba)
         self._tint.set_visible("uncovered" in self.layers)
-        deployed = _DEPLOYED_CODES[state] | (fr["kind"] == Kind.BASE)
+        deployed = _DEPLOYED_CODES[state] | (fr["kind"] == Role.BASE)
         if "disks" in self.layers:
             face, edge = colours[deployed].copy(), colours[deployed].copy()
             face[:, 3], edge[:, 3] = DISK_FACE_ALPHA, DISK_EDGE_ALPHA

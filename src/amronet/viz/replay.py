@@ -27,11 +27,11 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from amronet.recording import Recording
-from amronet.robots import KIND_NAMES, STATE_NAMES
+from amronet.engine.robots import ROLE_NAMES, STATE_NAMES
+from amronet.outputs.recording import Recording
 from amronet.viz.nodestyle import LINK_THINNING, NO_STATUS, PALETTE
 from amronet.viz.recorded import pick_frames
-from amronet.viz.snapshot import _LUT, MAP_COLOURS, _map_image
+from amronet.viz.snapshot import MAP_COLOURS, MAP_LUT, map_image
 
 __all__ = ["TEMPLATE", "replay_html", "replay_payload"]
 
@@ -122,7 +122,7 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
     raw, arrays = replay_payload(rec, idx)
     omap = rec.omap
     x0, x1, y0, y1 = omap.extent
-    base = _map_image(omap, rec.reachable, None)  # row 0 = lowest y; the page draws it with y pointing up
+    base = map_image(omap, rec.reachable, None)  # row 0 = lowest y; the page draws it with y pointing up
     tint = np.zeros((*omap.shape, 4), dtype=np.uint8)
     tint[rec.reachable] = (*MAP_COLOURS["uncovered"], 255)
     summary: dict[str, Any] = {}
@@ -155,7 +155,7 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
         "arrays": arrays,
         "status_none": 255 if arrays["status"]["dtype"] == "uint8" else -1,
         "state_names": list(STATE_NAMES),
-        "kind_names": list(KIND_NAMES),
+        "kind_names": list(ROLE_NAMES),
         "palette": [_hex(c) for c in PALETTE],
         "no_status": _hex(NO_STATUS),
         "link_thinning": LINK_THINNING,
@@ -163,7 +163,7 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
         "map_png": _png_b64(base),
         "reach_png": _png_b64(tint),
         "has_unreachable": bool((omap.free & ~rec.reachable).any()),
-        "occupied_rgb": [int(c) for c in _LUT[1]],
+        "occupied_rgb": [int(c) for c in MAP_LUT[1]],
         "timeseries": _timeseries(rec, folder, idx),
     }
     payload = base64.b64encode(zlib.compress(raw, 6)).decode("ascii")

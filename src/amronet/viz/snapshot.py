@@ -67,7 +67,7 @@ _LABELS = {
     "covered": "covered: within $r_c$ of any\nrouter or base (moving too)",
 }
 _CATEGORIES = ("free", "occupied", "unknown", "unreachable", "uncovered")
-_LUT = np.array([MAP_COLOURS[c] for c in _CATEGORIES], dtype=np.uint8)
+MAP_LUT = np.array([MAP_COLOURS[c] for c in _CATEGORIES], dtype=np.uint8)
 
 # Fixed layout, in inches.
 _AX_LONG_SIDE = 6.0
@@ -76,7 +76,7 @@ _MARGIN_LEFT, _MARGIN_BOTTOM, _MARGIN_TOP = 0.8, 0.6, 0.45
 _MIN_FIG_HEIGHT = 4.6
 
 
-def _map_image(omap: OccupancyMap, reachable: np.ndarray | None, covered: np.ndarray | None) -> np.ndarray:
+def map_image(omap: OccupancyMap, reachable: np.ndarray | None, covered: np.ndarray | None) -> np.ndarray:
     """Return the ``uint8`` RGB image ``(rows, cols, 3)`` of the map with the optional shadings."""
     cells = omap.cells
     cat = np.zeros(cells.shape, dtype=np.uint8)
@@ -89,7 +89,7 @@ def _map_image(omap: OccupancyMap, reachable: np.ndarray | None, covered: np.nda
         counted = free & reachable
     if covered is not None:
         cat[counted & ~covered] = 4
-    return _LUT[cat]
+    return MAP_LUT[cat]
 
 
 def draw_map(
@@ -121,7 +121,7 @@ def draw_map(
     reachable = check_mask("reachable", reachable, omap.shape)
     covered = check_mask("covered", covered, omap.shape)
     im = ax.imshow(
-        _map_image(omap, reachable, covered),
+        map_image(omap, reachable, covered),
         extent=omap.extent,
         origin="lower",
         interpolation="nearest",
@@ -135,7 +135,7 @@ def draw_map(
     return im
 
 
-def _new_figure(omap: OccupancyMap, right: float, dpi: float) -> tuple[Figure, Axes]:
+def new_map_figure(omap: OccupancyMap, right: float, dpi: float) -> tuple[Figure, Axes]:
     """Create an Agg figure whose axes hold the map to scale, with ``right`` inches free for a legend."""
     w, h = omap.size_m
     scale = _AX_LONG_SIDE / max(w, h)
@@ -149,7 +149,7 @@ def _new_figure(omap: OccupancyMap, right: float, dpi: float) -> tuple[Figure, A
     return fig, ax
 
 
-def _map_patch(category: str) -> Patch:
+def map_patch(category: str) -> Patch:
     """Legend patch of one map cell category (``covered`` is free space drawn plain, like ``free``)."""
     colour = MAP_COLOURS["free" if category == "covered" else category]
     return legend_patch(tuple(c / 255 for c in colour), _LABELS[category])
@@ -187,11 +187,11 @@ def save_map_picture(omap: OccupancyMap, path: str | Path, *, dpi: float = 150) 
         ValueError: If the suffix of ``path`` is neither ``.png`` nor ``.svg``.
     """
     _format_of(path)
-    fig, ax = _new_figure(omap, right=1.3, dpi=dpi)
+    fig, ax = new_map_figure(omap, right=1.3, dpi=dpi)
     draw_map(ax, omap)
     w, h = omap.size_m
     ax.set_title(f"{omap.name}: {w:.1f} m x {h:.1f} m, {omap.resolution:g} m/cell", fontsize=10)
-    add_legend(fig, ax, [_map_patch(c) for c in ("free", "occupied", "unknown")])
+    add_legend(fig, ax, [map_patch(c) for c in ("free", "occupied", "unknown")])
     return _save(fig, path, dpi)
 
 
@@ -221,7 +221,7 @@ def snapshot_figure(
     xy, kind, state, status, links = validate_nodes(xy, kind, state, status, links, float(r_c))
     reachable = check_mask("reachable", reachable, omap.shape)
     covered = check_mask("covered", covered, omap.shape)
-    fig, ax = _new_figure(omap, right=2.2, dpi=dpi)
+    fig, ax = new_map_figure(omap, right=2.2, dpi=dpi)
     draw_map(ax, omap, reachable=reachable, covered=covered)
     colours = status_colours(status)
 
@@ -268,7 +268,7 @@ def snapshot_figure(
         ("uncovered", covered is not None and (counted & ~covered).any()),
     ):
         if shown:
-            handles.append(_map_patch(category))
+            handles.append(map_patch(category))
     handles += status_handles(np.unique(status))
     add_legend(fig, ax, handles)
     add_scale_bar(ax, omap)

@@ -1,0 +1,16 @@
+"""Exploration strategies of the agents, registered by name in :data:`EXPLORERS` (the paper uses ``"random"``).
+
+An explorer sets the headings of the agents it is given from their sonar readings; it may keep its own state.
+A new one subclasses :class:`Explorer` and registers itself with ``@EXPLORERS.register("name")``
+(:mod:`~amronet.algorithms.explorers.base`); scenarios pick it with ``algorithm.params.explorer``.
+
+Modules: :mod:`~amronet.algorithms.explorers.base` (the base class and the registry),
+:mod:`~amronet.algorithms.explorers.random_walk` (``"random"``) and :mod:`~amronet.algorithms.explorers.frontier`
+(``"frontier"``). Importing this package registers them all.
+"""
+
+from amronet.algorithms.explorers.base import EXPLORERS, Explorer
+from amronet.algorithms.explorers.frontier import FrontierExplorer
+from amronet.algorithms.explorers.random_walk import RandomExplorer
+
+__all__ = ["EXPLORERS", "Explorer", "FrontierExplorer", "RandomExplorer"]

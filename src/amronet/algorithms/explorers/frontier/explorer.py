@@ -1,0 +1,175 @@
+"""The ``"frontier"`` explorer: per-agent state around the shared knowledge grid and the navigation kernel."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from amronet.algorithms.explorers.base import EXPLORERS, Explorer
+from amronet.algorithms.explorers.frontier.distance import gap_to_uncovered
+from amronet.algorithms.explorers.frontier.knowledge import KnowledgeGrid, clearance_offsets, paint_covered, paint_nodes
+from amronet.algorithms.explorers.frontier.navigation import navigate
+from amronet.algorithms.explorers.frontier.planning import search_buffers, window_buffers
+from amronet.algorithms.explorers.frontier.state import (
+    STUCK_RADIUS,
+    AgentPlans,
+    MapLayers,
+    NavBuffers,
+    NavSettings,
+    StepInputs,
+)
+from amronet.algorithms.explorers.random_walk import RandomExplorer
+from amronet.engine.sensing import beam_angles
+
+__all__ = ["FrontierExplorer"]
+
+
+@EXPLORERS.register("frontier")
+class FrontierExplorer(Explorer):
+    """Frontier exploration on a knowledge grid shared by the agents (see the package's docstring).
+
+    The first five arguments are those of :class:`~amronet.algorithms.explorers.base.Explorer`; the others tune
+    the strategy and keep their defaults when the explorer is picked by name. The explorer keeps per-agent
+    state between calls: it must always be called with the same agents, in the same order.
+
+    Args:
+        turn_noise: Heading noise of the random fallback, radians per square-root second.
+        avoid_range: Sonar readings nearer than this (metres) must keep out of the lane ahead.
+        dt: Step length in seconds.
+        r_c: Communication radius.
+        extent: ``(xmin, xmax, ymin, ymax)`` of the area in metres.
+        resolution: Cell size of the knowledge grid in metres.
+        clearance: Cells within this distance (metres, centre to centre) of an occupied cell or a deployed node
+            are not traversable; about the agent's body radius (a Pioneer's is 0.22 m). With 0.25 m cells,
+            0.3 m keeps a 1 m doorway open.
+        cover_margin: A node covers cells within ``(1 - cover_margin) r_c``; keep it below the deployment's
+            ``loss_margin`` (0.05) so that an agent in an uncovered cell is about to lose its references.
+        window: Targets have a seen uncovered cell or a frontier cell within this many cells.
+        claim_radius: Targets within this many metres of another agent's goal are left to it while others
+            exist; ``None``: ``r_c / 2``.
+        gap_weight: Weight of a target's distance to uncovered space in its score.
+        replan_every: Seconds between periodic replans.
+        stuck_after: Seconds within :data:`STUCK_RADIUS` of one point after which the goal is given up.
+        approach_time: Longest straight approach, in seconds, to an uncovered cell beside a reached target.
+        lookahead: The agent aims at most this many path cells ahead.
+        robot_radius: A reading ending within this many metres of a known robot marks no obstacle.
+        lane: Half-width in metres of the lane ahead that must be clear of near readings.
+
+    Attributes:
+        grid: The shared :class:`KnowledgeGrid`.
+        covered: Cells covered by the deployed nodes.
+        robots: Cells next to deployed nodes.
+        visited: Targets reached or given up.
+        plans: What every agent plans (:class:`~amronet.algorithms.explorers.frontier.state.AgentPlans`);
+            ``plans.active``: the agent followed a path or an approach in the last call.
+        steps: How many times :meth:`steer` was called.
+    """
+
+    def __init__(self, turn_noise: float, avoid_range: float, dt: float, r_c: float,
+                 extent: tuple[float, float, float, float], *, resolution: float = 0.25, clearance: float = 0.3,
+                 cover_margin: float = 0.02, window: int = 2, claim_radius: float | None = None,
+                 gap_weight: float = 1.5, replan_every: float = 5.0, stuck_after: float = 10.0,
+                 approach_time: float = 4.0, lookahead: int = 4, robot_radius: float = 0.3,
+                 lane: float = 0.25) -> None:
+        super().__init__(turn_noise, avoid_range, dt, r_c, extent)
+        self.grid = KnowledgeGrid(extent, resolution)
+        self.clearance = clearance
+        self.cover_radius = (1.0 - cover_margin) * r_c
+        self.claim_radius = 0.5 * r_c if claim_radius is None else claim_radius
+        self.gap_weight = gap_weight
+        self.robot_radius = robot_radius
+        self.lane = lane
+        self.window = int(window)
+        self.lookahead = int(lookahead)
+        self._steps_of = (max(1, round(replan_every / dt)), max(1, round(stuck_after / dt)),
+                          max(1, round(approach_time / dt)))
+        rows, cols = self.grid.shape
+        self.covered = np.zeros((rows, cols), dtype=np.bool_)
+        self.robots = np.zeros((rows, cols), dtype=np.bool_)
+        self.gap = gap_to_uncovered(self.covered)
+        self.visited = np.zeros((rows, cols), dtype=np.bool_)
+        self._no_robots = np.zeros((rows, cols), dtype=np.bool_)
+        self._off_r, self._off_c = clearance_offsets(clearance, resolution)
+        marks, counts = window_buffers((rows, cols))
+        # synced: -1, every view is computed again on the first plan (see NavBuffers)
+        self._work = NavBuffers(search=search_buffers(rows * cols), trav=np.zeros((2, rows, cols), dtype=np.bool_),
+                                marks=marks, counts=counts, synced=np.full(4, -1, dtype=np.int64),
+                                cells_r=np.zeros(0, dtype=np.int64), cells_c=np.zeros(0, dtype=np.int64))
+        self._nodes_key: tuple[int, float] | None = None
+        self._nodes = np.zeros((0, 2))
+        self._settings_for: tuple[float, NavSettings, float] | None = None
+        self.steps = 0
+        self.plans = AgentPlans.start(0, rows * cols)
+        self._fallback = RandomExplorer(turn_noise, avoid_range, dt, r_c, extent)
+
+    def steer(self, heading: np.ndarray, who: np.ndarray, scans: np.ndarray, sensor_range: float,  # noqa: D102
+              refused: np.ndarray, rng: np.random.Generator, xy: np.ndarray, deployed_xy: np.ndarray) -> None:
+        who = np.asarray(who, dtype=np.int64)
+        m = len(who)
+        if m == 0:
+            return
+        if m != len(self.plans.goal):
+            self.plans = AgentPlans.start(m, self.grid.shape[0] * self.grid.shape[1])
+        grid = self.grid
+        res = grid.resolution
+        grid.integrate(xy[who], heading[who], scans, sensor_range, deployed_xy, self.robot_radius)
+        key = (len(deployed_xy), float(deployed_xy.sum()))
+        refresh = key != self._nodes_key
+        if refresh:
+            self._nodes_key = key
+            self._paint(np.ascontiguousarray(deployed_xy, dtype=float).reshape(-1, 2))
+            self.gap = self.gap_weight * gap_to_uncovered(self.covered)
+            self._work.synced[1:3] = -1  # the uncovered counts and the traversable cells must be computed again
+        settings, avoid = self._settings(sensor_range)
+        fresh = rng.uniform(-np.pi, np.pi, size=m)
+        cells_r, cells_c = grid.buffers(max(sensor_range, (self.lookahead + 2) * res * 1.5))
+        if cells_r is not self._work.cells_r:  # the grid's scratch cell lists grew
+            self._work = self._work._replace(cells_r=cells_r, cells_c=cells_c)
+        step = StepInputs(now=self.steps, nodes_changed=refresh, xy=xy, heading=heading, who=who,
+                          scans=np.minimum(scans, avoid), angles=beam_angles(scans.shape[1]),
+                          refused=np.asarray(refused, dtype=np.bool_), fresh=fresh)
+        layers = MapLayers(score=grid.score, seen=grid.seen, row_stamp=grid.row_stamp, stamp=grid.stamp,
+                           robots=self.robots, no_robots=self._no_robots, covered=self.covered, gap=self.gap,
+                           visited=self.visited)
+        navigate(step, layers, settings, self.plans, self._work)
+        self.steps += 1
+        idle = ~self.plans.active
+        if idle.any():
+            self._fallback.steer(heading, who[idle], scans[idle], sensor_range, np.asarray(refused)[idle], rng, xy,
+                                 deployed_xy)
+
+    def _paint(self, nodes: np.ndarray) -> None:
+        """Paint :attr:`covered` and :attr:`robots` for the deployed ``nodes`` ``(D, 2)``.
+
+        When the nodes only grew (the last ones painted come first, unchanged) only the new ones are painted:
+        painting is a union of disks, so the cells are the same.
+        """
+        grid = self.grid
+        ox, oy = grid.origin
+        res = grid.resolution
+        old = self._nodes
+        if len(nodes) >= len(old) and np.array_equal(nodes[:len(old)], old):
+            new = nodes[len(old):]
+            paint_nodes(self.covered, ox, oy, res, new, self.cover_radius)
+            paint_nodes(self.robots, ox, oy, res, new, self.clearance)
+        else:
+            paint_covered(self.covered, ox, oy, res, nodes, self.cover_radius)
+            paint_covered(self.robots, ox, oy, res, nodes, self.clearance)
+        self._nodes = nodes.copy()
+
+    def _settings(self, sensor_range: float) -> tuple[NavSettings, float]:
+        """The navigation kernel's parameters and the avoidance reach, for this sensor range."""
+        if self._settings_for is None or self._settings_for[0] != sensor_range:
+            grid = self.grid
+            res = grid.resolution
+            avoid = min(sensor_range, self.avoid_range)
+            replan, stuck, approach = self._steps_of
+            settings = NavSettings(
+                origin_x=float(grid.origin[0]), origin_y=float(grid.origin[1]), resolution=res, off_r=self._off_r,
+                off_c=self._off_c, window=self.window, escape=math.ceil(self.clearance / res) + 1,
+                replan_every=replan, stuck_after=stuck, lookahead=self.lookahead, approach_steps=approach,
+                reach=float(avoid), stuck_radius=STUCK_RADIUS, claim_r2=float((self.claim_radius / res) ** 2),
+                reach_tol=0.75 * res, lane=float(self.lane))
+            self._settings_for = (sensor_range, settings, avoid)
+        return self._settings_for[1], self._settings_for[2]

@@ -1,0 +1,240 @@
+"""The ``amronet`` command line.
+
+Every error a user can cause prints one line ``amronet: error: ...`` on stderr and exits with status 2;
+nothing is written then.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import sys
+from pathlib import Path
+
+from amronet import __version__
+from amronet.cli.common import add_executor_arguments, make_executor_from_args
+from amronet.errors import AmronetError
+
+__all__ = ["main"]
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from amronet.outputs.files import check_output_folder
+    from amronet.scenario import load_scenario, parse_override
+    from amronet.sim import Simulation
+    from amronet.sim.results import RunResult  # noqa: F401 - import cost paid here, not for --help
+
+    if (args.scenario is None) == (args.preset is None):
+        raise AmronetError("run: give either a scenario file or --preset NAME (amronet presets lists them)")
+    check_output_folder(args.out)
+    overrides = dict(parse_override(item) for item in args.set or [])
+    scenario = load_scenario(args.scenario if args.scenario is not None else args.preset, overrides)
+    sim = Simulation(scenario, args.seed)
+    quiet = args.quiet
+    from amronet.cli.viz import make_recorder
+
+    recorder = make_recorder(args, scenario)
+
+    def progress(t: float, limit: float) -> None:
+        if not quiet and sys.stderr.isatty():
+            print(f"\r  t = {t:7.1f} s / {limit:g} s", end="", file=sys.stderr, flush=True)
+
+    result = sim.run(progress=progress, recorder=recorder)
+    if not quiet and sys.stderr.isatty():
+        print(file=sys.stderr)
+    result.save(args.out, snapshot=not args.no_snapshot)
+    s = result.summary
+    if not quiet:
+        print(f"{s['algorithm']} on {s['map']} (seed {s['seed']}, r_c = {s['r_c']:g} m): "
+              f"{s['stop_reason']} after {s['sim_time_s']:g} s simulated, {s['wall_time_s']:.1f} s wall")
+        bases = s['nodes_total'] - s['routers_deployed']
+        print(f"  nodes: {s['nodes_total']} (routers deployed: {s['routers_deployed']} of {s['routers_total']}, "
+              f"base nodes: {bases}); states {s['states']}")
+        print(f"  coverage {100 * s['coverage']:.2f} %, connected coverage {100 * s['connected_coverage']:.2f} % "
+              f"of {s['reachable_area_m2']:.1f} m² reachable ({s['coverage_method']})")
+        print(f"  wrote {args.out}/: summary.json timeseries.csv network.json"
+              + ("" if args.no_snapshot else " snapshot.png") + (" recording.npz" if recorder.full else ""))
+    return 0
+
+
+def _cmd_maps_list(args: argparse.Namespace) -> int:
+    from amronet.world.builtin import list_builtin_maps
+
+    infos = list_builtin_maps()
+    if args.json:
+        print(json.dumps([{"name": m.name, "width_m": m.size_m[0], "height_m": m.size_m[1],
+                           "resolution": m.resolution, "description": m.description, "licence": m.licence}
+                          for m in infos], indent=2))
+        return 0
+    print(f"{'name':<18} {'size (m)':>13} {'m/cell':>7}  description")
+    for m in infos:
+        size = f"{m.size_m[0]:.1f} x {m.size_m[1]:.1f}"
+        print(f"{m.name:<18} {size:>13} {m.resolution:>7g}  {m.description}")
+    return 0
+
+
+def _cmd_maps_show(args: argparse.Namespace) -> int:
+    from amronet.outputs.files import write_file_atomically
+    from amronet.viz import save_map_picture
+    from amronet.world.builtin import resolve_map
+
+    omap = resolve_map(args.map)
+    out = Path(args.out)
+    if out.suffix.lower() not in (".png", ".svg"):
+        raise AmronetError(f"--out: {args.out!r} must end in .png or .svg")
+    write_file_atomically(out, lambda tmp: save_map_picture(omap, tmp))
+    w, h = omap.size_m
+    print(f"{omap.name}: {w:.1f} m x {h:.1f} m at {omap.resolution:g} m/cell -> {out}")
+    return 0
+
+
+def _cmd_presets(args: argparse.Namespace) -> int:
+    from amronet.scenario import list_presets
+
+    for name, desc in list_presets().items():
+        print(f"{name:<30} {desc}")
+    return 0
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from amronet.sim.bench import run_bench
+
+    report = run_bench(algorithm=args.algorithm, robots=args.robots, steps=args.steps, map_name=args.map,
+                       seed=args.seed, r_c=args.rc)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        for key, value in report.items():
+            print(f"{key:>26}: {value}")
+    return 0
+
+
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from amronet.experiments.common import STORE_FILES
+    from amronet.experiments.registry import FIGURES, check_options
+    from amronet.outputs.files import check_output_folder
+
+    if args.workers is not None and args.workers < 1:
+        raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
+    names = list(FIGURES) if args.figure == "all" else [args.figure]
+    # the run options given on the command line (None: not given, the figure's own default applies); each
+    # figure must take each of them: checked before anything runs
+    given = {"explorer": args.explorer, "time_limit": args.time_limit, "workers": args.workers,
+             "retry_failed": args.retry_failed or None}
+    check_options([FIGURES[name] for name in names], given)
+    outs = {name: Path(args.out or "runs") / name if args.figure == "all" else Path(args.out or f"runs/{name}")
+            for name in names}
+    for out in outs.values():  # before any run: a folder that holds a user's files is refused, untouched
+        check_output_folder(out, keep=STORE_FILES)
+    dask = args.scheduler is not None or args.cluster is not None
+    with make_executor_from_args(args) if dask else contextlib.nullcontext() as executor:
+        for name, out in outs.items():
+            store = Path(args.store) if args.store else out / "results.sqlite"
+            report = FIGURES[name].run(out, quick=args.quick, show_progress=not args.quiet, store=store,
+                                       executor=executor, **given)
+            if not args.quiet:
+                print(report["markdown"])
+                files = sorted(f.name for f in out.iterdir() if f.name.startswith(name)) if out.is_dir() else []
+                written = " ".join(files) or "no figure files"
+                print(f"wrote {out}/: {written}; runs in {store}")
+    return 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="amronet", description="Build and evaluate Ad-hoc Mobile Router Networks.")
+    p.add_argument("--version", action="version", version=f"amronet {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run one scenario with one seed")
+    r.add_argument("scenario", nargs="?", help="scenario YAML file")
+    r.add_argument("--preset", help="a built-in scenario instead of a file (amronet presets)")
+    r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    r.add_argument("--out", required=True, help="output folder (replaced atomically)")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field, e.g. radio.r_c=1.5")
+    r.add_argument("--no-snapshot", action="store_true", help="skip snapshot.png")
+    r.add_argument("--record", action="store_true", help="also write recording.npz (for animate, replay, snapshot)")
+    r.add_argument("--record-every", type=int, metavar="K", help="record every K-th step (default sim.record_every)")
+    r.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    r.set_defaults(func=_cmd_run)
+
+    m = sub.add_parser("maps", help="built-in maps")
+    msub = m.add_subparsers(dest="maps_command", required=True)
+    ml = msub.add_parser("list", help="list built-in maps with their sizes")
+    ml.add_argument("--json", action="store_true")
+    ml.set_defaults(func=_cmd_maps_list)
+    ms = msub.add_parser("show", help="draw a map (free / occupied / unknown, to scale)")
+    ms.add_argument("map", help="built-in map name or ROS map_server YAML")
+    ms.add_argument("--out", required=True, help="picture to write (.png or .svg)")
+    ms.set_defaults(func=_cmd_maps_show)
+
+    ps = sub.add_parser("presets", help="list built-in scenarios")
+    ps.set_defaults(func=_cmd_presets)
+
+    from amronet.cli.patterns import add_parser as add_patterns_parser
+
+    add_patterns_parser(sub)
+    from amronet.cli.sweep import add_parsers as add_sweep_parsers
+
+    add_sweep_parsers(sub)
+    from amronet.cli.plan import add_parsers as add_plan_parsers
+
+    add_plan_parsers(sub)
+    from amronet.cli.viz import add_parsers as add_viz_parsers
+
+    add_viz_parsers(sub)
+
+    rp = sub.add_parser(
+        "reproduce", help="run one of the paper's experiments (figures) end to end",
+        description="Run one of the paper's experiments (figures) end to end. An option a figure does not take is "
+                    "an error, not ignored (e.g. fig10 and fig11 run no agents, so they refuse --explorer). With "
+                    "all, every option given goes to every figure, so it must be one that every figure takes "
+                    "(all --explorer is refused, before anything runs: reproduce the figures with agents one by "
+                    "one instead).")
+    from amronet.experiments.registry import FIGURES
+
+    rp.add_argument("figure", choices=[*FIGURES, "all"], help="which figure (all: every one, into OUT/FIGURE)")
+    rp.add_argument("--out", help="output folder (default runs/FIGURE)")
+    rp.add_argument("--store", help="result store: finished runs are kept and reused (default OUT/results.sqlite)")
+    rp.add_argument("--explorer", help="agents' exploration strategy (default frontier; only the figures with "
+                                       "agents take it)")
+    rp.add_argument("--time-limit", type=float, default=None,
+                    help="simulated seconds per run at most (default: the figure's own, 6000 for fig5 and fig7)")
+    rp.add_argument("--quick", action="store_true", help="a small subset, for a smoke test")
+    rp.add_argument("--retry-failed", action="store_true",
+                    help="run again the runs the store holds as failed (otherwise the figure stops at them)")
+    add_executor_arguments(rp)
+    rp.add_argument("-q", "--quiet", action="store_true")
+    rp.set_defaults(func=_cmd_reproduce)
+
+    b = sub.add_parser("bench", help="measure robot-steps per second of an algorithm's full step")
+    b.add_argument("--algorithm", default="self-spreading")
+    b.add_argument("--robots", type=int, default=3000)
+    b.add_argument("--steps", type=int, default=500)
+    b.add_argument("--map", default="hospital_section")
+    b.add_argument("--rc", type=float, default=1.0, help="communication radius (default 1 m)")
+    b.add_argument("--seed", type=int, default=0)
+    b.add_argument("--json", action="store_true", help="print the report as JSON")
+    b.set_defaults(func=_cmd_bench)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``amronet`` command."""
+    args = _parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except AmronetError as exc:
+        print(f"amronet: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("amronet: interrupted; nothing was written", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        # the reader of stdout went away (amronet results STORE | head -1): stop quietly, as other tools do;
+        # stdout goes to devnull so that flushing it at exit does not raise again
+        with contextlib.suppress(AttributeError, OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1  # as rich does when its console meets a closed pipe
+

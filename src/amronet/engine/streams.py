@@ -1,0 +1,68 @@
+"""The random streams of several runs stepped together in one set of arrays (:mod:`amronet.sim.batch`).
+
+A run draws its random numbers from its own ``numpy.random.Generator``, seeded by the run's seed. When several
+runs share one set of arrays, every draw a controller makes for some robots is split by run: each run's robots
+get numbers from that run's generator, in the order the run would have drawn them on its own, so a run gives the
+same result bit for bit whether it is stepped alone or in a batch. Code that draws per step goes through
+:func:`draw_per_run`, which takes either a plain generator (one run) or :class:`RunStreams`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+__all__ = ["RunStreams", "draw_per_run"]
+
+Draw = Callable[[np.random.Generator, int], tuple[np.ndarray, ...]]
+"""``draw(generator, m)`` returns arrays of ``m`` numbers each, drawn in a fixed order."""
+
+
+class RunStreams:
+    """One generator per run, for runs whose robots are contiguous blocks of the shared arrays.
+
+    Args:
+        generators: The runs' generators, in block order.
+        starts: First robot index of every run's block and, last, the total number of robots ``(G + 1,)``.
+    """
+
+    def __init__(self, generators: Sequence[np.random.Generator], starts: np.ndarray) -> None:
+        self.generators = list(generators)
+        self.starts = np.asarray(starts, dtype=np.int64)
+        if len(self.starts) != len(self.generators) + 1:
+            raise ValueError(f"starts needs {len(self.generators) + 1} entries, got {len(self.starts)}")
+
+    def draw(self, who: np.ndarray, draw: Draw) -> tuple[np.ndarray, ...]:
+        """Numbers for the robots ``who``: each run's robots draw from its generator, in their order in ``who``.
+
+        Returns:
+            The arrays ``draw`` returns, each of ``len(who)`` entries aligned with ``who``.
+        """
+        who = np.asarray(who, dtype=np.int64)
+        run = np.searchsorted(self.starts, who, side="right") - 1
+        counts = np.bincount(run, minlength=len(self.generators))
+        drawn = [draw(self.generators[g], int(counts[g])) for g in np.flatnonzero(counts)]
+        if not drawn:  # nobody draws: the shapes and types of a zero-size draw
+            return tuple(p[:0] for p in draw(np.random.default_rng(0), 0))
+        joined = tuple(np.concatenate(parts) for parts in zip(*drawn, strict=True))
+        if len(run) > 1 and np.any(run[1:] < run[:-1]):  # not grouped by run already: put every number in place
+            order = np.argsort(run, kind="stable")
+            out = tuple(np.empty_like(j) for j in joined)
+            for o, j in zip(out, joined, strict=True):
+                o[order] = j
+            return out
+        return joined
+
+
+def draw_per_run(rng: np.random.Generator | RunStreams, who: np.ndarray, draw: Draw) -> tuple[np.ndarray, ...]:
+    """Draw numbers for the robots ``who`` from one run's generator or, batched, from each robot's run's.
+
+    Args:
+        rng: The run's generator, or the :class:`RunStreams` of a batch.
+        who: The robots that draw, ``(M,)``.
+        draw: ``draw(generator, m)``: the numbers of ``m`` robots, as a tuple of arrays of ``m`` entries.
+    """
+    if isinstance(rng, RunStreams):
+        return rng.draw(who, draw)
+    return draw(rng, len(who))

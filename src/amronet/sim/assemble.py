@@ -1,0 +1,206 @@
+"""Turn a validated scenario into a world and a swarm: map, reachable free space, base stations, routers."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from amronet.engine.coverage import CoverageArea
+from amronet.engine.robots import ROBOT_MODELS, RobotModel, Role, State, Swarm
+from amronet.errors import MapError, ScenarioError
+from amronet.scenario import RobotRef, RobotSpec, Scenario
+from amronet.world.builtin import resolve_map
+from amronet.world.occupancy import OccupancyMap
+from amronet.world.space import clearance, reachable_free
+
+__all__ = ["World", "build_swarm", "build_world", "robot_model"]
+
+
+@dataclass(frozen=True)
+class World:
+    """The static part of a run.
+
+    Attributes:
+        omap: The occupancy map.
+        reachable: Free cells reachable from the base stations (the area that counts).
+        coverage: Prepared coverage computation over ``reachable``.
+        bases_xy: Base-station positions ``(n, 2)``.
+    """
+
+    omap: OccupancyMap
+    reachable: np.ndarray
+    coverage: CoverageArea
+    bases_xy: np.ndarray
+
+
+def robot_model(ref: RobotRef, field: str) -> RobotModel:
+    """Resolve a robot given by name or field by field."""
+    if isinstance(ref, RobotSpec):
+        return RobotModel("custom", ref.radius, ref.max_speed, ref.sensor_beams, ref.sensor_range)
+    try:
+        return ROBOT_MODELS[ref]
+    except KeyError:
+        raise ScenarioError(field, f"unknown robot {ref!r}; use one of {', '.join(ROBOT_MODELS)} or give "
+                                   "radius, max_speed, sensor_beams and sensor_range") from None
+
+
+def load_scenario_map(scenario: Scenario) -> OccupancyMap:
+    """Load the scenario's map; relative paths are taken from the scenario file's folder."""
+    ref = scenario.map
+    looks_like_path = ref.lower().endswith((".yaml", ".yml")) or "/" in ref
+    if looks_like_path and scenario.base_dir and not Path(ref).is_absolute():
+        ref = str(Path(scenario.base_dir) / ref)
+    try:
+        return resolve_map(ref)
+    except MapError as exc:
+        if exc.field.startswith("map"):
+            raise
+        raise MapError("map", exc.message) from None
+
+
+def build_world(scenario: Scenario, omap: OccupancyMap | None = None) -> World:
+    """Load the map (unless given), check the base stations and prepare the area that counts."""
+    omap = omap if omap is not None else load_scenario_map(scenario)
+    bases = np.array([[b.x, b.y] for b in scenario.base_stations], dtype=float)
+    inside = omap.inside(bases)
+    free = omap.is_free(bases)
+    for i, (x, y) in enumerate(bases):
+        where = f"({x:g}, {y:g})"
+        if not inside[i]:
+            xmin, xmax, ymin, ymax = omap.extent
+            raise ScenarioError(
+                f"base_stations[{i}]", f"{where} is outside the map [{xmin:g}, {xmax:g}] x [{ymin:g}, {ymax:g}]; "
+                "move it inside",
+            )
+        if not free[i]:
+            raise ScenarioError(f"base_stations[{i}]", f"{where} is inside an obstacle or unknown space; "
+                                "move it to free space")
+    clear = clearance(omap)
+    rows, cols = omap.world_to_cell(bases)
+    for i, spec in enumerate(scenario.base_stations):
+        body = robot_model(spec.robot, f"base_stations[{i}].robot").radius
+        if clear[rows[i], cols[i]] < body:
+            raise ScenarioError(
+                f"base_stations[{i}]", f"({spec.x:g}, {spec.y:g}) is {clear[rows[i], cols[i]]:.3g} m from an obstacle, "
+                f"too close for the reference node's body (radius {body:g} m); move it farther from the walls",
+            )
+    reachable = reachable_free(omap, bases)
+    return World(omap=omap, reachable=reachable, coverage=CoverageArea(omap, reachable), bases_xy=bases)
+
+
+def _sample_start(
+    world: World, centre: np.ndarray, region: tuple[float, float], count: int, radius: float, max_dist: float,
+    taken: np.ndarray, taken_r: np.ndarray, rng: np.random.Generator, field: str,
+) -> np.ndarray:
+    """Draw ``count`` non-overlapping start points in the region, in reachable free space, near the base."""
+    omap = world.omap
+    clear = clearance(omap)
+    placed: list[np.ndarray] = []
+    pts = np.zeros((0, 2))
+    others = taken.copy()
+    others_r = taken_r.copy()
+    for _ in range(200):
+        if len(pts) >= count:
+            break
+        cand = centre + (rng.random((4 * count + 16, 2)) - 0.5) * np.asarray(region)
+        rows, cols = omap.world_to_cell(cand)
+        ok = omap.inside(cand)
+        ok[ok] &= world.reachable[rows[ok], cols[ok]] & (clear[rows[ok], cols[ok]] >= radius)
+        ok &= np.linalg.norm(cand - centre, axis=1) <= max_dist
+        for p in cand[ok]:
+            if len(pts) >= count:
+                break
+            if len(others) and np.any(np.linalg.norm(others - p, axis=1) < others_r + radius):
+                continue
+            placed.append(p)
+            pts = np.asarray(placed)
+            others = np.vstack([others, p])
+            others_r = np.append(others_r, radius)
+    if len(pts) < count:
+        raise ScenarioError(field, f"could place only {len(pts)} of {count} robots without overlap in the start "
+                                   "region; enlarge the base station's region or use fewer robots")
+    return pts
+
+
+def _scatter(
+    world: World, count: int, radius: float, taken: np.ndarray, taken_r: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
+    """Scatter ``count`` robots uniformly over the reachable free space, dropping those that would overlap."""
+    omap = world.omap
+    rows, cols = np.nonzero(world.reachable & (clearance(omap) >= radius))
+    if len(rows) == 0:
+        raise ScenarioError("routers.start", "no reachable free cell is wide enough for a router")
+    out = np.zeros((0, 2))
+    for _ in range(50):
+        need = count - len(out)
+        if need <= 0:
+            break
+        pick = rng.integers(0, len(rows), size=need)
+        jitter = (rng.random((need, 2)) - 0.5) * omap.resolution
+        cand = omap.cell_centres(rows[pick], cols[pick]) + jitter
+        pool = np.vstack([taken, out, cand])
+        pool_r = np.concatenate([taken_r, np.full(len(out) + need, radius)])
+        tree = cKDTree(pool)
+        pairs = tree.query_pairs(2 * max(radius, float(pool_r.max())), output_type="ndarray")
+        gap = np.linalg.norm(pool[pairs[:, 0]] - pool[pairs[:, 1]], axis=1) if len(pairs) else np.zeros(0)
+        clash = pairs[gap < pool_r[pairs[:, 0]] + pool_r[pairs[:, 1]]] if len(pairs) else pairs
+        first_new = len(taken) + len(out)
+        bad = np.zeros(len(pool), dtype=bool)
+        # of every clashing pair drop the later robot (a new candidate), so earlier placements stay
+        if len(clash):
+            bad[np.maximum(clash[:, 0], clash[:, 1])] = True
+        out = np.vstack([out, cand[~bad[first_new:]]])
+    if len(out) < count:
+        raise ScenarioError("routers.count", f"could scatter only {len(out)} of {count} routers without overlap; "
+                                             "use fewer routers or a larger map")
+    return out[:count]
+
+
+def build_swarm(scenario: Scenario, world: World, rng: np.random.Generator, r_start: float) -> Swarm:
+    """Place base reference nodes, routers (round-robin over base stations) and agents, random in each region.
+
+    Args:
+        scenario: The scenario.
+        world: Its world.
+        rng: The run's generator (start positions and headings are drawn from it).
+        r_start: Routers start within this distance of their base's reference node, so that they hear it.
+    """
+    groups = []
+    base_models = [robot_model(b.robot, f"base_stations[{i}].robot") for i, b in enumerate(scenario.base_stations)]
+    for i, model in enumerate(base_models):
+        groups.append((model, Role.BASE, State.BASE, world.bases_xy[i : i + 1], np.array([i])))
+    router = robot_model(scenario.routers.robot, "routers.robot")
+    n_bases = len(scenario.base_stations)
+    counts = [len(range(i, scenario.routers.count, n_bases)) for i in range(n_bases)]
+    taken = world.bases_xy.copy()
+    taken_r = np.array([k.radius for k in base_models])
+    if scenario.routers.start == "uniform":
+        pts = _scatter(world, scenario.routers.count, router.radius, taken, taken_r, rng)
+        taken = np.vstack([taken, pts])  # agents placed below must not land on a scattered router
+        taken_r = np.append(taken_r, np.full(len(pts), router.radius))
+        groups.append((router, Role.ROUTER, State.EXPLORE, pts, np.full(len(pts), -1)))
+        counts = []
+    for i, count in enumerate(counts):
+        if count == 0:
+            continue
+        spec = scenario.base_stations[i]
+        pts = _sample_start(world, world.bases_xy[i], spec.region, count, router.radius, r_start, taken, taken_r,
+                            rng, f"base_stations[{i}].region")
+        taken = np.vstack([taken, pts])
+        taken_r = np.append(taken_r, np.full(len(pts), router.radius))
+        groups.append((router, Role.ROUTER, State.EXPLORE, pts, np.full(count, -1)))
+    per_base = scenario.agents.per_base
+    if per_base:
+        agent = robot_model(scenario.agents.robot, "agents.robot")
+        for i, spec in enumerate(scenario.base_stations):
+            pts = _sample_start(world, world.bases_xy[i], spec.region, per_base, agent.radius, r_start, taken,
+                                taken_r, rng, f"base_stations[{i}].region")
+            taken = np.vstack([taken, pts])
+            taken_r = np.append(taken_r, np.full(len(pts), agent.radius))
+            groups.append((agent, Role.AGENT, State.AGENT, pts, np.full(per_base, i)))
+    swarm = Swarm.build(groups)
+    swarm.heading[:] = rng.uniform(-np.pi, np.pi, size=len(swarm))
+    return swarm

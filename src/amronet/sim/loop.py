@@ -1,0 +1,300 @@
+"""The simulation loop: one step order, seeded randomness, stop conditions, recording — for one run or many.
+
+The life of a step, in this order and nowhere else (:meth:`Loop.step`):
+
+1. **sense**  — the range rings of every moving robot are ray-cast against the map and the other robots (skipped
+   when the controller reads no range readings);
+2. **decide** — the algorithm's controller reads those readings and the radio medium's neighbour table, and
+   updates states, statuses and headings;
+3. **move**   — robots drive along their headings; every move is checked along its whole path;
+4. **radio**  — the medium rebuilds the neighbour table once, for everybody, from the new positions;
+5. **metrics** — after every step, whether agents are connected; every ``record_every`` steps (and when a run
+   settles or hits its time limit) coverage, connected coverage, deployed routers and components; then the
+   stop conditions: all routers settled or the coverage target reached (*terminated*), or the time limit
+   (*truncated*) (:meth:`Loop.execute`).
+
+A :class:`Loop` holds ``G`` runs of one scenario in one set of arrays: their robots block by block, one neighbour
+table that never links robots of different runs, one controller, and every random draw split by run
+(:class:`~amronet.engine.streams.RunStreams`). A single run is the loop with ``G = 1`` (:class:`Simulation`);
+a batch is the same loop with more runs (:class:`~amronet.sim.batch.BatchSimulation`). Each run's books —
+rows, stop reason, metrics — are a :class:`~amronet.sim.run.Run`. All randomness of a run comes from one
+``numpy.random.Generator`` seeded by its seed: the same scenario and seed give the same result, bit for bit,
+alone or in a batch.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, Readings, RouterStock, Setup, StepInput
+from amronet.engine.motion import drive, path_clear
+from amronet.engine.radio import NeighbourTable, make_medium
+from amronet.engine.robots import MOBILE_STATES, Role, Swarm
+from amronet.engine.sensing import range_scan
+from amronet.engine.streams import RunStreams
+from amronet.errors import ScenarioError
+from amronet.scenario import Scenario
+from amronet.sim.assemble import World, build_swarm, build_world, robot_model
+from amronet.sim.results import RunResult
+from amronet.sim.run import Metrics, Run
+from amronet.world.occupancy import OccupancyMap
+
+if TYPE_CHECKING:
+    from amronet.outputs.recording import Recorder
+
+__all__ = ["Loop", "Metrics", "Simulation", "move", "sense"]
+
+
+def sense(controller: Controller, sw: Swarm, omap: OccupancyMap, table: NeighbourTable) -> Readings:
+    """The sense phase: the range rings of every moving robot (none when the controller reads none)."""
+    if not controller.needs_range_readings:
+        return Readings({})
+    mobile = sw.in_states(MOBILE_STATES)
+    groups = {}
+    for m, model in enumerate(sw.models):
+        who = np.flatnonzero(mobile & (sw.model == m))
+        if len(who):
+            scans = range_scan(omap, sw.xy, sw.heading, who, model.sensor_beams, model.sensor_range,
+                               radius=sw.radius, table=table)
+            groups[m] = (who, scans)
+    return Readings(groups)
+
+
+def move(controller: Controller, command: Command, sw: Swarm, omap: OccupancyMap, table: NeighbourTable,
+         dt: float, bodies: bool) -> None:
+    """The move phase: drive the movers, add up distances and tell the controller which moves were refused."""
+    movers = command.movers
+    refused, travelled = drive(omap, sw.xy, movers, sw.heading[movers], command.speed * dt, sw.radius,
+                               bodies=bodies, table=table)
+    sw.distance[movers] += travelled
+    controller.after_move(movers, refused)
+
+
+def _check_seed(seed: object) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed < 2**63:
+        raise ScenarioError("seed", f"{seed!r} is not an integer in [0, 2**63 - 1]; give e.g. --seed 1")
+    return int(seed)
+
+
+class Loop:
+    """Runs of one scenario, one per seed, stepped together in one set of arrays through one step order.
+
+    Args:
+        scenario: The validated scenario.
+        seeds: One seed per run.
+        omap: Use this map instead of loading the scenario's (for generated or scaled maps).
+
+    Raises:
+        ScenarioError: A seed is invalid, or the scenario cannot be set up (see the scenario's fields).
+    """
+
+    def __init__(self, scenario: Scenario, seeds: Sequence[int], omap: OccupancyMap | None = None) -> None:
+        if len(seeds) == 0:
+            raise ScenarioError("seeds", "a batch needs at least one seed")
+        seeds = [_check_seed(s) for s in seeds]
+        sc = self.scenario = scenario
+        self.dt = sc.sim.dt
+        params = sc.algorithm_params()
+        controller_cls = ALGORITHMS.lookup(sc.algorithm.name, "algorithm.name")
+        self.world: World = build_world(sc, omap)
+        self.medium = make_medium(sc.radio.model, sc.radio.r_c)
+        rngs = [np.random.default_rng(seed) for seed in seeds]
+        r_start = controller_cls.start_range(params, sc.radio.r_c)
+        swarms = [build_swarm(sc, self.world, rng, r_start=r_start) for rng in rngs]
+        if len(seeds) == 1:
+            self.swarm, self.groups, blocks, rng = swarms[0], None, [slice(None)], rngs[0]
+        else:
+            sizes = [len(s) for s in swarms]
+            starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+            blocks = [slice(int(a), int(b)) for a, b in itertools.pairwise(starts)]
+            self.groups = np.repeat(np.arange(len(seeds), dtype=np.int64), sizes)
+            self.swarm = Swarm.concat(swarms)
+            rng = RunStreams(rngs, starts)
+        self.controller: Controller = controller_cls(params, self._setup(rng))
+        self.table: NeighbourTable = self.medium.update(self.swarm.xy, self.groups)
+        self.steps = 0
+        self.phase_seconds = {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0}
+        target = sc.sim.coverage_target
+        if target is None:
+            target = controller_cls.default_coverage_target
+        self.runs = [Run(self, g, seed, rngs[g], blocks[g], target) for g, seed in enumerate(seeds)]
+        self._with_agents = [run for run in self.runs if len(run.agents)]
+        settled = self._settled_runs()
+        for run, now in zip(self.runs, settled, strict=True):
+            run.settled_at = 0.0 if now else None
+
+    def _setup(self, rng: np.random.Generator | RunStreams) -> Setup:
+        """What the controller is given: the robots and what the algorithm may know, never the map or scenario."""
+        sc, omap = self.scenario, self.world.omap
+        stock = None
+        if sc.agents.per_base > 0:
+            stock = RouterStock(robot=robot_model(sc.routers.robot, "routers.robot"),
+                                per_agent=sc.agents.routers_carried,
+                                path_clear=lambda start, end, radius: path_clear(omap, start, end, radius))
+        area = AreaKnowledge(extent=omap.extent,
+                             free_area_m2=float(np.count_nonzero(omap.free)) * (omap.resolution**2))
+        return Setup(robots=self.swarm, r_c=sc.radio.r_c, dt=self.dt, rng=rng, area=area, stock=stock)
+
+    @property
+    def t(self) -> float:
+        """Simulated time in seconds."""
+        return self.steps * self.dt
+
+    # -- the step --------------------------------------------------------------------------------------------
+    def step(self) -> None:
+        """Advance every run by one step: sense → decide → move → radio, then the agents' connection."""
+        sw = self.swarm
+        clock = time.perf_counter
+        t0 = clock()
+        readings = sense(self.controller, sw, self.world.omap, self.table)
+        t1 = clock()
+        command = self.controller.decide(StepInput(self.steps, self.t, self.dt, self.table, readings))
+        t2 = clock()
+        move(self.controller, command, sw, self.world.omap, self.table, self.dt, self.scenario.sim.robot_collisions)
+        t3 = clock()
+        self.table = self.medium.update(sw.xy, self.groups)
+        t4 = clock()
+        self.steps += 1
+        for run in self._with_agents:
+            run.observe_agents()
+        for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
+            self.phase_seconds[name] += dt
+
+    def _settled_runs(self) -> np.ndarray:
+        """Per run: no robot of it will move again."""
+        unsettled = self.controller.unsettled()
+        if self.groups is None:
+            return np.array([not unsettled.any()])
+        return np.bincount(self.groups[unsettled], minlength=len(self.runs)) == 0
+
+    # -- the runs --------------------------------------------------------------------------------------------
+    def execute(self, progress: Callable[[float, float], None] | None = None,
+                recorders: Sequence[Recorder | None] | None = None) -> list[RunResult]:
+        """Step until every run's stop condition holds; one :class:`~amronet.sim.results.RunResult` per run.
+
+        The coverage target is checked at recorded steps (every ``record_every`` steps, and when a run settles or
+        reaches the time limit); settling and the time limit after every step. A run that reaches its target or
+        settles *terminates*; one that hits the time limit first is *truncated*. A run that stops leaves the books
+        at once; its robots stay in the arrays until the loop ends. A run's ``wall_time_s`` is its share of the
+        loop's wall time until it stopped. A :class:`~amronet.outputs.recording.Recorder` given for a run is
+        shown that run in the metrics phase of every step and ends up in its result.
+        """
+        sim = self.scenario.sim
+        recorders = list(recorders) if recorders is not None else [None] * len(self.runs)
+        start = time.perf_counter()
+        results: list[RunResult | None] = [None] * len(self.runs)
+
+        def finish(run: Run, reason: str) -> None:
+            run.end(reason)
+            final = run.metrics(method=sim.coverage_method)
+            wall = (time.perf_counter() - start) / len(self.runs)
+            results[run.index] = RunResult.from_run(run, final, wall_time_s=wall, recorder=recorders[run.index])
+
+        active = []
+        for run in self.runs:
+            reached = run.record()
+            if recorders[run.index] is not None:
+                recorders[run.index].observe(run)
+            if reached:
+                finish(run, "coverage_target")
+            else:
+                active.append(run)
+        max_steps = round(sim.time_limit / self.dt)
+        while active:
+            self.step()
+            now_settled = self._settled_runs()
+            at_limit = self.steps >= max_steps
+            on_record = self.steps % sim.record_every == 0 or at_limit
+            still = []
+            for run in active:
+                run.settle(bool(now_settled[run.index]))
+                settled = sim.stop_when_settled and bool(now_settled[run.index])
+                reached = False
+                if on_record or settled:
+                    reached = run.record()
+                    if progress is not None:
+                        progress(self.t, sim.time_limit)
+                reason = "coverage_target" if reached else "settled" if settled else "time_limit" if at_limit else None
+                if reason is not None:
+                    run.stop_reason = reason
+                if recorders[run.index] is not None:
+                    recorders[run.index].observe(run)
+                if reason is None:
+                    still.append(run)
+                else:
+                    finish(run, reason)
+            active = still
+        return [r for r in results if r is not None]
+
+
+class Simulation(Loop):
+    """One seeded run of a scenario, stepped by :meth:`step` or run to its end by :meth:`run`: the loop of one run.
+
+    Args:
+        scenario: The validated scenario.
+        seed: Seed of the run's random generator.
+        omap: Use this map instead of loading the scenario's (for generated or scaled maps).
+    """
+
+    def __init__(self, scenario: Scenario, seed: int, omap: OccupancyMap | None = None) -> None:
+        super().__init__(scenario, [seed], omap)
+        self.books = self.runs[0]
+        """The run's books (:class:`~amronet.sim.run.Run`): rows, stop reason, agents' connection."""
+        self.seed = self.books.seed
+        self.rng = self.books.rng
+        self.bases = self.books.bases
+        self.agents = self.books.agents
+        self.coverage_target = self.books.coverage_target
+
+    def run(self, progress: Callable[[float, float], None] | None = None, recorder: Recorder | None = None
+            ) -> RunResult:
+        """Run until a stop condition holds and return its result (see :meth:`Loop.execute`)."""
+        return self.execute(progress, [recorder])[0]
+
+    def metrics(self, method: str | None = None) -> Metrics:
+        """Network metrics now (:meth:`amronet.sim.run.Run.metrics`)."""
+        return self.books.metrics(method)
+
+    @property
+    def stop_reason(self) -> str | None:
+        """Why the run ended (``None`` while it runs)."""
+        return self.books.stop_reason
+
+    @property
+    def terminated(self) -> bool:
+        """``True`` when the run ended because the task ended (settled or target reached), not by time."""
+        return self.books.terminated
+
+    @property
+    def settled_at(self) -> float | None:
+        """Start of the final stretch of time in which no router moved (``None`` while one still moves)."""
+        return self.books.settled_at
+
+    @property
+    def agents_connected_fraction(self) -> float | None:
+        """Mean over all steps of the fraction of agents connected to a base station (``None`` without agents)."""
+        return self.books.agents_connected_fraction
+
+    @property
+    def agents_connected_min(self) -> float:
+        """The lowest fraction of agents connected at any step."""
+        return self.books.agents_connected_min
+
+    def state_counts(self) -> dict[str, int]:
+        """How many robots are in each state."""
+        return self.books.state_counts()
+
+    @property
+    def rows(self) -> list[tuple]:
+        """The recorded rows of the time series so far."""
+        return self.books.rows
+
+    def __repr__(self) -> str:
+        n = {name: int(np.count_nonzero(self.swarm.role == code)) for name, code in
+             (("bases", Role.BASE), ("routers", Role.ROUTER), ("agents", Role.AGENT))}
+        return f"Simulation({self.scenario.name!r}, seed={self.seed}, t={self.t:g} s, {n})"

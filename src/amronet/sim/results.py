@@ -1,0 +1,173 @@
+"""The result of a run and its files: ``summary.json``, ``timeseries.csv``, ``network.json``, ``snapshot.png``.
+
+Files are written atomically as a set, and never over files amronet did not write
+(:mod:`amronet.outputs.files`): an interrupted or failed run leaves either the previous output or the complete new
+one, never half-written files.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from amronet import __version__
+from amronet.engine.network import connected_to
+from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role
+from amronet.outputs.files import write_files_atomically
+
+if TYPE_CHECKING:
+    from amronet.outputs.recording import Recorder
+    from amronet.sim.run import Metrics, Run
+
+__all__ = ["RunResult"]
+
+TIMESERIES_COLUMNS = ("t", "coverage", "connected_coverage", "routers_deployed", "components")
+
+
+@dataclass
+class RunResult:
+    """Everything a run produced.
+
+    Attributes:
+        summary: The ``summary.json`` content.
+        timeseries: Column name → array, one entry per recorded step (``timeseries.csv``).
+        network: The ``network.json`` content: ``r_c``, ``map`` and ``nodes``.
+        run: The finished run's books (world, swarm, neighbour table) for pictures and further analysis.
+        recorder: The :class:`~amronet.outputs.recording.Recorder` the run was given, if any: agents' trails for the
+            snapshot and, when it keeps whole frames, ``recording.npz``.
+    """
+
+    summary: dict[str, Any]
+    timeseries: dict[str, np.ndarray]
+    network: dict[str, Any]
+    run: Run
+    recorder: Recorder | None = None
+
+    @classmethod
+    def from_run(cls, sim: Run, final: Metrics, wall_time_s: float, recorder: Recorder | None = None) -> RunResult:
+        """Collect the result of a finished run."""
+        sc, sw = sim.scenario, sim.swarm
+        routers = sw.role == Role.ROUTER
+        deployed_routers = int(np.count_nonzero(sw.deployed & routers))
+        summary = {
+            "algorithm": sc.algorithm.name,
+            "map": sim.world.omap.name,
+            "seed": sim.seed,
+            "r_c": sc.radio.r_c,
+            "sim_time_s": round(sim.t, 9),
+            "steps": sim.steps,
+            "terminated": sim.terminated,
+            "truncated": not sim.terminated,
+            "stop_reason": sim.stop_reason,
+            "routers_total": int(np.count_nonzero(routers)),
+            "routers_deployed": deployed_routers,
+            "nodes_total": deployed_routers + len(sim.bases),
+            "coverage": final.coverage,
+            "connected_coverage": final.connected_coverage,
+            "coverage_method": sc.sim.coverage_method,
+            "components": final.components,
+            "agents": int(len(sim.agents)),
+            "agents_connected_fraction": sim.agents_connected_fraction,
+            "agents_connected_min": sim.agents_connected_min if len(sim.agents) else None,
+            "coverage_target": sim.coverage_target,
+            "reachable_area_m2": sim.world.coverage.area_m2,
+            "mean_distance_per_router_m": float(sw.distance[routers].mean()) if routers.any() else 0.0,
+            "states": sim.state_counts(),
+            "settled_at_s": None if sim.settled_at is None else round(sim.settled_at, 9),
+            "routers_connected_fraction": _routers_connected(sim),
+            **sim.report(),
+            "wall_time_s": wall_time_s,
+            "amronet_version": __version__,
+            "scenario": sc.to_dict(),
+        }
+        columns = TIMESERIES_COLUMNS + (("agents_connected",) if len(sim.agents) else ())
+        rows = np.array(sim.rows, dtype=float).reshape(-1, len(columns))
+        timeseries = {name: rows[:, k] for k, name in enumerate(columns)}
+        for name in ("routers_deployed", "components"):
+            timeseries[name] = timeseries[name].astype(np.int64)
+        nodes = [
+            {
+                "id": i,
+                "kind": ROLE_NAMES[sw.role[i]],
+                "state": STATE_NAMES[sw.state[i]],
+                "status": int(sw.status[i]),
+                "x": float(sw.xy[i, 0]),
+                "y": float(sw.xy[i, 1]),
+            }
+            for i in range(len(sw))
+        ]
+        network = {"r_c": sc.radio.r_c, "map": sim.world.omap.name, "nodes": nodes}
+        return cls(summary=summary, timeseries=timeseries, network=network, run=sim, recorder=recorder)
+
+    # -- rendering -------------------------------------------------------------------------------------------
+    def timeseries_csv(self) -> str:
+        """The time series as CSV text."""
+        ts = self.timeseries
+        agents = "agents_connected" in ts
+        lines = [",".join(TIMESERIES_COLUMNS + (("agents_connected",) if agents else ()))]
+        for k in range(len(ts["t"])):
+            line = (f"{ts['t'][k]:.6g},{ts['coverage'][k]:.6f},{ts['connected_coverage'][k]:.6f},"
+                    f"{int(ts['routers_deployed'][k])},{int(ts['components'][k])}")
+            lines.append(line + (f",{ts['agents_connected'][k]:.6f}" if agents else ""))
+        return "\n".join(lines) + "\n"
+
+    def snapshot_png(self, dpi: int = 120) -> bytes:
+        """The deployment picture as PNG bytes."""
+        from amronet.viz import snapshot_figure  # matplotlib: imported only when a picture is drawn
+
+        sim = self.run
+        sw = sim.swarm
+        r_c = sim.scenario.radio.r_c
+        covered = sim.world.coverage.covered_mask(sw.xy[sw.role != Role.AGENT], r_c)
+        s = self.summary
+        title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
+                 f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")
+        fig = snapshot_figure(
+            sim.world.omap,
+            xy=sw.xy,
+            kind=np.array(ROLE_NAMES)[sw.role],
+            state=np.array(STATE_NAMES)[sw.state],
+            status=sw.status,
+            r_c=r_c,
+            links=sim.table.pairs,
+            covered=covered,
+            reachable=sim.world.reachable,
+            title=title,
+            dpi=dpi,
+            trails=self.recorder.trails() if self.recorder is not None else None,
+        )
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi)
+        return buf.getvalue()
+
+    def files(self, snapshot: bool = True) -> dict[str, bytes]:
+        """Name → content of every output file."""
+        out = {
+            "summary.json": (json.dumps(self.summary, indent=2) + "\n").encode(),
+            "timeseries.csv": self.timeseries_csv().encode(),
+            "network.json": (json.dumps(self.network, indent=1) + "\n").encode(),
+        }
+        if snapshot:
+            out["snapshot.png"] = self.snapshot_png()
+        if self.recorder is not None and self.recorder.full:
+            out["recording.npz"] = self.recorder.npz_bytes(self.run)
+        return out
+
+    def save(self, out_dir: str | Path, snapshot: bool = True) -> Path:
+        """Write the output files into ``out_dir`` atomically (see the module docstring)."""
+        return write_files_atomically(Path(out_dir), self.files(snapshot=snapshot))
+
+
+def _routers_connected(sim: Run) -> float:
+    """Fraction of the routers that have a multi-hop path to a base station through the network."""
+    sw = sim.swarm
+    routers = sw.role == Role.ROUTER
+    if not routers.any():
+        return 1.0
+    linked = connected_to(sim.table, sim.bases, sw.role != Role.AGENT)
+    return float(np.count_nonzero(linked & routers) / np.count_nonzero(routers))

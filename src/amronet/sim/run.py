@@ -1,0 +1,196 @@
+"""One run's books inside the loop: its seed, its block of robots, its recorded rows, its stop reason.
+
+A :class:`Run` is what the loop keeps per run and what the outputs read (:class:`~amronet.sim.results.RunResult`,
+:class:`~amronet.outputs.recording.Recorder`): a run alone and a run inside a batch are the same object; only
+the block of the loop's arrays it owns differs (all of them, or one run's rows).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amronet.engine.network import agents_connected, components, connected_to
+from amronet.engine.radio import NeighbourTable
+from amronet.engine.robots import STATE_NAMES, Role, Swarm
+
+if TYPE_CHECKING:
+    from amronet.algorithms import Controller
+    from amronet.scenario import Scenario
+    from amronet.sim.assemble import World
+    from amronet.sim.loop import Loop
+
+__all__ = ["Metrics", "Run"]
+
+STOP_REASONS = ("coverage_target", "settled", "time_limit")
+"""Why a run ends: the first two *terminate* it (the task ended), the last *truncates* it."""
+
+
+@dataclass
+class Metrics:
+    """Network metrics at one instant."""
+
+    coverage: float
+    connected_coverage: float
+    routers_deployed: int
+    components: int
+
+
+class Run:
+    """The books of run ``index`` of a :class:`~amronet.sim.loop.Loop`.
+
+    Args:
+        loop: The loop that steps the run.
+        index: The run's number in the loop.
+        seed: The run's seed.
+        rng: The run's generator.
+        robots: The run's rows of the loop's arrays (``slice(None)`` when the loop holds one run).
+        coverage_target: Coverage at which the run ends (``None``: none).
+    """
+
+    def __init__(self, loop: Loop, index: int, seed: int, rng: np.random.Generator, robots: slice,
+                 coverage_target: float | None) -> None:
+        self.loop = loop
+        self.index = index
+        self.seed = seed
+        self.rng = rng
+        self.robots = robots
+        self.coverage_target = coverage_target
+        self.scenario: Scenario = loop.scenario
+        self.world: World = loop.world
+        self.dt = loop.dt
+        self.rows: list[tuple] = []
+        self.stop_reason: str | None = None
+        self.settled_at: float | None = None
+        """Start of the final stretch of time in which no router moved (``None`` while one still moves)."""
+        self._final: tuple[int, Swarm, NeighbourTable] | None = None
+        sw = self.swarm
+        self.bases = np.flatnonzero(sw.role == Role.BASE)
+        self.agents = np.flatnonzero(sw.role == Role.AGENT)
+        self.agents_connected_steps = 0
+        self.agents_connected_sum = 0.0
+        self.agents_connected_window = self._agents_connected()
+        self.agents_connected_min = self.agents_connected_window
+
+    # -- the run's view of the loop ------------------------------------------------------------------------
+    @property
+    def steps(self) -> int:
+        """Steps the run has taken."""
+        return self.loop.steps if self._final is None else self._final[0]
+
+    @property
+    def t(self) -> float:
+        """Simulated time in seconds."""
+        return self.steps * self.dt
+
+    @property
+    def swarm(self) -> Swarm:
+        """The run's robots (views of the loop's arrays while it runs; its own copy once it has ended)."""
+        if self._final is not None:
+            return self._final[1]
+        sw = self.loop.swarm
+        return sw if self.robots == slice(None) else sw.rows(self.robots)
+
+    @property
+    def table(self) -> NeighbourTable:
+        """The run's neighbour table (its block of the loop's table)."""
+        if self._final is not None:
+            return self._final[2]
+        table = self.loop.table
+        return table if self.robots == slice(None) else table.block(self.robots)
+
+    @property
+    def controller(self) -> Controller:
+        """The loop's controller (it drives every run of the loop)."""
+        return self.loop.controller
+
+    def report(self) -> dict[str, object]:
+        """The algorithm's own numbers for this run (``Controller.report_run``)."""
+        return self.loop.controller.report_run(self.robots)
+
+    @property
+    def terminated(self) -> bool:
+        """``True`` when the run ended because the task ended (settled or target reached), not by time."""
+        return self.stop_reason in ("settled", "coverage_target")
+
+    def state_counts(self) -> dict[str, int]:
+        """How many robots are in each state."""
+        counts = np.bincount(self.swarm.state, minlength=len(STATE_NAMES))
+        return {STATE_NAMES[s]: int(c) for s, c in enumerate(counts) if c}
+
+    # -- metrics -----------------------------------------------------------------------------------------------
+    def metrics(self, method: str | None = None) -> Metrics:
+        """Network metrics now.
+
+        Coverage (Eq. 1) over all routers and base nodes, coverage of those connected to a base, deployed
+        routers, and the number of components of the deployed network (base nodes and deployed routers).
+        """
+        sw, table = self.swarm, self.table
+        method = method or self.scenario.sim.coverage_method
+        r_c = self.scenario.radio.r_c
+        network = sw.role != Role.AGENT
+        linked = connected_to(table, self.bases, network)
+        deployed = sw.deployed
+        n_comp, _ = components(table, deployed)
+        coverage = self.world.coverage.fraction(sw.xy[network], r_c, method=method)
+        everyone_linked = np.array_equal(linked, network)  # then both are the same area: one computation
+        return Metrics(
+            coverage=coverage,
+            connected_coverage=coverage if everyone_linked else self.world.coverage.fraction(sw.xy[linked], r_c,
+                                                                                             method=method),
+            routers_deployed=int(np.count_nonzero(deployed & (sw.role == Role.ROUTER))),
+            components=n_comp,
+        )
+
+    def _agents_connected(self) -> float:
+        """Fraction of agents with a multi-hop path to a base station through the AMRoNet right now."""
+        if len(self.agents) == 0:
+            return 1.0
+        network = self.swarm.role != Role.AGENT
+        linked = agents_connected(self.table, self.agents, self.bases, network)
+        return np.count_nonzero(linked) / len(linked)  # the mean, exactly, at a tenth of ndarray.mean's cost
+
+    def observe_agents(self) -> None:
+        """Account for the agents' connection after a step (runs with agents only)."""
+        frac = self._agents_connected()
+        self.agents_connected_steps += 1
+        self.agents_connected_sum += frac
+        self.agents_connected_window = min(self.agents_connected_window, frac)
+        self.agents_connected_min = min(self.agents_connected_min, frac)
+
+    @property
+    def agents_connected_fraction(self) -> float | None:
+        """Mean over all steps of the fraction of agents connected to a base station (``None`` without agents)."""
+        if len(self.agents) == 0:
+            return None
+        if self.agents_connected_steps == 0:
+            return self.agents_connected_window
+        return self.agents_connected_sum / self.agents_connected_steps
+
+    def record(self) -> bool:
+        """Append a row of metrics to the time series; whether the coverage target is reached."""
+        m = self.metrics()
+        row = (round(self.t, 9), m.coverage, m.connected_coverage, m.routers_deployed, m.components)
+        if len(self.agents):
+            # the worst fraction seen at any step since the last record, so that no dip is hidden
+            row = (*row, self.agents_connected_window)
+            self.agents_connected_window = 1.0
+        self.rows.append(row)
+        return self.coverage_target is not None and m.coverage >= self.coverage_target
+
+    def settle(self, now_settled: bool) -> None:
+        """Note whether the run's robots are all settled after the step just taken."""
+        if not now_settled:
+            self.settled_at = None
+        elif self.settled_at is None:
+            self.settled_at = self.t
+
+    def end(self, reason: str) -> None:
+        """End the run: keep its own copy of its robots and table (the loop's arrays may go on moving)."""
+        if reason not in STOP_REASONS:
+            raise ValueError(f"unknown stop reason {reason!r}")
+        self.stop_reason = reason
+        sw, table = self.swarm, self.table
+        self._final = (self.loop.steps, sw.copy() if self.robots != slice(None) else sw, table)
