@@ -33,7 +33,16 @@ from typing import Any
 import numpy as np
 
 from amronet.errors import AmronetError, MapError
+from amronet.experiments.common import agent_scenario
 from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
+from amronet.outputs.files import write_files_atomically
+from amronet.patterns import as_area, place_all
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.sweeps import LocalExecutor, ResultStore, run_sweep, sweep_from_spec
+from amronet.sweeps.store import check_store_path
+from amronet.world import reachable_free, resolve_map
+from amronet.world.builtin import BUILTIN_MAPS
 
 __all__ = ["PLAN_ESTIMATE_DENSITY", "Plan", "plan", "write_plan"]
 
@@ -136,8 +145,6 @@ def _check(option: str, ok: bool, message: str) -> None:
 
 def _scenario(map_ref: str, bases: list[tuple[float, float]], r_c: float, agents: int, explorer: str,
               time_limit: float, dt: float) -> dict[str, Any]:
-    from amronet.experiments.common import agent_scenario
-    from amronet.world.builtin import BUILTIN_MAPS
 
     sc = agent_scenario(map_ref, r_c, tuple(bases), agents, explorer, time_limit, dt=dt)
     if map_ref not in BUILTIN_MAPS:
@@ -177,13 +184,6 @@ def plan(
     Raises:
         AmronetError: Bad input, with one line naming the option.
     """
-    from amronet.patterns import as_area, place_all
-    from amronet.scenario import load_scenario
-    from amronet.sim import Simulation
-    from amronet.sweeps import LocalExecutor, ResultStore, run_sweep, sweep_from_spec
-    from amronet.sweeps.store import check_store_path
-    from amronet.world import reachable_free, resolve_map
-
     options = options or RunOptions(show_progress=False)
     explorer, seed, store = options.explorer, options.seed, options.store
     time_limit = options.time_limit_or(AGENT_TIME_LIMIT_S)
@@ -262,8 +262,6 @@ def typical_picture(p: Plan) -> bytes | None:
     """PNG of the typical run (re-run here from its seed; the same seed gives the same deployment)."""
     if p.typical_seed is None:
         return None
-    from amronet.scenario import load_scenario
-    from amronet.sim import Simulation
 
     result = Simulation(load_scenario(p.scenario), p.typical_seed).run()
     stored = next(r["routers_deployed"] for r in p.runs if r["seed"] == p.typical_seed)
@@ -283,7 +281,6 @@ def write_plan(p: Plan, out_dir: str | Path, keep: tuple[str, ...] = ()) -> Path
     """
     import json
 
-    from amronet.outputs.files import write_files_atomically
 
     picture = typical_picture(p)
     files = {"plan.json": (json.dumps(p.to_dict(), indent=2) + "\n").encode(),

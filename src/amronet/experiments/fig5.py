@@ -18,6 +18,7 @@ import numpy as np
 from amronet.experiments.common import START_LOCATIONS, Claim, agent_scenario, claims_markdown, csv_text, write_outputs
 from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 from amronet.experiments.runner import run_jobs
+from amronet.patterns import estimate, place
 from amronet.sweeps.stats import mean_ci
 
 __all__ = ["PATTERNS", "run_fig5"]
@@ -27,7 +28,6 @@ AREA = (32.0, 32.0)
 
 
 def _pattern_counts(radii: list[float]) -> dict[str, dict[float, dict[str, float]]]:
-    from amronet.patterns import estimate, place
 
     out: dict[str, dict[float, dict[str, float]]] = {}
     for name in PATTERNS:

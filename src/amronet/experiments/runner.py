@@ -17,8 +17,15 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from amronet.errors import AmronetError
 from amronet.experiments.options import RunOptions
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.sim.batch import run_seeds
+from amronet.sweeps.engine import execute_into_store, pending_runs, plan_batches, progress_bar
 from amronet.sweeps.executors import Executor, LocalExecutor, default_workers
+from amronet.sweeps.identity import canonical_json, resolve_scenario, scenario_hash
+from amronet.sweeps.store import ResultStore, check_store_path
 
 __all__ = ["Job", "run_batch", "run_jobs"]
 
@@ -35,9 +42,6 @@ def run_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
     Returns:
         One result per job, in order: its labels, seed, summary and (when the job asks) time series, as plain data.
     """
-    from amronet.scenario import load_scenario
-    from amronet.sim.batch import run_seeds
-
     results = run_seeds(load_scenario(jobs[0]["scenario"]), [job["seed"] for job in jobs])
     outs = []
     for job, result in zip(jobs, results, strict=True):
@@ -80,8 +84,6 @@ def run_jobs(
         raise TypeError(f"run_jobs() got unexpected keyword arguments {unknown}; it takes {list(_EXECUTION)}")
     options = dataclasses.replace(options or RunOptions(), **changes)
     if jobs:  # fail fast, in this process, on a scenario that cannot start
-        from amronet.scenario import load_scenario
-        from amronet.sim import Simulation
 
         Simulation(load_scenario(jobs[0]["scenario"]), jobs[0]["seed"])
     own = options.executor is None
@@ -98,8 +100,6 @@ def run_jobs(
 
 def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_progress: bool,
                on_result: Callable[[int, dict[str, Any]], None] | None) -> list[dict[str, Any]]:
-    from amronet.sweeps.engine import plan_batches, progress_bar
-    from amronet.sweeps.identity import canonical_json
 
     results: list[dict[str, Any] | None] = [None] * len(jobs)
     slots = executor.slots if jobs else 0
@@ -120,11 +120,6 @@ def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_p
 def _run_with_store(jobs: Sequence[Job], store_path: Path, executor: Executor, description: str,
                     show_progress: bool, on_result: Callable[[int, dict[str, Any]], None] | None,
                     retry_failed: bool) -> list[dict[str, Any]]:
-    from amronet.errors import AmronetError
-    from amronet.scenario import load_scenario
-    from amronet.sweeps.engine import execute_into_store, pending_runs
-    from amronet.sweeps.identity import canonical_json, resolve_scenario, scenario_hash
-    from amronet.sweeps.store import ResultStore, check_store_path
 
     check_store_path(store_path)
     resolved: dict[str, tuple[str, dict[str, Any]]] = {}

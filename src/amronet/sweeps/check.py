@@ -15,6 +15,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from amronet.errors import ScenarioError
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.sim.assemble import load_scenario_map
 from amronet.sweeps.identity import canonical_json
 
 __all__ = ["check_points", "owner_key"]
@@ -43,9 +46,6 @@ def _values(overrides: dict[str, Any]) -> str:
 
 
 def _start(resolved: dict[str, Any], seed: int, maps: dict[str, Any]) -> None:
-    from amronet.scenario import load_scenario
-    from amronet.sim import Simulation
-    from amronet.sim.assemble import load_scenario_map
 
     scenario = load_scenario(resolved)
     ref = resolved["map"]

@@ -17,6 +17,8 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
+from amronet.scenario import load_scenario
+from amronet.sim.batch import batchable
 from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, WorkerDiedError
 from amronet.sweeps.spec import Sweep
 from amronet.sweeps.store import ResultStore
@@ -87,9 +89,6 @@ def plan_batches(pending: Sequence[StoreJob], slots: int, max_size: int = MAX_BA
     Returns:
         Lists of indices into ``pending``, one per job.
     """
-    from amronet.scenario import load_scenario
-    from amronet.sim.batch import batchable
-
     by_hash: dict[str, list[int]] = {}
     for k, (h, _, _) in enumerate(pending):
         by_hash.setdefault(h, []).append(k)

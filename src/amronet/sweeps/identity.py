@@ -34,6 +34,7 @@ import yaml
 
 from amronet.errors import MapError
 from amronet.scenario import Scenario
+from amronet.world.builtin import BUILTIN_MAPS
 
 __all__ = ["canonical_json", "map_digest", "resolve_scenario", "scenario_hash"]
 
@@ -46,7 +47,6 @@ def canonical_json(data: Any) -> str:
 
 
 def _resolved_map(scenario: Scenario) -> str:
-    from amronet.world.builtin import BUILTIN_MAPS
 
     ref = scenario.map
     if ref in BUILTIN_MAPS:
@@ -135,8 +135,6 @@ def map_digest(ref: str) -> str:
         The digest; a missing file (YAML or image) hashes as ``"missing"``, so creating it later changes the
         digest. Cached per file path, modification time and size: cheap to call for every point of a sweep.
     """
-    from amronet.world.builtin import BUILTIN_MAPS
-
     if ref in BUILTIN_MAPS:
         with resources.as_file(resources.files("amronet").joinpath("data", "maps")) as folder:
             return _digest_of_yaml(Path(folder) / f"{ref}.yaml")

@@ -15,7 +15,9 @@ from typing import Any
 import numpy as np
 
 from amronet.errors import AmronetError
+from amronet.outputs.files import write_file_atomically
 from amronet.sweeps.stats import mean_ci
+from amronet.viz.decorations import save_figure
 
 __all__ = ["plot_groups", "save_plot"]
 
@@ -81,8 +83,6 @@ def save_plot(rows: list[dict[str, Any]], x: str, y: str, out: str | Path, hue: 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from amronet.outputs.files import write_file_atomically
-    from amronet.viz.decorations import save_figure
 
     out = Path(out)
     if out.suffix.lower() not in (".png", ".svg", ".pdf"):

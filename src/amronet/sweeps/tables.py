@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 
 from amronet.errors import AmronetError
+from amronet.outputs.files import write_files_atomically
+from amronet.sweeps.stats import mean_ci
 from amronet.sweeps.store import ResultStore
 
 __all__ = ["export_tables", "flatten", "point_summary", "run_rows"]
@@ -67,8 +69,6 @@ def point_summary(rows: list[dict[str, Any]], keys: list[str]) -> list[dict[str,
         Per point: the swept keys' values, runs, done, failed, mean ± 95 % CI of ``nodes_total``, means of
         ``coverage`` and ``connected_coverage``, and the most common stop reason.
     """
-    from amronet.sweeps.stats import mean_ci
-
     groups: dict[Any, list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault(row.get("point"), []).append(row)
@@ -161,8 +161,6 @@ def export_tables(store: ResultStore, fmt: str, out_dir: str | Path, sweep_id: i
     Raises:
         AmronetError: An unknown format, or Parquet without pyarrow.
     """
-    from amronet.outputs.files import write_files_atomically
-
     if fmt not in ("csv", "parquet"):
         raise AmronetError(f"--export: unknown format {fmt!r}; choose csv or parquet")
     if fmt == "parquet":

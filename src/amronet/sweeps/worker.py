@@ -10,6 +10,12 @@ import socket
 import time
 from typing import Any
 
+from amronet import __version__
+from amronet.errors import AmronetError
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.sim.batch import run_seeds
+
 __all__ = ["SUMMARY_EXTRAS", "execute_batch", "execute_job", "one_line_error"]
 
 SUMMARY_EXTRAS = ("wall_time_s", "amronet_version", "scenario")
@@ -18,8 +24,6 @@ SUMMARY_EXTRAS = ("wall_time_s", "amronet_version", "scenario")
 
 def one_line_error(exc: BaseException) -> str:
     """An exception as one line: ``Type: first line of the message`` (just the message for amronet's own)."""
-    from amronet.errors import AmronetError
-
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
     if isinstance(exc, AmronetError):
         return text or type(exc).__name__
@@ -34,13 +38,9 @@ def execute_job(job: dict[str, Any]) -> dict[str, Any]:
         without :data:`SUMMARY_EXTRAS`; the time series as lists) or ``{"status": "failed", "error": one line,
         ...}`` when the run raised.
     """
-    from amronet import __version__
-
     start = time.perf_counter()
     out: dict[str, Any] = {"host": socket.gethostname(), "amronet_version": __version__}
     try:
-        from amronet.scenario import load_scenario
-        from amronet.sim import Simulation
 
         result = Simulation(load_scenario(job["scenario"]), int(job["seed"])).run()
     except Exception as exc:
@@ -62,14 +62,10 @@ def execute_batch(job: dict[str, Any]) -> list[dict[str, Any]]:
     the same results as one by one; a run's ``wall_time_s`` is then its share of the batch. If the batch raises,
     its seeds run again one by one, so every run gets its own outcome (and a failure names its own error).
     """
-    from amronet import __version__
-
     seeds = [int(s) for s in job["seeds"]]
     if len(seeds) > 1:
         out: dict[str, Any] = {"host": socket.gethostname(), "amronet_version": __version__}
         try:
-            from amronet.scenario import load_scenario
-            from amronet.sim.batch import run_seeds
 
             results = run_seeds(load_scenario(job["scenario"]), seeds)
         except Exception:
