@@ -126,17 +126,17 @@ class FrontierExplorer(Explorer):
         cells_r, cells_c = grid.buffers(max(sensor_range, (self.lookahead + 2) * res * 1.5))
         if cells_r is not self._work.cells_r:  # the grid's scratch cell lists grew
             self._work = self._work._replace(cells_r=cells_r, cells_c=cells_c)
-        step = StepInputs(now=self.steps, nodes_changed=refresh, xy=xy, heading=heading, who=who,
-                          scans=np.minimum(scans, avoid), angles=beam_angles(scans.shape[1]),
-                          refused=np.asarray(refused, dtype=np.bool_), fresh=fresh)
-        layers = MapLayers(score=grid.score, seen=grid.seen, row_stamp=grid.row_stamp, stamp=grid.stamp,
-                           robots=self.robots, no_robots=self._no_robots, covered=self.covered, gap=self.gap,
-                           visited=self.visited)
+        # built by position, in the order of the fields (keywords cost a dictionary per step)
+        step = StepInputs(self.steps, refresh, xy, heading, who, np.minimum(scans, avoid), beam_angles(scans.shape[1]),
+                          np.asarray(refused, dtype=np.bool_), fresh)
+        layers = MapLayers(grid.score, grid.seen, grid.row_stamp, grid.stamp, self.robots, self._no_robots,
+                           self.covered, self.gap, self.visited)
         navigate(step, layers, settings, self.plans, self._work)
         self.steps += 1
-        idle = ~self.plans.active
-        if idle.any():
-            self._fallback.steer(heading, who[idle], scans[idle], sensor_range, np.asarray(refused)[idle], rng, xy,
+        active = self.plans.active
+        if not active.all():
+            idle = ~active
+            self._fallback.steer(heading, who[idle], scans[idle], sensor_range, step.refused[idle], rng, xy,
                                  deployed_xy)
 
     def _paint(self, nodes: np.ndarray) -> None:
