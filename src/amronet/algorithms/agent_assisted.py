@@ -117,9 +117,7 @@ class AgentAssisted(Controller):
         if (sw.role == Role.ROUTER).any():
             raise ScenarioError("routers.count", "agents release the routers in agent-assisted deployment; "
                                                  "set routers.count to 0")
-        if self.params.explorer not in EXPLORERS:
-            raise ScenarioError("algorithm.params.explorer", f"unknown explorer {self.params.explorer!r}; choose one "
-                                f"of: {', '.join(sorted(EXPLORERS))}")
+        explorer_cls = EXPLORERS.lookup(self.params.explorer, "algorithm.params.explorer")
         step = float(sw.max_speed[agents].max()) * self.dt
         self.r_eff = check_loss_band(self.params.loss_margin, self.r_c, step, "agent")
         self.router_model = stock.robot
@@ -131,7 +129,7 @@ class AgentAssisted(Controller):
         self.disabled = np.zeros(n, dtype=bool)
         self.refused = np.zeros(n, dtype=bool)
         self.steering = GoalSteering(n, n_anchors=2, give_up_steps=self.params.give_up_steps)
-        self.explorer = EXPLORERS[self.params.explorer](self.params.turn_noise, self.params.avoid_range, self.dt,
+        self.explorer = explorer_cls(self.params.turn_noise, self.params.avoid_range, self.dt,
                                                         self.r_c, self.area.extent)
         self.agents = np.flatnonzero(agents)
         self.agent_model = int(sw.model[self.agents[0]])

@@ -84,7 +84,6 @@ def run_jobs(
         raise TypeError(f"run_jobs() got unexpected keyword arguments {unknown}; it takes {list(_EXECUTION)}")
     options = dataclasses.replace(options or RunOptions(), **changes)
     if jobs:  # fail fast, in this process, on a scenario that cannot start
-
         Simulation(load_scenario(jobs[0]["scenario"]), jobs[0]["seed"])
     own = options.executor is None
     executor: Executor = options.executor or LocalExecutor(options.workers or default_workers())
