@@ -69,8 +69,9 @@ def check_output_folder(out_dir: str | Path, keep: Iterable[str] = (), option: s
     if foreign:
         shown = ", ".join(repr(name) for name in foreign[:3])
         more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+        them = "it" if len(foreign) == 1 else "them"
         raise AmronetError(f"{option}: {where!r} holds {shown}{more}, which amronet did not write there (or changed "
-                           f"since); move them away or choose a new or empty folder; nothing was changed")
+                           f"since); move {them} away or choose a new or empty folder; nothing was changed")
     return out_dir
 
 
