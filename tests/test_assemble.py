@@ -577,3 +577,18 @@ def test_agents_do_not_overlap_uniformly_scattered_routers(seed: int) -> None:
     swarm = build_swarm(sc, build_world(sc), np.random.default_rng(seed), R_START)
     assert_no_body_overlap(swarm)
 
+
+
+@pytest.mark.parametrize(("second", "gap"), [((0.0, 0.0), "0 m"), ((0.31, 0.0), "0.31 m")])
+def test_base_stations_whose_bodies_overlap_are_refused_naming_both(second: tuple[float, float], gap: str) -> None:
+    # two AmigoBot reference nodes (radius 0.165 m) need 0.33 m between their centres
+    sc = load_scenario({"map": "open-6x6", "base_stations": [{"x": 0.0, "y": 0.0}, {"x": second[0], "y": second[1]}]})
+    with pytest.raises(ScenarioError) as excinfo:
+        build_world(sc)
+    err = one_line_error(excinfo, "base_stations[1]")
+    assert "base_stations[0]" in err.message and gap in err.message and "0.33 m" in err.message
+
+
+def test_base_stations_just_far_enough_apart_are_accepted() -> None:
+    sc = load_scenario({"map": "open-6x6", "base_stations": [{"x": 0.0, "y": 0.0}, {"x": 0.34, "y": 0.0}]})
+    assert build_world(sc).bases_xy.shape == (2, 2)

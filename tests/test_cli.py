@@ -133,3 +133,11 @@ def test_console_script_in_a_subprocess(tmp_path):
     proc = subprocess.run([str(exe), "run", "--preset", "self-spreading-6x6", "--out", str(tmp_path / "q"),
                            "--set", "radio.r_c=-1"], capture_output=True, text=True)
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1
+
+
+@pytest.mark.parametrize(("argv", "option"), [(["--steps", "-5"], "--steps"), (["--steps", "0"], "--steps"),
+                                              (["--robots", "-3"], "--robots"), (["--rc", "nan"], "--rc"),
+                                              (["--rc", "0"], "--rc")])
+def test_bench_refuses_bad_sizes_in_one_line(argv, option, capsys):
+    code, cap = run_cli("bench", "--map", "open-6x6", "--robots", "30", "--steps", "5", *argv, capsys=capsys)
+    assert code == 2 and cap.err.startswith(f"amronet: error: {option}: ") and cap.err.count("\n") == 1

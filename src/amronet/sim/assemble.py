@@ -80,8 +80,17 @@ def build_world(scenario: Scenario, omap: OccupancyMap | None = None) -> World:
                                 "move it to free space")
     clear = clearance(omap)
     rows, cols = omap.world_to_cell(bases)
+    bodies = [robot_model(spec.robot, f"base_stations[{i}].robot").radius
+              for i, spec in enumerate(scenario.base_stations)]
+    for j in range(1, len(bases)):  # a handful of base stations: pairs in plain Python
+        for i in range(j):
+            gap, need = float(np.linalg.norm(bases[j] - bases[i])), bodies[i] + bodies[j]
+            if gap < need:
+                raise ScenarioError(f"base_stations[{j}]", f"({bases[j][0]:g}, {bases[j][1]:g}) is {gap:.3g} m "
+                                    f"from base_stations[{i}] ({bases[i][0]:g}, {bases[i][1]:g}), but their "
+                                    f"reference nodes' bodies need {need:.3g} m; move one of them")
     for i, spec in enumerate(scenario.base_stations):
-        body = robot_model(spec.robot, f"base_stations[{i}].robot").radius
+        body = bodies[i]
         if clear[rows[i], cols[i]] < body:
             raise ScenarioError(
                 f"base_stations[{i}]", f"({spec.x:g}, {spec.y:g}) is {clear[rows[i], cols[i]]:.3g} m from an obstacle, "

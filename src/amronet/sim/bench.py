@@ -22,6 +22,7 @@ from scipy import ndimage
 
 from amronet import __version__
 from amronet.engine.robots import Role
+from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
 from amronet.sim.loop import Simulation
 from amronet.world.builtin import resolve_map
@@ -52,7 +53,17 @@ def run_bench(
     r_c: float = 1.0,
     area_per_robot: float = 0.25,
 ) -> dict[str, Any]:
-    """Time ``steps`` full steps of ``robots`` robots and return a report (robot-steps per second and more)."""
+    """Time ``steps`` full steps of ``robots`` robots and return a report (robot-steps per second and more).
+
+    Raises:
+        AmronetError: ``robots`` or ``steps`` below 1, or ``r_c`` not a finite number > 0 (named as the options
+            of ``amronet bench``).
+    """
+    for option, value in (("--robots", robots), ("--steps", steps)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise AmronetError(f"{option}: must be a whole number >= 1, got {value!r}")
+    if isinstance(r_c, bool) or not math.isfinite(r_c) or r_c <= 0:
+        raise AmronetError(f"--rc: must be a finite number > 0, got {r_c!r}")
     omap = resolve_map(map_name)
     rng = np.random.default_rng(seed)
     largest = _largest_free_region(omap)
