@@ -80,3 +80,17 @@ def test_overrides():
     with pytest.raises(ScenarioError, match="no list item 3"):
         apply_overrides({"base_stations": [{}]}, {"base_stations.3.x": 1})
     assert str(err(BASE, overrides={"radio.rc": 2})).startswith("radio.rc: unknown key")
+
+
+@pytest.mark.parametrize(("key", "value", "field"), [
+    ("radio.r_c", True, "radio.r_c"),
+    ("base_stations.0.x", False, "base_stations[0].x"),
+    ("sim.dt", True, "sim.dt"),
+    ("algorithm.params.loss_margin", True, "algorithm.params.loss_margin"),
+    ("radio.r_c", "1.5", "radio.r_c"),
+])
+def test_booleans_and_strings_are_not_numbers(key, value, field):
+    with pytest.raises(ScenarioError) as excinfo:
+        # the algorithm's own parameters are validated when a run starts
+        load_scenario("self-spreading-6x6", overrides={key: value}).algorithm_params()
+    assert excinfo.value.field == field

@@ -41,9 +41,9 @@ __all__ = [
     "parse_override",
 ]
 
-PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegativeFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+PositiveFloat = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
+NonNegativeFloat = Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)]
+FiniteFloat = Annotated[float, Field(strict=True, allow_inf_nan=False)]
 
 
 class _Strict(BaseModel):
@@ -104,7 +104,7 @@ class SimSpec(_Strict):
     dt: PositiveFloat = 0.1
     time_limit: PositiveFloat = 300.0
     record_every: Annotated[StrictInt, Field(ge=1)] = 10
-    coverage_target: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] | None = None
+    coverage_target: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] | None = None
     coverage_method: Literal["raster", "exact"] = "raster"
     stop_when_settled: StrictBool = True
     robot_collisions: StrictBool = True

@@ -58,12 +58,12 @@ class AgentAssistedParams(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     triangular: TriangularMode = "local"
-    loss_margin: Annotated[float, Field(gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
+    loss_margin: Annotated[float, Field(strict=True, gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
     explorer: str = "random"
-    turn_noise: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.5
-    avoid_range: Annotated[float, Field(gt=0, allow_inf_nan=False)] = 0.6
+    turn_noise: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.5
+    avoid_range: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 0.6
     give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
-    release_gap: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 0.02
+    release_gap: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.02
 
 
 @njit(cache=True)

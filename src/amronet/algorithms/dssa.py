@@ -45,7 +45,7 @@ from amronet.engine.robots import Role, State
 
 __all__ = ["DSSA", "DSSAParams"]
 
-_Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+_Positive = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
 
 
 class DSSAParams(BaseModel):
@@ -64,13 +64,13 @@ class DSSAParams(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    sensing_radius_factor: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.5
+    sensing_radius_factor: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] = 0.5
     field_area: _Positive | None = None
     obstacle_forces: StrictBool = True
-    obstacle_gain: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
+    obstacle_gain: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 1.0
     oscillation_limit: Annotated[StrictInt, Field(ge=1)] = 10
-    oscillation_radius: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.05
-    stable_fraction: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.1
+    oscillation_radius: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.05
+    stable_fraction: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.1
     stable_steps: Annotated[StrictInt, Field(ge=1)] = 20
 
 

@@ -55,7 +55,7 @@ from amronet.engine.robots import Role, State
 
 __all__ = ["PotentialField", "PotentialFieldParams"]
 
-_Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+_Positive = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
 
 
 class PotentialFieldParams(BaseModel):
@@ -83,17 +83,17 @@ class PotentialFieldParams(BaseModel):
 
     connectivity_k: Annotated[StrictInt, Field(ge=0)] = 1
     damping: _Positive = 0.25
-    safety_factor: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.8
+    safety_factor: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] = 0.8
     mass: _Positive = 1.0
-    sensing_radius_factor: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.5
-    balance_fraction: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.75
+    sensing_radius_factor: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] = 0.5
+    balance_fraction: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.75
     k_cover: _Positive | None = None
     k_degree: _Positive | None = None
     obstacle_forces: StrictBool = True
     k_obstacle: _Positive | None = None
-    rest_fraction: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.05
+    rest_fraction: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.05
     rest_steps: Annotated[StrictInt, Field(ge=1)] = 20
-    force_cap_factor: Annotated[float, Field(gt=0, allow_inf_nan=False)] = 4.0
+    force_cap_factor: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 4.0
 
 
 @ALGORITHMS.register("potential-field")

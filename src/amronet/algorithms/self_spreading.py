@@ -51,8 +51,8 @@ class SelfSpreadingParams(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     triangular: TriangularMode = "local"
-    loss_margin: Annotated[float, Field(gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
-    turn_noise: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
+    loss_margin: Annotated[float, Field(strict=True, gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
+    turn_noise: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 1.0
     give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
 
 
