@@ -94,3 +94,18 @@ def test_booleans_and_strings_are_not_numbers(key, value, field):
         # the algorithm's own parameters are validated when a run starts
         load_scenario("self-spreading-6x6", overrides={key: value}).algorithm_params()
     assert excinfo.value.field == field
+
+
+@pytest.mark.parametrize(("robot", "field"), [
+    ({"radius": 0.05, "max_speed": 0.1, "sensor_beams": 0, "sensor_range": 0.2}, "routers.robot.sensor_beams"),
+    ({"radius": 0.05, "max_speed": float("nan"), "sensor_beams": 8, "sensor_range": 0.2}, "routers.robot.max_speed"),
+    ({"radius": 0.05, "max_speed": 0.1, "sensor_beams": 8, "sensor_range": 0.2, "colour": "red"},
+     "routers.robot.colour"),
+    (5, "routers.robot"),
+])
+def test_a_robot_given_field_by_field_names_the_real_field(robot, field):
+    with pytest.raises(ScenarioError) as excinfo:
+        load_scenario({"map": "open-6x6", "base_stations": [{"x": 0, "y": 0}], "routers": {"robot": robot}})
+    assert excinfo.value.field == field
+    if field.endswith("colour"):
+        assert "radius, max_speed, sensor_beams, sensor_range" in excinfo.value.message

@@ -21,7 +21,17 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    StrictBool,
+    StrictInt,
+    Tag,
+    ValidationError,
+    model_validator,
+)
 
 from amronet.algorithms import ALGORITHMS
 from amronet.engine.radio import MEDIA
@@ -59,7 +69,12 @@ class RobotSpec(_Strict):
     sensor_range: PositiveFloat
 
 
-RobotRef = str | RobotSpec
+def _robot_ref_tag(value: Any) -> str:
+    return "spec" if isinstance(value, dict | RobotSpec) else "name"
+
+
+RobotRef = Annotated[Annotated[str, Tag("name")] | Annotated[RobotSpec, Tag("spec")], Discriminator(_robot_ref_tag)]
+"""A robot model by name (``bebot``), or field by field (a mapping: errors then name the field inside it)."""
 
 
 class RadioSpec(_Strict):
@@ -165,31 +180,46 @@ class Scenario(_Strict):
         return _validate(data, base_dir=self.base_dir)
 
 
+_UNION_TAGS = ("name", "spec")
+"""The tags of :data:`RobotRef`'s two forms: pydantic puts them into an error's location after ``robot``."""
+
+
 def _field_path(loc: tuple[Any, ...], prefix: str = "") -> str:
     path = prefix
-    for part in loc:
+    for k, part in enumerate(loc):
         if isinstance(part, int):
             path += f"[{part}]"
-        else:
+        elif not (part in _UNION_TAGS and k > 0 and loc[k - 1] == "robot"):
             path += ("." if path else "") + str(part)
     return path
 
 
 def _allowed_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
     current: Any = model
-    for part in loc[:-1]:
-        if isinstance(part, int):
+    for k, part in enumerate(loc[:-1]):
+        if isinstance(part, int) or (part in _UNION_TAGS and k > 0 and loc[k - 1] == "robot"):
             continue
         field = getattr(current, "model_fields", {}).get(part)
         if field is None:
             return []
-        annotation = field.annotation
-        for candidate in (annotation, *getattr(annotation, "__args__", ())):
-            for inner in (candidate, *getattr(candidate, "__args__", ())):
-                if isinstance(inner, type) and issubclass(inner, BaseModel):
-                    current = inner
-                    break
+        found = _model_in(field.annotation)
+        if found is not None:
+            current = found
     return [k for k in getattr(current, "model_fields", {}) if k != "base_dir"]
+
+
+def _model_in(annotation: Any, depth: int = 0) -> type[BaseModel] | None:
+    """The first pydantic model inside an annotation (through unions, ``Annotated`` and containers)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    if depth > 4:
+        return None
+    for inner in getattr(annotation, "__args__", ()) or ():
+        found = _model_in(inner, depth + 1)
+        if found is not None:
+            return found
+    origin = getattr(annotation, "__origin__", None)
+    return _model_in(origin, depth + 1) if origin is not None and origin is not annotation else None
 
 
 def to_scenario_error(exc: ValidationError, prefix: str = "", model: type[BaseModel] = Scenario) -> ScenarioError:
