@@ -109,3 +109,15 @@ def test_a_robot_given_field_by_field_names_the_real_field(robot, field):
     assert excinfo.value.field == field
     if field.endswith("colour"):
         assert "radius, max_speed, sensor_beams, sensor_range" in excinfo.value.message
+
+
+def test_switching_the_algorithm_drops_the_base_s_parameters_for_every_caller():
+    sc = load_scenario("self-spreading-6x6", overrides={"algorithm.name": "dssa"})
+    assert sc.algorithm.name == "dssa" and sc.algorithm.params == {}
+    sc.algorithm_params()  # DSSA's defaults, not self-spreading's parameters
+    sc = load_scenario("self-spreading-6x6", overrides={"algorithm.name": "dssa", "algorithm.params.field_area": 30.0})
+    assert sc.algorithm_params().field_area == 30.0
+    same = load_scenario("self-spreading-6x6", overrides={"algorithm.name": "self-spreading"})
+    assert same.algorithm.params == load_scenario("self-spreading-6x6").algorithm.params
+    switched = load_scenario("self-spreading-6x6").with_overrides({"algorithm.name": "potential-field"})
+    assert switched.algorithm.params == {}

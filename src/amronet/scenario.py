@@ -266,8 +266,18 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 
 def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
-    """Return a copy of ``data`` with dotted paths set (list items by index: ``base_stations.0.x``)."""
+    """Return a copy of ``data`` with dotted paths set (list items by index: ``base_stations.0.x``).
+
+    One rule for every caller (``run --set``, sweeps, the library): an ``algorithm.name`` that switches to another
+    algorithm drops the base's ``algorithm.params`` first, since they belong to the base's algorithm; the new one
+    starts from its defaults and ``algorithm.params[.KEY]`` given in ``overrides`` apply on top.
+    """
     out = copy.deepcopy(data)
+    algorithm = out.get("algorithm") if isinstance(out, dict) else None
+    name = overrides.get("algorithm.name")
+    if (isinstance(algorithm, dict) and name is not None and name != algorithm.get("name")
+            and not isinstance(overrides.get("algorithm"), dict)):
+        algorithm.pop("params", None)
     for dotted, value in overrides.items():
         parts = dotted.split(".")
         node: Any = out

@@ -180,17 +180,9 @@ def _base_scenario(spec: SweepSpec, base_dir: str | None) -> Scenario:
         raise ScenarioError(f"base: {exc.field}" if exc.field else "base", exc.message) from None
 
 
-def _algorithm_rule(base: Scenario, merged: dict[str, Any]) -> dict[str, Any]:
-    """``merged`` with the base's ``algorithm.params`` dropped first when it switches to another algorithm."""
-    name = merged.get("algorithm.name")
-    if name is None or name == base.algorithm.name or isinstance(merged.get("algorithm"), dict):
-        return merged
-    return {"algorithm.params": {}, **merged}
-
-
 def _point(base: Scenario, fixed: dict[str, Any], overrides: dict[str, Any], where: str, index: int) -> Point:
     try:
-        merged = _algorithm_rule(base, {**fixed, **overrides})
+        merged = {**fixed, **overrides}  # switching algorithm.name drops the base's params (apply_overrides)
         sc = base.with_overrides(merged) if merged else base
         resolved = resolve_scenario(sc)
     except ScenarioError as exc:
