@@ -52,10 +52,26 @@ def _sha(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+def _drop_default_radio_fields(summary: dict) -> None:
+    """Leave out the scenario's radio fields that are at their defaults, but for ``model`` and ``r_c``.
+
+    The radio's link budget (issue #14) added fields to every scenario; left at their defaults they change nothing
+    a unit-disk run computes, and leaving them out of the digest keeps it what it was before they existed.
+    """
+    from amronet.scenario import RadioSpec
+
+    radio = summary.get("scenario", {}).get("radio", {})
+    defaults = RadioSpec().model_dump(mode="json")
+    for key in list(radio):
+        if key not in ("model", "r_c") and radio[key] == defaults.get(key):
+            del radio[key]
+
+
 def result_fingerprint(result) -> dict[str, str]:
     """Digests of a run's ``network.json``, ``timeseries.csv`` and ``summary.json`` (less wall-clock fields)."""
     files = result.files(snapshot=False)
     summary = {k: v for k, v in json.loads(files["summary.json"]).items() if k not in _WALL_FIELDS}
+    _drop_default_radio_fields(summary)
     return {"network.json": _sha(files["network.json"]), "timeseries.csv": _sha(files["timeseries.csv"]),
             "summary": _sha(json.dumps(summary, sort_keys=True).encode()),
             "coverage": f"{summary['coverage']:.6f}", "nodes_total": str(summary["nodes_total"])}

@@ -34,7 +34,8 @@ from pydantic import (
 )
 
 from amronet.algorithms import ALGORITHMS
-from amronet.engine.radio import MEDIA
+from amronet.engine.propagation import LinkBudget, median_range
+from amronet.engine.radio import DEFAULT_WALL_DB, MEDIA
 from amronet.errors import ScenarioError
 
 __all__ = [
@@ -78,10 +79,68 @@ RobotRef = Annotated[Annotated[str, Tag("name")] | Annotated[RobotSpec, Tag("spe
 
 
 class RadioSpec(_Strict):
-    """The radio medium."""
+    """The radio medium and its link budget (:mod:`amronet.engine.propagation`, :mod:`amronet.engine.radio`).
+
+    Fields left out (``None``) take the model's defaults: path-loss exponent 2.5 for ``log-distance`` and the
+    unit disk's RSSI, 2.0 for ``multi-wall``; shadowing 5 dB for ``log-distance``, none otherwise; 6.9 dB per
+    wall (COST 231 heavy wall) for ``multi-wall``.
+    """
 
     model: str = "unit-disk"
     r_c: PositiveFloat = 1.0
+    """Median range without walls and shadowing (m): the usable threshold is derived from it."""
+    tx_dbm: FiniteFloat = 20.0
+    pl0_db: FiniteFloat = 40.0
+    """Path loss at 1 m (dB)."""
+    path_loss_exponent: PositiveFloat | None = None
+    wall_db: NonNegativeFloat | None = None
+    """Loss per wall crossed (dB); ``multi-wall`` only."""
+    shadowing_db: NonNegativeFloat | None = None
+    """Standard deviation of the spatially correlated log-normal shadowing (dB); not for the unit disk."""
+    shadowing_corr_m: PositiveFloat = 2.0
+    threshold_dbm: FiniteFloat | None = None
+    """The usable-link threshold (dBm); given, it sets ``r_c`` (the median range it implies), so give one of the two."""
+    packet_loss: StrictBool = False
+    """Drop each link in each step with probability one minus its packet delivery ratio."""
+
+    @model_validator(mode="after")
+    def _check_budget(self) -> RadioSpec:
+        cls = MEDIA.get(self.model)
+        if cls is None:
+            return self  # the scenario names the unknown model
+        given = self.model_fields_set
+        if not cls.uses_walls and self.wall_db is not None:
+            raise ValueError(f"@radio.wall_db@the {self.model} model has no walls; use radio.model=multi-wall or "
+                             "leave wall_db out")
+        if not cls.uses_shadowing and (self.shadowing_db or 0.0) > 0:
+            raise ValueError(f"@radio.shadowing_db@the {self.model} model has no shadowing; use radio.model="
+                             "log-distance or multi-wall, or leave shadowing_db out")
+        if self.threshold_dbm is not None:
+            n = self.path_loss_exponent or cls.default_exponent
+            implied = median_range(self.tx_dbm, self.pl0_db, n, self.threshold_dbm)
+            if implied < 0.05:
+                at = self.tx_dbm - self.pl0_db - 10.0 * n * math.log10(0.05)
+                raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm is never reached: the transmitter "
+                                 f"delivers {at:.1f} dBm at 5 cm; lower the threshold or raise radio.tx_dbm")
+            if implied > 1e5:
+                raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm puts the median range at "
+                                 f"{implied:.3g} m; raise the threshold (or give radio.r_c instead)")
+            if "r_c" in given and not math.isclose(implied, self.r_c, rel_tol=1e-9):
+                raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm implies r_c = {implied:.6g} m but "
+                                 f"radio.r_c is {self.r_c:g}; give only one of the two")
+            object.__setattr__(self, "r_c", implied)
+        return self
+
+    def link_budget(self) -> LinkBudget:
+        """The link budget of this radio, the model's defaults filled in."""
+        cls = MEDIA.lookup(self.model, "radio.model")
+        shadowing = self.shadowing_db if self.shadowing_db is not None else cls.default_shadowing_db
+        wall = self.wall_db if self.wall_db is not None else DEFAULT_WALL_DB
+        return LinkBudget(r_c=self.r_c, tx_dbm=self.tx_dbm, pl0_db=self.pl0_db,
+                          exponent=self.path_loss_exponent or cls.default_exponent,
+                          wall_db=wall if cls.uses_walls else 0.0,
+                          shadowing_db=shadowing if cls.uses_shadowing else 0.0,
+                          shadowing_corr_m=self.shadowing_corr_m)
 
 
 class BaseStationSpec(_Strict):
@@ -160,6 +219,9 @@ class Scenario(_Strict):
         if self.radio.model not in MEDIA:
             raise ValueError(f"@radio.model@unknown radio model {self.radio.model!r}; choose one of: "
                              + ", ".join(sorted(MEDIA)))
+        if self.radio.model != "unit-disk" and self.sim.coverage_method != "raster":
+            raise ValueError(f"@sim.coverage_method@{self.sim.coverage_method!r} is defined for the unit disk only; "
+                             f"coverage under {self.radio.model} is decided cell by cell: use raster")
         return self
 
     def algorithm_params(self) -> BaseModel:
@@ -270,9 +332,22 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
 
     One rule for every caller (``run --set``, sweeps, the library): an ``algorithm.name`` that switches to another
     algorithm drops the base's ``algorithm.params`` first, since they belong to the base's algorithm; the new one
-    starts from its defaults and ``algorithm.params[.KEY]`` given in ``overrides`` apply on top.
+    starts from its defaults and ``algorithm.params[.KEY]`` given in ``overrides`` apply on top. The same for the
+    radio: ``radio.threshold_dbm`` given without ``radio.r_c`` replaces the base's ``r_c`` (and the other way round),
+    and a ``radio.model`` that switches drops the base's ``wall_db`` / ``shadowing_db`` that the new model does not
+    take.
     """
     out = copy.deepcopy(data)
+    radio = out.get("radio") if isinstance(out, dict) else None
+    if isinstance(radio, dict) and not isinstance(overrides.get("radio"), dict):
+        for given, replaced in (("threshold_dbm", "r_c"), ("r_c", "threshold_dbm")):
+            if f"radio.{given}" in overrides and f"radio.{replaced}" not in overrides:
+                radio.pop(replaced, None)
+        new_model = MEDIA.get(overrides.get("radio.model")) if isinstance(overrides.get("radio.model"), str) else None
+        if new_model is not None and overrides["radio.model"] != radio.get("model"):
+            for key, taken in (("wall_db", new_model.uses_walls), ("shadowing_db", new_model.uses_shadowing)):
+                if not taken and f"radio.{key}" not in overrides:
+                    radio.pop(key, None)
     algorithm = out.get("algorithm") if isinstance(out, dict) else None
     name = overrides.get("algorithm.name")
     if (isinstance(algorithm, dict) and name is not None and name != algorithm.get("name")

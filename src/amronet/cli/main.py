@@ -47,7 +47,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     result.save(args.out, snapshot=not args.no_snapshot)
     s = result.summary
     if not quiet:
-        print(f"{s['algorithm']} on {s['map']} (seed {s['seed']}, r_c = {s['r_c']:g} m): "
+        model = s["scenario"]["radio"]["model"]
+        radio = "" if model == "unit-disk" else f", {model} radio"
+        print(f"{s['algorithm']} on {s['map']} (seed {s['seed']}, r_c = {s['r_c']:g} m{radio}): "
               f"{s['stop_reason']} after {s['sim_time_s']:g} s simulated, {s['wall_time_s']:.1f} s wall")
         bases = s['nodes_total'] - s['routers_deployed']
         print(f"  nodes: {s['nodes_total']} (routers deployed: {s['routers_deployed']} of {s['routers_total']}, "
@@ -184,6 +186,9 @@ def _parser() -> argparse.ArgumentParser:
     from amronet.cli.viz import add_parsers as add_viz_parsers
 
     add_viz_parsers(sub)
+    from amronet.cli.radio_map import add_parser as add_radio_map_parser
+
+    add_radio_map_parser(sub)
 
     rp = sub.add_parser(
         "reproduce", help="run one of the paper's experiments (figures) end to end",

@@ -3,10 +3,14 @@
 ``amronet run ... --record [--record-every K]`` adds ``recording.npz`` to the run folder (every K-th step,
 default the scenario's ``sim.record_every``). Then:
 
-- ``amronet snapshot RUN --out pic.svg [--time T]``: the deployment picture of one frame (default the last), PNG
-  or SVG, from the recording, or from ``network.json`` of a run recorded without ``--record``;
-- ``amronet animate RUN --out run.gif`` (or ``.mp4`` with ``imageio-ffmpeg`` installed);
-- ``amronet replay RUN --out replay.html``: one self-contained page that plays the run in any browser.
+- ``amronet snapshot RUN --out pic.svg [--time T] [--layer signal]``: the deployment picture of one frame
+  (default the last), PNG or SVG, from the recording, or from ``network.json`` of a run recorded without
+  ``--record``; ``--layer signal`` shades the best RSSI of the routers and base nodes per cell (dBm, the run's
+  radio rebuilt from its seed) instead of the uncovered cells;
+- ``amronet animate RUN --out run.gif [--layer signal]`` (or ``.mp4`` with ``imageio-ffmpeg`` installed);
+- ``amronet replay RUN --out replay.html [--layer signal]``: one self-contained page that plays the run in any
+  browser; with ``--layer signal`` it also carries each frame's signal map and toggles between it and the
+  uncovered area.
 
 Every output is written atomically. Bad input raises :class:`amronet.errors.AmronetError` with one line naming
 the option and the fix.
@@ -88,14 +92,14 @@ def _read_json_object(path: Path) -> dict[str, Any]:
     return data
 
 
-def _snapshot_from_network(folder: Path, dpi: float) -> Figure:
+def _snapshot_from_network(folder: Path, dpi: float, layer: str = "coverage") -> Figure:
     """The final snapshot of a run folder without a recording, from ``network.json`` and the scenario."""
     import numpy as np
 
-    from amronet.engine.radio import make_medium
     from amronet.scenario import load_scenario
-    from amronet.sim.assemble import build_world
+    from amronet.sim.assemble import build_medium, build_world
     from amronet.viz import snapshot_figure
+    from amronet.viz.signal import SPAN_DB
 
     if not (folder / "summary.json").is_file() or not (folder / "network.json").is_file():
         raise AmronetError(f"{folder} has neither recording.npz nor network.json and summary.json: give the "
@@ -132,10 +136,21 @@ def _snapshot_from_network(folder: Path, dpi: float) -> Figure:
     except (TypeError, ValueError) as exc:
         raise _damaged(folder / "summary.json", f"bad value: {exc}") from None
     try:
+        medium = build_medium(sc, world.omap, np.random.default_rng(int(summary["seed"])), packet_loss=False)
+    except (KeyError, TypeError, ValueError, OverflowError):
+        raise _damaged(folder / "summary.json", "no valid 'seed'") from None
+    network_xy = xy[kind != "agent"]
+    try:
+        if not np.isfinite(xy).all():
+            raise ValueError("a node's x or y is not a finite number")
+        if layer == "signal":
+            shading = {"signal": medium.signal_dbm(world.omap, network_xy, floor_db=-SPAN_DB),
+                       "threshold_dbm": medium.budget.threshold_dbm}
+        else:
+            shading = {"covered": medium.covered_mask(world.coverage, network_xy)}
         return snapshot_figure(
-            world.omap, xy=xy, kind=kind, state=state, status=status, r_c=r_c,
-            links=make_medium(sc.radio.model, r_c).update(xy).pairs, covered=world.coverage.covered_mask(
-                xy[kind != "agent"], r_c), reachable=world.reachable, title=title, dpi=dpi,
+            world.omap, xy=xy, kind=kind, state=state, status=status, r_c=r_c, links=medium.update(xy).pairs,
+            reachable=world.reachable, title=title, dpi=dpi, **shading,
         )  # fmt: skip
     except ValueError as exc:  # an unknown kind or state, a negative r_c...
         raise _damaged(folder / "network.json", str(exc).splitlines()[0]) from None
@@ -184,18 +199,18 @@ def _write_from_run(args: argparse.Namespace, check: Callable[[Path], None],
 
 def _cmd_snapshot(args: argparse.Namespace) -> int:
     from amronet.viz.decorations import save_figure
-    from amronet.viz.recorded import recording_snapshot
+    from amronet.viz.recorded import check_layer, recording_snapshot
 
     def render(folder: Path, rec: Recording | None) -> Callable[[Path], str]:
         if rec is not None:
             f = _frame_index(rec.t, args.time)
-            fig = recording_snapshot(rec, f, dpi=args.dpi)
+            fig = recording_snapshot(rec, f, dpi=args.dpi, layer=args.layer)
             where = f"frame {f} (t = {rec.t[f]:g} s) of {folder}/recording.npz"
         else:
             if args.time is not None:
                 raise AmronetError(f"--time: {folder} has no recording.npz, only the final network: run it again "
                                    "with --record")
-            fig = _snapshot_from_network(folder, args.dpi)
+            fig = _snapshot_from_network(folder, args.dpi, args.layer)
             where = f"{folder}/network.json"
         fmt = Path(args.out).suffix.lower().lstrip(".")
 
@@ -208,21 +223,23 @@ def _cmd_snapshot(args: argparse.Namespace) -> int:
     def check(out: Path) -> None:
         _check_dpi(args.dpi)
         _check_suffix(args.out, (".png", ".svg"))
+        check_layer(args.layer)
 
     return _write_from_run(args, check, render, optional_recording=True)
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
-    from amronet.viz.recorded import check_animation_options, write_animation
+    from amronet.viz.recorded import check_animation_options, check_layer, write_animation
 
     def check(out: Path) -> None:
         check_animation_options(out, args.fps, args.every, args.max_frames)
         _check_dpi(args.dpi)
+        check_layer(args.layer)
 
     def render(folder: Path, rec: Recording) -> Callable[[Path], str]:
         def write(tmp: Path) -> str:
             count = write_animation(rec, tmp, fps=args.fps, every=args.every, max_frames=args.max_frames,
-                                    dpi=args.dpi)
+                                    dpi=args.dpi, layer=args.layer)
             return f"{count} frames of {rec.frames} recorded, {args.fps:g} per second"
 
         return write
@@ -231,11 +248,11 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from amronet.viz.recorded import check_frame_options
+    from amronet.viz.recorded import check_frame_options, check_layer
     from amronet.viz.replay import replay_html
 
     def render(folder: Path, rec: Recording) -> Callable[[Path], str]:
-        page = replay_html(rec, folder, every=args.every, max_frames=args.max_frames)
+        page = replay_html(rec, folder, every=args.every, max_frames=args.max_frames, layer=args.layer)
 
         def write(tmp: Path) -> str:
             tmp.write_bytes(page)
@@ -246,6 +263,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     def check(out: Path) -> None:
         _check_suffix(args.out, (".html", ".htm"), shown=".html")
         check_frame_options(args.every, args.max_frames)
+        check_layer(args.layer)
 
     return _write_from_run(args, check, render)
 
@@ -257,6 +275,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--out", required=True, help="picture to write (.png or .svg)")
     s.add_argument("--time", type=float, help="simulated time in seconds (default: the end; needs a recording)")
     s.add_argument("--dpi", type=float, default=120)
+    s.add_argument("--layer", default="coverage", help="what to shade: coverage (uncovered cells, default) or "
+                                                       "signal (best RSSI per cell, dBm)")
     s.add_argument("-q", "--quiet", action="store_true")
     s.set_defaults(func=_cmd_snapshot)
 
@@ -267,6 +287,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     a.add_argument("--every", type=int, default=1, help="draw every N-th recorded frame (default 1)")
     a.add_argument("--max-frames", type=int, default=200, help="at most this many frames (default 200)")
     a.add_argument("--dpi", type=float, default=80)
+    a.add_argument("--layer", default="coverage", help="what to shade: coverage (default) or signal (best RSSI "
+                                                       "per cell; slower)")
     a.add_argument("-q", "--quiet", action="store_true")
     a.set_defaults(func=_cmd_animate)
 
@@ -275,5 +297,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--out", required=True, help="page to write (.html)")
     r.add_argument("--every", type=int, default=1, help="keep every N-th recorded frame (default 1)")
     r.add_argument("--max-frames", type=int, default=None, help="at most this many frames (default all)")
+    r.add_argument("--layer", default="coverage", help="coverage (default), or signal: the page also carries each "
+                                                       "frame's best RSSI per cell and shows it first (larger)")
     r.add_argument("-q", "--quiet", action="store_true")
     r.set_defaults(func=_cmd_replay)

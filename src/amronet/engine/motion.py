@@ -310,8 +310,9 @@ def drive(
     dist = np.zeros(0)
     reach = 2.0 * float(radius.max()) + 2.0 * float(length.max())
     if bodies and len(xy) > 1:
-        if table is not None and reach <= table.r:
-            indptr, indices, dist = table.indptr, table.indices, table.dist
+        near = None if table is None else table.geometric  # every body within its r, walls or not
+        if near is not None and reach <= near.r:
+            indptr, indices, dist = near.indptr, near.indices, near.dist
         else:
             indptr, indices, dist = neighbour_csr(xy, reach, None if table is None else table.groups)
     _drive(clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), movers, heading,

@@ -130,8 +130,9 @@ def range_scan(
     )
     if radius is not None and table is not None and len(xy) > 1:
         reach = float(max_range + radius.max())
-        if reach <= table.r:
-            indptr, indices, dist = table.indptr, table.indices, table.dist
+        near = table.geometric  # every body within table.r, whatever the walls do to the radio links
+        if reach <= near.r:
+            indptr, indices, dist = near.indptr, near.indices, near.dist
         else:  # the sensor reaches beyond the radio range: a neighbour search of its own
             indptr, indices, dist = neighbour_csr(xy, reach, table.groups)
         _cast_bodies(who, indptr, indices, dist, xy, heading, angles, float(max_range), radius, out)

@@ -23,11 +23,18 @@ What ``recording.npz`` holds (format ``amronet-recording/1``):
   ``(L, 2)`` with ``link_offsets`` ``(F + 1,)`` (CSR style);
 - the map (``map_cells`` int8, ``map_resolution``, ``map_origin``) and ``reachable`` (bit-packed), so that a
   recording can be drawn without the scenario's files, and ``meta``: a JSON string (algorithm, map name,
-  seed, ``r_c``, ``dt``, ``every``, medium, stop reason).
+  seed, ``r_c``, ``dt``, ``every``, medium, stop reason, and the medium's resolved link budget ``budget`` with
+  ``packet_loss``).
+
+The medium's name, link budget and the seed rebuild the run's radio (:attr:`Recording.medium`, its shadowing field
+included): coverage (:meth:`Recording.covered`) and the signal map (:meth:`Recording.signal`) of any frame are the
+run's, under walls and shadowing too. Recordings written before ``budget`` was kept are read with the unit disk of
+``r_c``, as they were drawn then.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import math
@@ -40,6 +47,8 @@ import numpy as np
 
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.neighbours import neighbour_csr, pairs_from_csr
+from amronet.engine.propagation import LinkBudget
+from amronet.engine.radio import MEDIA, RadioMedium, make_medium
 from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role
 from amronet.errors import AmronetError
 from amronet.outputs.recording_codec import (
@@ -140,6 +149,7 @@ class Recorder:
         origin = np.array([omap.extent[0], omap.extent[2]], dtype=np.float64)
         quantum = max(omap.size_m) / Q_MAX
         sc = sim.scenario
+        medium = sim.medium
         meta = {
             "format": FORMAT,
             "algorithm": sc.algorithm.name,
@@ -151,6 +161,8 @@ class Recorder:
             "dt": sim.dt,
             "every": self.every,
             "stop_reason": sim.stop_reason,
+            "budget": dataclasses.asdict(medium.budget),
+            "packet_loss": bool(medium.packet_loss),
         }
         out = {
             "meta": np.array(json.dumps(meta)),
@@ -204,6 +216,8 @@ class Recording:
         xy_quantum: Metres per step of the position grid.
         link_offsets: Stored links' offsets per frame ``(F + 1,)``, or ``None`` when links are recomputed.
         link_pairs: Stored links ``(L, 2)``, or ``None``.
+        budget: The run's resolved link budget (``meta["budget"]``), or ``None`` for a recording written before
+            it was kept (then the radio is the unit disk of ``r_c``).
     """
 
     meta: dict[str, Any]
@@ -221,7 +235,9 @@ class Recording:
     xy_quantum: float
     link_offsets: np.ndarray | None = None
     link_pairs: np.ndarray | None = None
+    budget: LinkBudget | None = None
     _coverage: Any = field(default=None, repr=False)
+    _medium: Any = field(default=None, repr=False)
 
     @property
     def frames(self) -> int:
@@ -255,6 +271,7 @@ class Recording:
         missing = [k for k in _META_KEYS if k not in meta]
         if missing:
             raise AmronetError(f"{damaged} (its meta lacks {missing[0]!r}); record the run again")
+        budget = _read_budget(meta, damaged) if "budget" in meta else None
         try:
             if not math.isfinite(float(meta["r_c"])):
                 raise ValueError("r_c")
@@ -281,6 +298,7 @@ class Recording:
                 xy_quantum=quantum,
                 link_offsets=np.asarray(data["link_offsets"]) if "link_offsets" in data else None,
                 link_pairs=np.asarray(data["link_pairs"], dtype=np.int64) if "link_pairs" in data else None,
+                budget=budget,
             )
         except KeyError as exc:
             raise AmronetError(f"{where}: array {exc.args[0]!r} is missing; record the run again") from None
@@ -313,21 +331,91 @@ class Recording:
         agents = np.flatnonzero(self.kind == Role.AGENT)
         return {int(a): self.xy[: f + 1, a].astype(np.float64) for a in agents if a < self.n[f]}
 
+    @property
+    def medium(self) -> RadioMedium:
+        """The run's radio medium, rebuilt from ``meta`` (model, link budget, seed) over the recorded map.
+
+        Its shadowing field is the run's (the run's generator spawns it first; a fresh generator of the seed
+        spawns the same). Packet loss is left off: it decides nothing that a picture shows. Without a recorded
+        budget (older recordings): the unit disk of ``r_c``.
+        """
+        if self._medium is None:
+            if self.budget is None:
+                self._medium = make_medium("unit-disk", self.r_c, self.omap)
+            else:
+                self._medium = make_medium(self.meta["medium"], self.budget, self.omap,
+                                           rng=np.random.default_rng(int(self.meta["seed"])))
+        return self._medium
+
+    def network_xy(self, f: int) -> np.ndarray:
+        """Positions ``(k, 2)`` of the routers and base nodes (not the agents) present in frame ``f``."""
+        fr = self.frame(f)
+        return fr["xy"][fr["kind"] != Role.AGENT]
+
     def covered(self, f: int) -> np.ndarray:
-        """Cells of the area that counts within ``r_c`` of a router or base node in frame ``f`` (Eq. 1 raster)."""
+        """Cells of the area that counts where a receiver hears a router or base node of frame ``f``.
+
+        Under the unit disk: the cells within ``r_c`` (Eq. 1 raster); under another medium, the cells it hears
+        (walls, shadowing), as the run counted them.
+        """
         if self._coverage is None:
             self._coverage = CoverageArea(self.omap, self.reachable)
-        fr = self.frame(f)
-        return self._coverage.covered_mask(fr["xy"][fr["kind"] != Role.AGENT], self.r_c)
+        return self.medium.covered_mask(self._coverage, self.network_xy(f))
 
     def coverage(self, f: int) -> float:
-        """Raster coverage (Eq. 1) of frame ``f``."""
+        """Raster coverage (Eq. 1, under the run's medium) of frame ``f``."""
         return float(np.count_nonzero(self.covered(f)) / max(np.count_nonzero(self.reachable), 1))
+
+    def signal(self, f: int, grid: OccupancyMap | None = None, floor_db: float = -30.0) -> np.ndarray:
+        """Best RSSI (dBm) of the routers and base nodes of frame ``f`` at every cell centre of ``grid``.
+
+        Args:
+            f: The frame.
+            grid: The cells to evaluate (default the recorded map; a coarser grid over it for small rasters).
+            floor_db: NaN where every node is more than ``-floor_db`` dB below the usable threshold.
+        """
+        return self.medium.signal_dbm(self.omap if grid is None else grid, self.network_xy(f), floor_db)
 
     def names(self, f: int) -> tuple[np.ndarray, np.ndarray]:
         """Role and state names of the robots present in frame ``f`` (for the pictures)."""
         fr = self.frame(f)
         return np.array(ROLE_NAMES)[fr["kind"]], np.array(STATE_NAMES)[fr["state"]]
+
+
+_BUDGET_FIELDS = tuple(f.name for f in dataclasses.fields(LinkBudget))
+
+
+def _read_budget(meta: dict[str, Any], damaged: str) -> LinkBudget:
+    """The link budget recorded in ``meta`` (with its medium and seed checked, to rebuild the medium).
+
+    Raises:
+        AmronetError: The budget, the medium's name or the seed is malformed.
+    """
+    raw = meta["budget"]
+    if not isinstance(raw, dict) or "r_c" not in raw:
+        raise AmronetError(f"{damaged} (its meta's 'budget' is not a link budget); record the run again")
+    values: dict[str, float] = {}
+    for key, value in raw.items():
+        if key not in _BUDGET_FIELDS:
+            raise AmronetError(f"{damaged} (its meta's budget has an unknown field {key!r}); record the run again")
+        try:
+            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                raise ValueError(key)
+            values[key] = float(value)
+        except (ValueError, OverflowError):
+            raise AmronetError(f"{damaged} (its meta's budget.{key} is not a finite number); record the run "
+                               "again") from None
+    budget = LinkBudget(**values)
+    if budget.r_c <= 0 or budget.exponent <= 0 or budget.shadowing_corr_m <= 0 or min(
+            budget.wall_db, budget.shadowing_db, budget.shadowing_clip) < 0:
+        raise AmronetError(f"{damaged} (its meta's budget is out of range); record the run again")
+    if not isinstance(meta.get("medium"), str) or meta["medium"] not in MEDIA:
+        raise AmronetError(f"{damaged} (its meta's medium {meta.get('medium')!r} is not a radio model of this "
+                           f"amronet: {', '.join(sorted(MEDIA))}); record the run again")
+    seed = meta.get("seed")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise AmronetError(f"{damaged} (its meta's seed {seed!r} is not a whole number >= 0); record the run again")
+    return budget
 
 
 def load_recording(path: str | Path) -> Recording:

@@ -9,6 +9,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from amronet.engine.coverage import CoverageArea
+from amronet.engine.radio import RadioMedium, make_medium
 from amronet.engine.robots import ROBOT_MODELS, RobotModel, Role, State, Swarm
 from amronet.errors import MapError, ScenarioError
 from amronet.scenario import RobotRef, RobotSpec, Scenario
@@ -16,7 +17,7 @@ from amronet.world.builtin import resolve_map
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance, reachable_free
 
-__all__ = ["World", "build_swarm", "build_world", "robot_model"]
+__all__ = ["World", "build_medium", "build_swarm", "build_world", "medium_needs_rng", "robot_model"]
 
 
 @dataclass(frozen=True)
@@ -34,6 +35,27 @@ class World:
     reachable: np.ndarray
     coverage: CoverageArea
     bases_xy: np.ndarray
+
+
+def medium_needs_rng(scenario: Scenario) -> bool:
+    """Whether the scenario's radio draws random numbers (shadowing field, packet loss): one run per medium then."""
+    return scenario.radio.packet_loss or scenario.radio.link_budget().shadowing_db > 0
+
+
+def build_medium(scenario: Scenario, omap: OccupancyMap, rng: np.random.Generator | None,
+                 packet_loss: bool | None = None) -> RadioMedium:
+    """The scenario's radio medium over ``omap``.
+
+    Args:
+        scenario: The scenario (its ``radio``).
+        omap: The map.
+        rng: The run's generator (``None`` for a batch, which :func:`medium_needs_rng` must then deny). A fresh
+            ``numpy.random.default_rng(seed)`` rebuilds a finished run's shadowing field exactly.
+        packet_loss: Override the scenario's switch (``False`` for pictures of the usable links).
+    """
+    radio = scenario.radio
+    loss = radio.packet_loss if packet_loss is None else packet_loss
+    return make_medium(radio.model, radio.link_budget(), omap, rng=rng, packet_loss=loss)
 
 
 def robot_model(ref: RobotRef, field: str) -> RobotModel:

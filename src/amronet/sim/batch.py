@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 from amronet.algorithms import ALGORITHMS
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario
+from amronet.sim.assemble import medium_needs_rng
 from amronet.sim.loop import Loop, Simulation
 from amronet.world.occupancy import OccupancyMap
 
@@ -35,7 +36,8 @@ __all__ = ["BatchSimulation", "batchable", "run_seeds"]
 
 def batchable(scenario: Scenario) -> bool:
     """Whether runs of ``scenario`` can be stepped together by :class:`BatchSimulation`."""
-    return ALGORITHMS.lookup(scenario.algorithm.name, "algorithm.name").batchable and scenario.agents.per_base == 0
+    return (ALGORITHMS.lookup(scenario.algorithm.name, "algorithm.name").batchable and scenario.agents.per_base == 0
+            and not medium_needs_rng(scenario))
 
 
 def run_seeds(scenario: Scenario, seeds: Sequence[int]) -> list[RunResult]:

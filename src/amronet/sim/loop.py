@@ -33,13 +33,13 @@ import numpy as np
 
 from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, Readings, RouterStock, Setup, StepInput
 from amronet.engine.motion import drive, path_clear
-from amronet.engine.radio import NeighbourTable, make_medium
+from amronet.engine.radio import NeighbourTable
 from amronet.engine.robots import MOBILE_STATES, Role, Swarm
 from amronet.engine.sensing import range_scan
 from amronet.engine.streams import RunStreams
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario
-from amronet.sim.assemble import World, build_swarm, build_world, robot_model
+from amronet.sim.assemble import World, build_medium, build_swarm, build_world, medium_needs_rng, robot_model
 from amronet.sim.results import RunResult
 from amronet.sim.run import Metrics, Run
 from amronet.world.occupancy import OccupancyMap
@@ -102,8 +102,11 @@ class Loop:
         params = sc.algorithm_params()
         controller_cls = ALGORITHMS.lookup(sc.algorithm.name, "algorithm.name")
         self.world: World = build_world(sc, omap)
-        self.medium = make_medium(sc.radio.model, sc.radio.r_c)
         rngs = [np.random.default_rng(seed) for seed in seeds]
+        if len(seeds) > 1 and medium_needs_rng(sc):
+            raise ScenarioError("radio", "runs whose radio draws random numbers (shadowing, packet loss) cannot share "
+                                "one loop; run them one by one")
+        self.medium = build_medium(sc, self.world.omap, rngs[0] if len(seeds) == 1 else None)
         r_start = controller_cls.start_range(params, sc.radio.r_c)
         swarms = [build_swarm(sc, self.world, rng, r_start=r_start) for rng in rngs]
         if len(seeds) == 1:

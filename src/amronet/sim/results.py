@@ -123,7 +123,7 @@ class RunResult:
         sim = self.run
         sw = sim.swarm
         r_c = sim.scenario.radio.r_c
-        covered = sim.world.coverage.covered_mask(sw.xy[sw.role != Role.AGENT], r_c)
+        covered = sim.medium.covered_mask(sim.world.coverage, sw.xy[sw.role != Role.AGENT])
         s = self.summary
         title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
                  f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")

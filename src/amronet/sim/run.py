@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from amronet.engine.network import agents_connected, components, connected_to
-from amronet.engine.radio import NeighbourTable
+from amronet.engine.radio import NeighbourTable, RadioMedium
 from amronet.engine.robots import STATE_NAMES, Role, Swarm
 
 if TYPE_CHECKING:
@@ -86,6 +86,11 @@ class Run:
         return self.steps * self.dt
 
     @property
+    def medium(self) -> RadioMedium:
+        """The loop's radio medium (the same for every run of a loop)."""
+        return self.loop.medium
+
+    @property
     def swarm(self) -> Swarm:
         """The run's robots (views of the loop's arrays while it runs; its own copy once it has ended)."""
         if self._final is not None:
@@ -129,17 +134,16 @@ class Run:
         """
         sw, table = self.swarm, self.table
         method = method or self.scenario.sim.coverage_method
-        r_c = self.scenario.radio.r_c
         network = sw.role != Role.AGENT
         linked = connected_to(table, self.bases, network)
         deployed = sw.deployed
         n_comp, _ = components(table, deployed)
-        coverage = self.world.coverage.fraction(sw.xy[network], r_c, method=method)
+        medium, area = self.medium, self.world.coverage
+        coverage = medium.coverage(area, sw.xy[network], method=method)
         everyone_linked = np.array_equal(linked, network)  # then both are the same area: one computation
         return Metrics(
             coverage=coverage,
-            connected_coverage=coverage if everyone_linked else self.world.coverage.fraction(sw.xy[linked], r_c,
-                                                                                             method=method),
+            connected_coverage=coverage if everyone_linked else medium.coverage(area, sw.xy[linked], method=method),
             routers_deployed=int(np.count_nonzero(deployed & (sw.role == Role.ROUTER))),
             components=n_comp,
         )

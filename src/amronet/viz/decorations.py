@@ -29,14 +29,14 @@ _SCALE_BAR_DROP = 0.27
 """Inches from the bottom of the map's axes down to the top of the scale bar: below the x tick labels."""
 
 
-def add_legend(fig: Figure, ax: Axes, handles: Sequence[Patch | Line2D]) -> None:
-    """Place a legend of ``handles`` outside the axes, to the right of its top edge."""
+def add_legend(fig: Figure, ax: Axes, handles: Sequence[Patch | Line2D], offset: float = 0.0) -> None:
+    """Place a legend of ``handles`` outside the axes, to the right of its top edge (``offset`` inches further)."""
     _, _, x1, y1 = ax.get_position().extents
     fig_w = fig.get_figwidth()
     fig.legend(
         handles=list(handles),
         loc="upper left",
-        bbox_to_anchor=(x1 + GAP / fig_w, y1),
+        bbox_to_anchor=(x1 + (GAP + offset) / fig_w, y1),
         fontsize=8,
         frameon=False,
         borderaxespad=0.0,

@@ -40,12 +40,23 @@ from amronet.viz.nodestyle import (
     status_colours,
     status_handles,
 )
+from amronet.viz.signal import (
+    COLORBAR_SPACE,
+    SPAN_DB,
+    add_signal_colorbar,
+    coarse_grid,
+    draw_threshold,
+    signal_rgba,
+    threshold_handle,
+)
 from amronet.viz.snapshot import MAP_COLOURS, draw_map, map_patch, new_map_figure, snapshot_figure
 
 __all__ = [
+    "LAYERS",
     "FrameRenderer",
     "check_animation_options",
     "check_frame_options",
+    "check_layer",
     "frame_title",
     "pick_frames",
     "recording_snapshot",
@@ -121,16 +132,39 @@ def pick_frames(frames: int, every: int = 1, max_frames: int | None = None) -> n
     return idx
 
 
-def recording_snapshot(rec: Recording, f: int = -1, dpi: float = 120):
-    """The snapshot figure of frame ``f`` (default: the last) of a recording, with the agents' trails."""
+def recording_snapshot(rec: Recording, f: int = -1, dpi: float = 120, layer: str = "coverage"):
+    """The snapshot figure of frame ``f`` (default: the last) of a recording, with the agents' trails.
+
+    ``layer``: ``coverage`` (uncovered cells tinted, disks of ``r_c``) or ``signal`` (the best RSSI of the
+    routers and base nodes per cell, :mod:`amronet.viz.signal`).
+    """
     f = range(rec.frames)[f]
     fr = rec.frame(f)
     kind, state = rec.names(f)
+    check_layer(layer)
+    if layer == "signal":
+        extra = {"signal": rec.signal(f, floor_db=-SPAN_DB), "threshold_dbm": rec.medium.budget.threshold_dbm}
+    else:
+        extra = {"covered": rec.covered(f)}
     return snapshot_figure(
         rec.omap, xy=fr["xy"], kind=kind, state=state, status=fr["status"].astype(np.int64), r_c=rec.r_c,
-        links=rec.links(f), covered=rec.covered(f), reachable=rec.reachable, title=frame_title(rec, f), dpi=dpi,
-        trails=rec.trails(f),
+        links=rec.links(f), reachable=rec.reachable, title=frame_title(rec, f), dpi=dpi, trails=rec.trails(f),
+        **extra,
     )  # fmt: skip
+
+
+LAYERS = ("coverage", "signal")
+"""What the pictures of a run shade under the nodes: the uncovered cells, or the best signal per cell."""
+
+
+def check_layer(layer: str) -> None:
+    """Check a ``--layer`` option.
+
+    Raises:
+        AmronetError: ``layer`` is not one of :data:`LAYERS`.
+    """
+    if layer not in LAYERS:
+        raise AmronetError(f"--layer: {layer!r} is not one of {', '.join(LAYERS)}")
 
 
 def _area_weights(cells: int, pixels: int) -> sparse.csr_matrix:
@@ -162,13 +196,17 @@ class FrameRenderer:
     Args:
         rec: The recording.
         dpi: Resolution (the figure's size in inches is the snapshot's).
-        layers: Which optional layers to draw, among ``disks``, ``links``, ``trails``, ``uncovered``.
+        layers: Which optional layers to draw, among ``disks``, ``links``, ``trails``, ``uncovered`` and
+            ``signal`` (the best RSSI of the routers and base nodes per cell, with its threshold contour and a
+            colour bar; evaluated on a grid of cells of about two pixels, and only again when the routers and
+            base nodes moved).
     """
 
     def __init__(self, rec: Recording, dpi: float = 80,
                  layers: Sequence[str] = ("disks", "links", "trails", "uncovered")) -> None:
         self.rec, self.dpi, self.layers = rec, dpi, set(layers)
-        self.fig, self.ax = new_map_figure(rec.omap, right=2.2, dpi=dpi)
+        signal = "signal" in self.layers
+        self.fig, self.ax = new_map_figure(rec.omap, right=2.2 + COLORBAR_SPACE * signal, dpi=dpi)
         ax = self.ax
         image = draw_map(ax, rec.omap, reachable=rec.reachable)
         image.set_interpolation("antialiased")  # at animation sizes a cell is < 1 pixel: keep thin walls
@@ -190,23 +228,33 @@ class FrameRenderer:
             self.markers[code] = (coll, filled)
             if code in present:
                 handles.append(marker_handle(marker, math.sqrt(size), "0.45" if filled else "none", label))
-        handles.append(legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {rec.r_c:g} m", edge="0.4"))
+        if not signal or "disks" in self.layers:
+            handles.append(legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {rec.r_c:g} m", edge="0.4"))
         handles.append(Line2D([], [], color=LINK_COLOUR, linewidth=1.0, label="link"))
         if np.any(rec.kind == Role.AGENT):
             handles.append(Line2D([], [], color="0.35", linewidth=1.0, label="agent trail"))
         free = rec.omap.free
-        shown = {"occupied": True, "unreachable": bool((free & ~rec.reachable).any()), "covered": True,
-                 "uncovered": True}
+        threshold = rec.medium.budget.threshold_dbm if signal else float("nan")
+        if signal:
+            handles.append(threshold_handle(threshold))
+        shown = {"occupied": True, "unreachable": bool((free & ~rec.reachable).any()), "covered": not signal,
+                 "uncovered": not signal}
         handles += [map_patch(c) for c, show in shown.items() if show]
         handles += status_handles(np.unique(rec.status))
-        add_legend(self.fig, ax, handles)
+        if signal:
+            add_signal_colorbar(self.fig, ax, threshold)
+            add_legend(self.fig, ax, handles, offset=COLORBAR_SPACE)
+        else:
+            add_legend(self.fig, ax, handles)
         add_scale_bar(ax, rec.omap)
         self.title = ax.set_title("", fontsize=10)
         self.fig.canvas.draw()  # lay out once: ticks, legend, the axes' pixels
         self._tint, self._tint_rows, self._tint_cols = self._tint_layer()
         self._counted = free & rec.reachable
+        self._signal = _SignalLayer(rec, ax, threshold) if signal else None
         self._animated = sorted([self._tint, self.disks, self.links, self.trails, *ax.spines.values(),
-                                 *(coll for coll, _ in self.markers.values()), self.title],
+                                 *(coll for coll, _ in self.markers.values()), self.title,
+                                 *([self._signal.image] if self._signal is not None else [])],
                                 key=lambda a: a.get_zorder())
         for artist in self._animated:
             artist.set_animated(True)
@@ -240,6 +288,8 @@ class FrameRenderer:
             self._tint_rgba[..., 3] = np.rint(255 * np.clip(alpha, 0, 1))
             self._tint.set_data(self._tint_rgba)
         self._tint.set_visible("uncovered" in self.layers)
+        if self._signal is not None:
+            self._signal.update(f)
         deployed = _DEPLOYED_CODES[state] | (fr["kind"] == Role.BASE)
         if "disks" in self.layers:
             face, edge = colours[deployed].copy(), colours[deployed].copy()
@@ -275,7 +325,10 @@ class FrameRenderer:
         canvas = self.fig.canvas
         canvas.restore_region(self._background)
         renderer = canvas.get_renderer()
-        for artist in self._animated:
+        animated = self._animated
+        if self._signal is not None and self._signal.contour is not None:
+            animated = sorted([*animated, self._signal.contour], key=lambda a: a.get_zorder())
+        for artist in animated:
             artist.draw(renderer)
         return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
@@ -283,6 +336,56 @@ class FrameRenderer:
         """Render the frames ``indices`` one after another."""
         for f in indices:
             yield self.render(int(f))
+
+
+_SIGNAL_PIXELS = 2.0
+"""An animation's signal grid has cells of at least this many pixels a side (a signal map costs per cell)."""
+
+
+class _SignalLayer:
+    """The signal of a recording's frames on an animation's axes: an image and the threshold contour.
+
+    The signal is evaluated on a grid with cells of at least :data:`_SIGNAL_PIXELS` pixels a side
+    (:func:`~amronet.viz.signal.coarse_grid`), and again only when the routers and base nodes moved since the last
+    frame drawn.
+    """
+
+    def __init__(self, rec: Recording, ax, threshold: float) -> None:
+        self.rec, self.ax, self.threshold = rec, ax, threshold
+        box = ax.get_window_extent()
+        self.grid, self.k = coarse_grid(rec.omap, max(round(max(box.width, box.height) / _SIGNAL_PIXELS), 1))
+        x0, _, y0, _ = rec.omap.extent
+        rows, cols = self.grid.shape
+        self.extent = (x0, x0 + cols * self.grid.resolution, y0, y0 + rows * self.grid.resolution)
+        self.counted = rec.omap.free & rec.reachable
+        centre_r = np.minimum(np.arange(rows) * self.k + self.k // 2, rec.omap.shape[0] - 1)
+        centre_c = np.minimum(np.arange(cols) * self.k + self.k // 2, rec.omap.shape[1] - 1)
+        self.shown = self.counted[np.ix_(centre_r, centre_c)]
+        limits = ax.get_xlim(), ax.get_ylim()
+        # the image has the map's cells (the coarse values repeated), so that walls keep their exact shape
+        self.image = ax.imshow(np.zeros((*rec.omap.shape, 4), np.uint8), extent=rec.omap.extent, origin="lower",
+                               interpolation="antialiased", zorder=0.5)
+        ax.set_xlim(*limits[0])
+        ax.set_ylim(*limits[1])
+        self.contour = None
+        self._key: bytes | None = None
+
+    def update(self, f: int) -> None:
+        xy = np.ascontiguousarray(self.rec.network_xy(f))
+        key = xy.tobytes()
+        if key == self._key:
+            return
+        self._key = key
+        signal = self.rec.signal(f, grid=self.grid, floor_db=-SPAN_DB)
+        rows, cols = self.rec.omap.shape
+        fine = np.repeat(np.repeat(signal, self.k, axis=0), self.k, axis=1)
+        fine = np.pad(fine, ((0, rows - fine.shape[0]), (0, cols - fine.shape[1])), mode="edge")
+        self.image.set_data(signal_rgba(fine, self.threshold, self.counted))
+        if self.contour is not None:
+            self.contour.remove()
+        self.contour = draw_threshold(self.ax, self.extent, signal, self.threshold, self.shown)
+        if self.contour is not None:
+            self.contour.set_animated(True)
 
 
 def _gif_palette(renderer: FrameRenderer, indices: np.ndarray, colours: int = _GIF_COLOURS) -> Image.Image:
@@ -303,7 +406,7 @@ def _mp4_writer():
 
 
 def write_animation(rec: Recording, path: str | Path, *, fps: float = 10.0, every: int = 1,
-                    max_frames: int | None = 200, dpi: float = 80) -> int:
+                    max_frames: int | None = 200, dpi: float = 80, layer: str = "coverage") -> int:
     """Write an animation of a recording as GIF or MP4 (by the suffix of ``path``).
 
     Args:
@@ -314,6 +417,8 @@ def write_animation(rec: Recording, path: str | Path, *, fps: float = 10.0, ever
         every: Draw every ``every``-th recorded frame.
         max_frames: Draw at most this many frames, spread evenly over the run (the last always included).
         dpi: Resolution.
+        layer: ``coverage`` (uncovered tint and disks) or ``signal`` (the best RSSI per cell, see
+            :class:`FrameRenderer`; slower: each frame whose network moved costs a signal map).
 
     Returns:
         The number of frames written.
@@ -324,9 +429,11 @@ def write_animation(rec: Recording, path: str | Path, *, fps: float = 10.0, ever
     """
     path = Path(path)
     check_animation_options(path, fps, every, max_frames)
+    check_layer(layer)
     ffmpeg = _mp4_writer() if path.suffix.lower() == ".mp4" else None
     indices = pick_frames(rec.frames, every, max_frames)
-    renderer = FrameRenderer(rec, dpi=dpi)
+    layers = ("disks", "links", "trails", "uncovered") if layer == "coverage" else ("links", "trails", "signal")
+    renderer = FrameRenderer(rec, dpi=dpi, layers=layers)
     if ffmpeg is None:
         palette = _gif_palette(renderer, indices)
         images = (Image.fromarray(rgb).quantize(palette=palette, dither=Image.Dither.NONE)

@@ -35,6 +35,14 @@ from amronet.viz.nodestyle import (
     status_colours,
     status_handles,
 )
+from amronet.viz.signal import (
+    COLORBAR_SPACE,
+    add_signal_colorbar,
+    blank_handle,
+    draw_signal,
+    has_blank,
+    threshold_handle,
+)
 from amronet.viz.validate import KINDS, STATES, check_mask, validate_nodes
 from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
@@ -209,6 +217,8 @@ def snapshot_figure(
     title: str = "",
     dpi: float = 150,
     trails: Mapping[int, np.ndarray] | None = None,
+    signal: np.ndarray | None = None,
+    threshold_dbm: float | None = None,
 ) -> Figure:
     """Build the deployment picture as an Agg figure (see `save_snapshot` for the arguments).
 
@@ -221,12 +231,18 @@ def snapshot_figure(
     xy, kind, state, status, links = validate_nodes(xy, kind, state, status, links, float(r_c))
     reachable = check_mask("reachable", reachable, omap.shape)
     covered = check_mask("covered", covered, omap.shape)
-    fig, ax = new_map_figure(omap, right=2.2, dpi=dpi)
+    if signal is not None:
+        signal = _check_signal(signal, threshold_dbm, omap.shape)
+        covered = None
+    fig, ax = new_map_figure(omap, right=2.2 if signal is None else 2.2 + COLORBAR_SPACE, dpi=dpi)
     draw_map(ax, omap, reachable=reachable, covered=covered)
+    if signal is not None:
+        shown = omap.free if reachable is None else omap.free & reachable
+        draw_signal(ax, omap.extent, signal, threshold_dbm, shown)
     colours = status_colours(status)
 
     deployed = np.isin(state, DEPLOYED) | (kind == "base")
-    if deployed.any():
+    if deployed.any() and signal is None:  # the signal shows the range; disks would tint its colours
         face = colours[deployed].copy()
         face[:, 3] = DISK_FACE_ALPHA
         edge = colours[deployed].copy()
@@ -253,10 +269,14 @@ def snapshot_figure(
     handles = draw_nodes(ax, xy, state, colours)
     if trail_handle is not None:
         handles.append(trail_handle)
-    if deployed.any():
+    if deployed.any() and signal is None:
         handles.append(legend_patch((0.5, 0.5, 0.5, 0.15), f"comm. range $r_c$ = {r_c:g} m", edge="0.4"))
     if len(links):
         handles.append(Line2D([], [], color=LINK_COLOUR, linewidth=1.0, label="link"))
+    if signal is not None:
+        handles.append(threshold_handle(threshold_dbm))
+        if has_blank(signal, shown):
+            handles.append(blank_handle(threshold_dbm))
     cells = omap.cells
     free = cells == FREE
     counted = free if reachable is None else free & reachable
@@ -270,7 +290,11 @@ def snapshot_figure(
         if shown:
             handles.append(map_patch(category))
     handles += status_handles(np.unique(status))
-    add_legend(fig, ax, handles)
+    if signal is None:
+        add_legend(fig, ax, handles)
+    else:
+        add_signal_colorbar(fig, ax, threshold_dbm)
+        add_legend(fig, ax, handles, offset=COLORBAR_SPACE)
     add_scale_bar(ax, omap)
 
     if not title:
@@ -282,6 +306,16 @@ def snapshot_figure(
         )
     ax.set_title(title, fontsize=10)
     return fig
+
+
+def _check_signal(signal: np.ndarray, threshold_dbm: float | None, shape: tuple[int, int]) -> np.ndarray:
+    """A signal grid must have the map's shape and come with a finite threshold."""
+    signal = np.asarray(signal, dtype=float)
+    if signal.shape != tuple(shape):
+        raise ValueError(f"signal must have the map's shape {tuple(shape)}, got {signal.shape}")
+    if threshold_dbm is None or not np.isfinite(threshold_dbm):
+        raise ValueError(f"a signal layer needs the radio's finite threshold_dbm, got {threshold_dbm!r}")
+    return signal
 
 
 def save_snapshot(
@@ -299,6 +333,8 @@ def save_snapshot(
     title: str = "",
     dpi: float = 150,
     trails: Mapping[int, np.ndarray] | None = None,
+    signal: np.ndarray | None = None,
+    threshold_dbm: float | None = None,
 ) -> Path:
     """Write the deployment picture: map, communication disks, links and nodes.
 
@@ -325,6 +361,10 @@ def save_snapshot(
         dpi: Resolution of the PNG (and of the map raster inside an SVG).
         trails: Optional node index → path ``(k, 2)`` in metres (agents' trails), drawn as thin lines in the
             node's status colour.
+        signal: Optional best RSSI (dBm) per cell ``omap.shape`` (``RadioMedium.signal_dbm``), NaN where blank:
+            drawn instead of the coverage tint (``covered`` is then ignored) and of the disks, on the scale of
+            :mod:`amronet.viz.signal`, with the threshold contour and a colour bar.
+        threshold_dbm: The radio's usable threshold; needed with ``signal``.
 
     Returns:
         The path written.
@@ -346,5 +386,7 @@ def save_snapshot(
         title=title,
         dpi=dpi,
         trails=trails,
+        signal=signal,
+        threshold_dbm=threshold_dbm,
     )
     return _save(fig, path, dpi)

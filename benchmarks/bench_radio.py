@@ -1,0 +1,119 @@
+"""The cost of a real radio, as ratios to the unit disk measured in the same process (README table).
+
+Run: ``.venv/bin/python benchmarks/bench_radio.py``. Three measurements, each against its unit-disk peer:
+
+* the radio step (building the neighbour table with link quality) of 3 000 routers scattered over the reachable
+  free space of ``hospital_section``, scaled as ``amronet bench`` scales it (0.25 m² per robot, ``r_c`` = 1 m),
+  for ``multi-wall`` (no shadowing, the model's default), ``multi-wall`` with 5 dB shadowing and ``log-distance``
+  (5 dB shadowing, its default) — target: multi-wall at most 3x the unit disk;
+* coverage of 30 nodes on ``obstacles-6x6`` (the positions of a self-spreading run after 60 s, ``r_c`` = 1 m) —
+  target: multi-wall at most 10x the unit-disk raster;
+* the signal map of one node over the unscaled ``hospital_section`` (``r_c`` = 4 m, multi-wall) — target: under
+  50 ms.
+
+Each timing is the best of several repeats after a warm-up call (numba compiles on first use, cached on disk).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from amronet.engine.propagation import LinkBudget
+from amronet.engine.radio import make_medium
+from amronet.engine.robots import Role
+from amronet.scenario import load_scenario
+from amronet.sim.loop import Simulation
+from amronet.world.builtin import resolve_map
+
+
+def best_of(fn: Callable[[], object], repeats: int) -> float:
+    """Best wall time of ``repeats`` calls of ``fn`` after one warm-up call, in seconds."""
+    fn()
+    best = math.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def radio_step(robots: int = 3000, repeats: int = 20) -> list[dict]:
+    """Neighbour-table build of ``robots`` routers on scaled ``hospital_section`` under each model."""
+    omap = resolve_map("hospital_section")
+    area = np.count_nonzero(omap.free) * omap.resolution**2
+    scale = max(1.0, math.sqrt(robots * 0.25 / area))
+    omap = dataclasses.replace(omap, resolution=omap.resolution * scale, _cache={})
+    rng = np.random.default_rng(0)
+    rows, cols = np.nonzero(omap.free)
+    pick = rng.choice(len(rows), size=robots, replace=False)
+    xy = omap.cell_centres(rows[pick], cols[pick]) + rng.uniform(-0.4, 0.4, (robots, 2)) * omap.resolution
+    cases = [("unit-disk", LinkBudget(r_c=1.0)),
+             ("multi-wall", LinkBudget(r_c=1.0, exponent=2.0, wall_db=6.9)),
+             ("multi-wall", LinkBudget(r_c=1.0, exponent=2.0, wall_db=6.9, shadowing_db=5.0)),
+             ("log-distance", LinkBudget(r_c=1.0, exponent=2.5, shadowing_db=5.0))]
+    out = []
+    for model, budget in cases:
+        medium = make_medium(model, budget, omap, rng=np.random.default_rng(1))
+        seconds = best_of(lambda m=medium: m.update(xy), repeats)
+        table = medium.update(xy)
+        out.append({"model": model, "shadowing_db": budget.shadowing_db, "ms": seconds * 1e3,
+                    "mean_degree": float(table.degree.mean()), "map_resolution_m": omap.resolution})
+    return out
+
+
+def coverage(repeats: int = 20) -> list[dict]:
+    """Coverage of the 30 nodes of a self-spreading run on ``obstacles-6x6`` under each model."""
+    sim = Simulation(load_scenario("self-spreading-obstacles-6x6"), 1)
+    for _ in range(600):
+        sim.step()
+    xy = sim.swarm.xy[sim.swarm.role != Role.AGENT]
+    area, omap = sim.world.coverage, sim.world.omap
+    out = []
+    for model, budget in (("unit-disk", LinkBudget(r_c=1.0)),
+                          ("multi-wall", LinkBudget(r_c=1.0, exponent=2.0, wall_db=6.9)),
+                          ("multi-wall", LinkBudget(r_c=1.0, exponent=2.0, wall_db=6.9, shadowing_db=5.0)),
+                          ("log-distance", LinkBudget(r_c=1.0, exponent=2.5, shadowing_db=5.0))):
+        medium = make_medium(model, budget, omap, rng=np.random.default_rng(1))
+        seconds = best_of(lambda m=medium: m.coverage(area, xy), repeats)
+        out.append({"model": model, "shadowing_db": budget.shadowing_db, "ms": seconds * 1e3,
+                    "coverage": medium.coverage(area, xy)})
+    return out
+
+
+def signal_map(repeats: int = 5) -> dict:
+    """The signal map of one node over ``hospital_section`` under multi-wall."""
+    omap = resolve_map("hospital_section")
+    rows, cols = np.nonzero(omap.free)
+    node = omap.cell_centres(rows[len(rows) // 2:len(rows) // 2 + 1], cols[len(rows) // 2:len(rows) // 2 + 1])
+    medium = make_medium("multi-wall", LinkBudget(r_c=4.0, exponent=2.0, wall_db=6.9), omap)
+    seconds = best_of(lambda: medium.signal_dbm(omap, node), repeats)
+    return {"cells": int(omap.cells.size), "ms": seconds * 1e3}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    report = {"radio_step": radio_step(), "coverage": coverage(), "signal_map": signal_map()}
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return
+    for title, rows in (("radio step, N = 3 000, hospital_section scaled", report["radio_step"]),
+                        ("coverage, 30 nodes, obstacles-6x6", report["coverage"])):
+        base = rows[0]["ms"]
+        print(f"\n{title}\n| model | shadowing (dB) | ms | ratio to unit disk |\n|---|---:|---:|---:|")
+        for r in rows:
+            print(f"| {r['model']} | {r['shadowing_db']:g} | {r['ms']:.3f} | {r['ms'] / base:.1f}x |")
+    s = report["signal_map"]
+    print(f"\nsignal map, one node, hospital_section ({s['cells']:,} cells): {s['ms']:.1f} ms")
+
+
+if __name__ == "__main__":
+    main()
