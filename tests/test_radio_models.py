@@ -461,3 +461,22 @@ def test_bad_radio_input_one_line_exit_2_nothing_written(tmp_path, capsys, sets,
     assert field in lines[0], lines[0]
     assert "Traceback" not in cap.err
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_margins_reused_for_still_links_equal_fresh_ones():
+    """A medium reuses the margins of links whose ends did not move: over a run they equal a fresh computation."""
+    from amronet.engine.radio import _NO_PREVIOUS, _candidate_margins
+
+    sc = load_scenario("self-spreading-obstacles-6x6", overrides={"radio.model": "multi-wall",
+                                                                  "radio.shadowing_db": 5.0})
+    sim = Simulation(sc, 3)
+    reused = 0
+    for _ in range(150):
+        previous = sim.medium._previous
+        sim.step()
+        t = sim.table.geometric
+        fresh = _candidate_margins(t.xy, t.indptr, t.indices, t.dist, *_NO_PREVIOUS, *sim.medium.hearing.args())
+        np.testing.assert_array_equal(t.link_margin, fresh)
+        if previous is not None:
+            reused += int(np.count_nonzero((previous[0][:, None] == t.xy[None, :]).all(-1).any(0)))
+    assert reused > 0  # some nodes stood still, so the reuse was exercised

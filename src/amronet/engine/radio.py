@@ -157,15 +157,36 @@ def _mirror(indptr, indices):  # pragma: no cover - numba
     return out
 
 
+@njit(cache=True, inline="always")
+def _find(indptr, indices, i, j):  # pragma: no cover - numba
+    """Position of entry ``(i, j)`` in a CSR with sorted rows, -1 if absent."""
+    lo = indptr[i]
+    hi = indptr[i + 1]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if indices[mid] < j:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo if lo < indptr[i + 1] and indices[lo] == j else -1
+
+
 @njit(cache=True)
-def _candidate_margins(xy, indptr, indices, dist, r_c, n10, wall_db, walls, jump, ox, oy, res, shadow, sx0, sy0,
-                       sh, corr, clip):  # pragma: no cover - numba
-    """Margin of every candidate link, computed once per pair (walking from the lower id) and mirrored."""
+def _candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indices, prev_margin, r_c, n10, wall_db,
+                       walls, jump, ox, oy, res, shadow, sx0, sy0, sh, corr,
+                       clip):  # pragma: no cover - numba
+    """Margin of every candidate link, computed once per pair (walking from the lower id) and mirrored.
+
+    A pair whose two ends stand exactly where they stood in the previous table (``prev_*``) and were a candidate
+    there takes its margin from it: a margin depends on the two positions alone, so it is the same number.
+    """
     out = np.empty(indices.shape[0])
     cursor = indptr[:-1].copy()  # see _mirror
+    n_prev = prev_xy.shape[0]
     for i in range(indptr.shape[0] - 1):
         xa = xy[i, 0]
         ya = xy[i, 1]
+        still_i = i < n_prev and xa == prev_xy[i, 0] and ya == prev_xy[i, 1]
         sa = _cell_value(shadow, sx0, sy0, sh, xa, ya) if clip > 0.0 else 0.0
         for e in range(indptr[i], indptr[i + 1]):
             j = indices[e]
@@ -173,9 +194,15 @@ def _candidate_margins(xy, indptr, indices, dist, r_c, n10, wall_db, walls, jump
                 continue
             xb = xy[j, 0]
             yb = xy[j, 1]
-            sb = _cell_value(shadow, sx0, sy0, sh, xb, yb) if clip > 0.0 else 0.0
-            m = link_margin(xa, ya, xb, yb, dist[e], sa, sb, 0.0, r_c, n10, wall_db, walls, jump, ox, oy, res, shadow,
-                            sx0, sy0, sh, corr, clip)
+            f = -1
+            if still_i and j < n_prev and xb == prev_xy[j, 0] and yb == prev_xy[j, 1]:
+                f = _find(prev_indptr, prev_indices, i, j)
+            if f >= 0:
+                m = prev_margin[f]
+            else:
+                sb = _cell_value(shadow, sx0, sy0, sh, xb, yb) if clip > 0.0 else 0.0
+                m = link_margin(xa, ya, xb, yb, dist[e], sa, sb, 0.0, r_c, n10, wall_db, walls, jump, ox, oy, res,
+                                shadow, sx0, sy0, sh, corr, clip)
             out[e] = m
             f = cursor[j]
             cursor[j] = f + 1
@@ -415,16 +442,27 @@ class UnitDisk(RadioMedium):
         return area.covered_mask(xy, self.r_c)
 
 
+_NO_PREVIOUS = (np.zeros((0, 2)), np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0))
+
+
 class _PathLoss(RadioMedium):
-    """Models whose links are decided by their margin: distance, shadowing and, with walls, the walls crossed."""
+    """Models whose links are decided by their margin: distance, shadowing and, with walls, the walls crossed.
+
+    The medium remembers its last candidate table: links between nodes that have not moved since keep their margin
+    (most of a deployed network stands still while agents and explorers move).
+    """
 
     uses_shadowing = True
+    _previous: tuple | None = None
 
     def margins(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray) -> np.ndarray | None:
         h = self.hearing
         if h.clip == 0.0 and h.wall_db == 0.0:
             return None  # no shadowing, no walls: the unit disk, decided by distance
-        return _candidate_margins(xy, indptr, indices, dist, *h.args())
+        prev = self._previous if self._previous is not None else _NO_PREVIOUS
+        margin = _candidate_margins(xy, indptr, indices, dist, *prev, *h.args())
+        self._previous = (xy, indptr, indices, margin)
+        return margin
 
 
 @MEDIA.register("log-distance")
