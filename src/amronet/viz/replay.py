@@ -170,7 +170,8 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
         every: Keep every ``every``-th recorded frame.
         max_frames: Keep at most this many frames, spread evenly (the last always kept).
         layer: ``coverage`` (the page of old), or ``signal``: the page also carries the signal of every frame
-            (:func:`signal_rasters`), shows it first and toggles between it and the uncovered area.
+            (:func:`signal_rasters`), shows it first and toggles between it and the uncovered area. A run under a
+            radio other than the unit disk always carries the signal (its uncovered area is drawn from it).
 
     Returns:
         The complete HTML document.
@@ -180,7 +181,8 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
     idx = pick_frames(rec.frames, every, max_frames)
     signal: dict[str, Any] | None = None
     extra: tuple[tuple[str, np.ndarray], ...] = ()
-    if layer == "signal":
+    if layer == "signal" or rec.meta.get("medium", "unit-disk") != "unit-disk":
+        # under walls or shadowing the uncovered area is not a union of disks: the page takes it from the rasters
         rasters, frame_raster, signal = signal_rasters(rec, idx)
         extra = (("signal", rasters), ("signal_frame", frame_raster))
     raw, arrays = replay_payload(rec, idx, extra)
@@ -231,7 +233,7 @@ def replay_html(rec: Recording, folder: str | Path | None = None, *, every: int 
         "timeseries": _timeseries(rec, folder, idx),
     }
     if signal is not None:
-        header["signal"] = signal
+        header["signal"] = {**signal, "first": layer == "signal"}
     payload = base64.b64encode(zlib.compress(raw, 6)).decode("ascii")
     text = resources.files("amronet.viz").joinpath(TEMPLATE).read_text(encoding="utf-8")
     header_json = json.dumps(header, separators=(",", ":")).replace("</", "<\\/")
