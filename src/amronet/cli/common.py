@@ -8,22 +8,27 @@ from typing import Any
 
 from amronet.errors import AmronetError
 
-__all__ = ["add_executor_arguments", "make_executor_from_args", "parse_base"]
+__all__ = ["add_executor_arguments", "make_executor_from_args", "parse_base", "parse_point"]
 
 
-def parse_base(text: str) -> tuple[float, float]:
-    """Parse ``--base X,Y`` (metres).
+def parse_point(text: str, option: str = "--base", example: str = "1.0,2.0") -> tuple[float, float]:
+    """Parse a point option ``X,Y`` in metres (``--base``, ``--node``).
 
     Raises:
-        AmronetError: Not two finite numbers.
+        AmronetError: Not two finite numbers (names ``option``).
     """
     try:
         x, y = (float(v) for v in text.split(","))
     except ValueError:
-        raise AmronetError(f"--base: {text!r} is not X,Y in metres, e.g. 1.0,2.0") from None
+        raise AmronetError(f"{option}: {text!r} is not X,Y in metres, e.g. {example}") from None
     if not (math.isfinite(x) and math.isfinite(y)):
-        raise AmronetError(f"--base: {text!r} must be finite")
+        raise AmronetError(f"{option}: {text!r} must be finite")
     return x, y
+
+
+def parse_base(text: str) -> tuple[float, float]:
+    """Parse ``--base X,Y`` (metres); see :func:`parse_point`."""
+    return parse_point(text)
 
 
 def add_executor_arguments(parser: argparse.ArgumentParser) -> None:

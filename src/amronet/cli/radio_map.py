@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from amronet.cli.common import parse_point
 from amronet.errors import AmronetError
 
 __all__ = ["add_parser", "parse_node"]
@@ -26,13 +27,7 @@ def parse_node(text: str) -> tuple[float, float]:
     Raises:
         AmronetError: Not two finite numbers.
     """
-    try:
-        x, y = (float(v) for v in text.split(","))
-    except ValueError:
-        raise AmronetError(f"--node: {text!r} is not X,Y in metres, e.g. 2.5,10") from None
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise AmronetError(f"--node: {text!r} must be finite")
-    return x, y
+    return parse_point(text, "--node", "2.5,10")
 
 
 def _number(option: str, text: str | None, *, integer: bool = False) -> float | int | None:

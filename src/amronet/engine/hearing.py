@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
-from amronet.engine.shadowing import ShadowingField, _cell_value, link_shadowing
+from amronet.engine.shadowing import ShadowingField, _cell_value, _lookup, link_shadowing
 from amronet.engine.walls import count_walls, wall_grid
 from amronet.world.occupancy import OccupancyMap
 
@@ -108,20 +108,12 @@ def cell_field(shape: tuple[int, int], gox: float, goy: float, gres: float, shad
     cy = goy + (np.arange(rows) + 0.5) * gres
     cx = gox + (np.arange(cols) + 0.5) * gres
     xx, yy = np.meshgrid(cx, cy)
-    values = _lookup_grid(shadow, sx0, sy0, sh, xx.ravel(), yy.ravel()).reshape(rows, cols)
+    values = _lookup(shadow, sx0, sy0, sh, xx.ravel(), yy.ravel()).reshape(rows, cols)
     nb_r, nb_c = -(-rows // BLOCK), -(-cols // BLOCK)
     padded = np.full((nb_r * BLOCK, nb_c * BLOCK), -np.inf)
     padded[:rows, :cols] = values
     bmax = padded.reshape(nb_r, BLOCK, nb_c, BLOCK).max(axis=(1, 3))
     return values, bmax
-
-
-@njit(cache=True)
-def _lookup_grid(grid, x0, y0, h, x, y):  # pragma: no cover - numba
-    out = np.empty(x.shape[0])
-    for k in range(x.shape[0]):
-        out[k] = _cell_value(grid, x0, y0, h, x[k], y[k])
-    return out
 
 
 @njit(cache=True, inline="always")
