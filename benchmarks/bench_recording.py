@@ -55,7 +55,7 @@ def bench_simulation(robots: int, map_name: str = "hospital_section", seed: int 
         "routers": {"count": robots, "start": "uniform"},
         "sim": {"time_limit": 1e9, "stop_when_settled": False},
     })
-    return Simulation(scenario, seed, omap=omap)
+    return Simulation(scenario, seed, omap=omap, force=True)  # a long time limit, stopped by the benchmark
 
 
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

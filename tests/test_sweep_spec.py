@@ -167,7 +167,7 @@ def test_bad_sweeps_name_the_field(spec, field):
     ({"grid": {"map": ["open-6x6", "office-32x32"]}},
      "grid: point 1 (map = 'office-32x32'): base_stations[0]: (0, 0) is inside an obstacle"),
     ({"grid": {"routers.count": [30, 3000]}},
-     "grid: point 1 (routers.count = 3000): base_stations[0].region: could place only"),
+     "grid.routers.count: 3000 routers (radius 0.045 m) need"),
     ({"overrides": {"sim.time_limit": 3.0, "base_stations.0.x": 100}},
      "overrides.base_stations[0]: (100, 0) is outside the map"),
 ])

@@ -56,6 +56,10 @@ PositiveFloat = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
 NonNegativeFloat = Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)]
 FiniteFloat = Annotated[float, Field(strict=True, allow_inf_nan=False)]
 
+MAX_RANGE_M = 1e5
+"""The longest median range ``radio.r_c`` (100 km): longer ones overflow the controllers' squared ranges and the
+pictures' arithmetic, and no floor plan needs them."""
+
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -105,6 +109,9 @@ class RadioSpec(_Strict):
 
     @model_validator(mode="after")
     def _check_budget(self) -> RadioSpec:
+        if self.r_c > MAX_RANGE_M:
+            raise ValueError(f"@radio.r_c@{self.r_c:g} m is beyond the longest range amronet models, "
+                             f"{MAX_RANGE_M:g} m; give a range in metres, e.g. 1.5")
         cls = MEDIA.get(self.model)
         if cls is None:
             return self  # the scenario names the unknown model
@@ -122,7 +129,7 @@ class RadioSpec(_Strict):
                 at = self.tx_dbm - self.pl0_db - 10.0 * n * math.log10(0.05)
                 raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm is never reached: the transmitter "
                                  f"delivers {at:.1f} dBm at 5 cm; lower the threshold or raise radio.tx_dbm")
-            if implied > 1e5:
+            if implied > MAX_RANGE_M:
                 raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm puts the median range at "
                                  f"{implied:.3g} m; raise the threshold (or give radio.r_c instead)")
             if "r_c" in given and not math.isclose(implied, self.r_c, rel_tol=1e-9):

@@ -34,6 +34,7 @@ override it.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated
 
 import numpy as np
@@ -42,6 +43,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
 from amronet.engine.robots import Role, State
+from amronet.errors import ScenarioError
 
 __all__ = ["DSSA", "DSSAParams"]
 
@@ -74,6 +76,25 @@ class DSSAParams(BaseModel):
     stable_steps: Annotated[StrictInt, Field(ge=1)] = 20
 
 
+def _expected_density(nodes: int, r_s: float, area: float, r_c: float, field: str) -> float:
+    """``mu = N pi r_s^2 / A``, checked so that the force law ``D / mu^2 (r_c - d)`` stays a finite number.
+
+    Raises:
+        ScenarioError: ``mu`` so large or so small that ``mu^2`` or the force overflows (a field area or a range
+            far from any floor plan's), naming ``field``.
+    """
+    try:
+        mu = nodes * np.pi * r_s**2 / area
+        scale = max(nodes, 1) * r_c / mu**2
+    except (OverflowError, ZeroDivisionError):
+        scale = math.inf
+    if not (math.isfinite(scale) and scale > 0):
+        raise ScenarioError(field, f"DSSA's expected density mu = N pi r_s^2 / A (N = {nodes} nodes, r_s = {r_s:g} m, "
+                                   f"A = {area:g} m²) is out of the range its force law can compute with; give a "
+                                   "field area and a range of a real floor plan")
+    return mu
+
+
 @ALGORITHMS.register("dssa")
 class DSSA(Controller):
     """Controller of DSSA routers."""
@@ -89,7 +110,8 @@ class DSSA(Controller):
         area = p.field_area if p.field_area is not None else self.area.free_area_m2
         nodes = int(np.count_nonzero(sw.role != Role.AGENT))
         r_s = p.sensing_radius_factor * self.r_c
-        self.mu = nodes * np.pi * r_s**2 / area
+        self.mu = _expected_density(nodes, r_s, area, self.r_c, "algorithm.params.field_area"
+                                    if p.field_area is not None else "radio.r_c")
         self.last_step = np.zeros((n, 2))
         self.anchor = sw.xy.copy()
         self.reversals = np.zeros(n, dtype=np.int64)

@@ -31,7 +31,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_output_folder(args.out)
     overrides = dict(parse_override(item) for item in args.set or [])
     scenario = load_scenario(args.scenario if args.scenario is not None else args.preset, overrides)
-    sim = Simulation(scenario, args.seed)
+    sim = Simulation(scenario, args.seed, force=args.force)
     quiet = args.quiet
     from amronet.cli.viz import make_recorder
 
@@ -104,7 +104,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from amronet.sim.bench import run_bench
 
     report = run_bench(algorithm=args.algorithm, robots=args.robots, steps=args.steps, map_name=args.map,
-                       seed=args.seed, r_c=args.rc)
+                       seed=args.seed, r_c=args.rc, force=args.force)
     if args.json:
         print(json.dumps(report, indent=2))
     else:
@@ -159,6 +159,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--record", action="store_true", help="also write recording.npz (for animate, replay, snapshot)")
     r.add_argument("--record-every", type=int, metavar="K", help="record every K-th step (default sim.record_every)")
     r.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    r.add_argument("--force", action="store_true", help="run even when the resource guard finds it absurdly long "
+                                                        "(more than 10^7 steps or 10^9 robot-steps)")
     r.set_defaults(func=_cmd_run)
 
     m = sub.add_parser("maps", help="built-in maps")
@@ -221,6 +223,8 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--rc", type=float, default=1.0, help="communication radius (default 1 m)")
     b.add_argument("--seed", type=int, default=0)
     b.add_argument("--json", action="store_true", help="print the report as JSON")
+    b.add_argument("--force", action="store_true", help="run even when the resource guard finds it absurdly long "
+                                                        "(more than 10^9 robot-steps)")
     b.set_defaults(func=_cmd_bench)
     return p
 

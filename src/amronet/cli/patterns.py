@@ -4,7 +4,9 @@
 placed count, the exact coverage and whether the placement is connected; ``--map NAME_OR_YAML [--base X,Y]``
 places the patterns in a map's free space reachable from the base (all free cells without ``--base``);
 ``--out FILE`` writes the figure; ``--json`` prints JSON instead of the table. Bad input raises
-:class:`amronet.errors.AmronetError` with one line naming the option.
+:class:`amronet.errors.AmronetError` with one line naming the option; so does an area too large for ``--r``
+(the resource guard, :func:`amronet.patterns.placement.check_budget`: a lattice that would not fit in memory, or a
+search that would take absurdly long without ``--force``).
 """
 
 from __future__ import annotations
@@ -97,10 +99,13 @@ def cmd_patterns(args: argparse.Namespace) -> int:
     if out is not None and out.suffix.lower() not in (".png", ".svg"):
         raise AmronetError(f"--out: {args.out!r} must end in .png or .svg")
 
-    from amronet.patterns import DENSITY, place_all
+    from amronet.patterns import DENSITY, PATTERNS, place_all
+    from amronet.patterns.placement import check_budget
 
     area, what = _area(args, r)
-    placements = place_all(area, r, steps=args.steps, tol=args.tol)
+    for name in PATTERNS:  # before any lattice is built: one line naming the options
+        check_budget(name, area, r, args.steps, force=args.force, field="--map/--r" if args.map else "--area/--r")
+    placements = place_all(area, r, steps=args.steps, tol=args.tol, force=args.force)
     if out is not None:
         from amronet.outputs.files import write_file_atomically
         from amronet.viz.patterns import save_patterns_figure
@@ -139,5 +144,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--json", action="store_true", help="print JSON instead of the table")
     p.add_argument("--steps", type=int, default=16, help="offset grid divisions per lattice cell side (default 16)")
     p.add_argument("--tol", type=float, default=1e-4, help="coverage tie tolerance (default 1e-4)")
+    p.add_argument("--force", action="store_true", help="place even when the search would take absurdly long "
+                                                        "(more than 2e7 lattice points x candidate offsets)")
     p.set_defaults(func=cmd_patterns)
     return p

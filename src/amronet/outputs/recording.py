@@ -26,6 +26,10 @@ What ``recording.npz`` holds (format ``amronet-recording/1``):
   seed, ``r_c``, ``dt``, ``every``, medium, stop reason, and the medium's resolved link budget ``budget`` with
   ``packet_loss``).
 
+Before any array is read, :func:`load_recording` reads each array's header (shape and type) alone and refuses a
+file whose headers claim more data than the file can hold (a damaged or forged file) or more memory than is
+available for the arrays and their decoding (the resource guard, :mod:`amronet.limits`).
+
 The medium's name, link budget and the seed rebuild the run's radio (:attr:`Recording.medium`, its shadowing field
 included): coverage (:meth:`Recording.covered`) and the signal map (:meth:`Recording.signal`) of any frame are the
 run's, under walls and shadowing too. Recordings written before ``budget`` was kept are read with the unit disk of
@@ -45,6 +49,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from amronet import limits
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.neighbours import neighbour_csr, pairs_from_csr
 from amronet.engine.propagation import LinkBudget
@@ -418,11 +423,57 @@ def _read_budget(meta: dict[str, Any], damaged: str) -> LinkBudget:
     return budget
 
 
+_DEFLATE_MAX_RATIO = 1100
+"""Deflate packs at most 1 032 bytes into one: a member claiming to expand more is forged."""
+DECODE_BYTES_PER_POSITION = 24
+"""Decoding one stored coordinate of ``xy_delta`` (uint16): its running sum (2 B), the float64 products (2 x 8 B)
+and the float32 result (4 B)."""
+
+
+def check_recording_arrays(archive: zipfile.ZipFile, where: str) -> None:
+    """Read the header (shape, type) of every array of a recording without its data, and refuse what cannot be read.
+
+    Refused: a header claiming more bytes than the file holds (or than its compressed size can expand to), or
+    arrays that need more memory than is available for reading and decoding them.
+
+    Raises:
+        AmronetError: A damaged or forged header (one line naming the array), or memory that is not there.
+    """
+    damaged = f"{where} is damaged or was not written by amronet run --record"
+    total = decode = 0
+    for info in archive.infolist():
+        name = info.filename.removesuffix(".npy")
+        try:
+            with archive.open(info) as fp:
+                version = np.lib.format.read_magic(fp)
+                read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+                shape, _, dtype = read(fp)
+                header = fp.tell()
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile, NotImplementedError) as exc:
+            raise AmronetError(f"{damaged} (array {name!r}: {type(exc).__name__} reading its header); record the "
+                               "run again") from None
+        count = math.prod(shape)
+        nbytes = count * dtype.itemsize
+        stored = info.file_size - header
+        packed = info.compress_size * _DEFLATE_MAX_RATIO + 4096 if info.compress_type != zipfile.ZIP_STORED else None
+        if nbytes > stored or (packed is not None and info.file_size > packed):
+            raise AmronetError(f"{damaged} (array {name!r} claims shape {tuple(shape)} of {dtype}, "
+                               f"{limits.format_bytes(nbytes)}, in {limits.format_bytes(info.compress_size)} of file); "
+                               "record the run again")
+        total += nbytes
+        if name == "xy_delta":
+            decode += count * DECODE_BYTES_PER_POSITION
+    limits.check_memory(total + decode, "", f"reading {where} ({limits.format_bytes(total)} of arrays)",
+                        "read it on a machine with more memory, or record fewer frames (--record-every)",
+                        error=AmronetError)
+
+
 def load_recording(path: str | Path) -> Recording:
     """Load ``recording.npz``, or the one inside a run folder.
 
     Raises:
-        AmronetError: The folder or file does not exist, or is not a recording.
+        AmronetError: The folder or file does not exist, is not a recording, holds arrays whose headers claim more
+            than the file holds, or needs more memory than is available (:func:`check_recording_arrays`).
     """
     path = Path(path)
     if path.is_dir():
@@ -433,6 +484,8 @@ def load_recording(path: str | Path) -> Recording:
         raise AmronetError(f"{path} does not exist: give a run folder written by amronet run --record")
     try:
         with np.load(path, allow_pickle=False) as data:
+            if data.zip is not None:
+                check_recording_arrays(data.zip, str(path))
             arrays = {k: data[k] for k in data.files}
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
         raise AmronetError(f"{path} is not a recording ({type(exc).__name__}); run it again with --record") from None

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from amronet import limits
+from amronet.errors import AmronetError
 from amronet.patterns.area import in_rectangle
 
 __all__ = ["DENSITY", "PATTERNS", "estimate", "lattice"]
@@ -191,14 +193,24 @@ def lattice(
 
     Returns:
         ``(xy, connector)``: positions ``(N, 2)`` and a boolean mask of the r-strip's connectors.
+
+    Raises:
+        ValueError: Unknown pattern or ``r`` not finite and positive.
+        AmronetError: The lattice would not fit in the memory available (``BYTES_PER_LATTICE_POINT`` per point).
     """
     r = check_pattern(pattern, r)
     bounds = (0.0, 0.0, float(width), float(height))
+    lat = lattice_basis(pattern, r)
+    w, h = (float(height), float(width)) if rotated else (float(width), float(height))
+    points = len(lat.basis) * (abs(h) / lat.py + 3) * (abs(w) / lat.px + 4)
+    limits.check_memory(points * limits.BYTES_PER_LATTICE_POINT, "r",
+                        f"the {pattern} lattice at r = {r:g} m over {width:g} m x {height:g} m "
+                        f"({limits.format_count(points)} points)", "use a larger r or a smaller area",
+                        error=AmronetError)
 
     def inside(q: np.ndarray) -> np.ndarray:
         return in_rectangle(q, width, height)
 
-    lat = lattice_basis(pattern, r)
     ox, oy = (offset[1], -offset[0]) if rotated else offset
     k = math.floor(oy / lat.py)  # reduce the offset into the fundamental cell
     ox, oy = (ox - k * lat.sx) % lat.px, oy - k * lat.py

@@ -1,6 +1,11 @@
 """Placing a pattern in a bounded area: the offset search and its result, :class:`Placement`.
 
 See :mod:`amronet.patterns` for the search (candidate offsets, the coverage tolerance, the early stop).
+
+Before the lattice is generated, :func:`check_budget` estimates its points (the area's bounding box over the
+lattice's cell) and the search's candidate offsets, and refuses (the resource guard, :mod:`amronet.limits`) a
+placement that would not fit in the memory available, or one of more than ``limits.MAX_PATTERN_WORK`` lattice
+points times candidates unless acknowledged (``force=True``, ``amronet patterns --force``).
 """
 
 from __future__ import annotations
@@ -12,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from amronet import limits
+from amronet.errors import AmronetError
 from amronet.patterns.area import AreaLike, PatternArea, as_area
 from amronet.patterns.lattices import (
     DENSITY,
@@ -27,7 +34,7 @@ from amronet.patterns.lattices import (
 )
 from amronet.patterns.links import is_connected
 
-__all__ = ["DEFAULT_STEPS", "DEFAULT_TOL", "Placement", "place", "place_all"]
+__all__ = ["DEFAULT_STEPS", "DEFAULT_TOL", "Placement", "check_budget", "place", "place_all"]
 
 DEFAULT_STEPS: int = 16
 """Default offset grid: divisions of each side of the lattice's fundamental cell."""
@@ -92,6 +99,38 @@ def _offsets(lat: Lattice, bbox: tuple[float, float, float, float], steps: int) 
     return np.stack(np.meshgrid(xs_u, ys_u, indexing="ij"), axis=-1).reshape(-1, 2)
 
 
+def check_budget(pattern: str, area: PatternArea, r: float, steps: int = DEFAULT_STEPS, rotations: bool = True,
+                 force: bool = False, field: str = "r") -> None:
+    """Refuse a placement that would not fit in memory, or (unless ``force``) take absurdly long.
+
+    Estimated from the area's bounding box and ``r`` alone, before anything is allocated.
+
+    Per rotation the lattice has at most ``len(basis) (H / py + 3) (W / px + 4)`` points in the bounding box
+    ``W x H`` (the rows and columns :func:`~amronet.patterns.lattices.lattice_points` covers) and the search at most
+    ``(steps + 4 len(basis)) (steps + 2 len(basis))`` candidate offsets.
+
+    Raises:
+        AmronetError: ``FIELD: ...`` naming the lattice points, the memory or the work, and the fix.
+    """
+    lat = lattice_basis(pattern, check_pattern(pattern, r))
+    x0, y0, x1, y1 = area.bounds
+    points = work = 0.0
+    k = len(lat.basis)
+    offsets = (int(steps) + 4 * k) * (int(steps) + 2 * k)
+    for rotated in (False, True) if rotations else (False,):
+        w, h = (y1 - y0, x1 - x0) if rotated else (x1 - x0, y1 - y0)
+        n = k * (h / lat.py + 3) * (w / lat.px + 4)
+        points += n
+        work += n * offsets
+    where = f"the {pattern} pattern at r = {r:g} m over {x1 - x0:g} m x {y1 - y0:g} m"
+    fix = "use a larger r or a smaller area"
+    limits.check_memory(points * (limits.BYTES_PER_LATTICE_POINT + offsets * limits.BYTES_PER_LATTICE_CANDIDATE),
+                        field, f"{where} ({limits.format_count(points)} lattice points)", fix, error=AmronetError)
+    limits.check_work(work, limits.MAX_PATTERN_WORK, field,
+                      f"{where} ({limits.format_count(points)} lattice points x {offsets} candidate offsets)",
+                      f"{fix} (or fewer --steps)", force, error=AmronetError)
+
+
 @dataclass
 class _Candidate:
     rotated: bool
@@ -117,6 +156,7 @@ def place(
     steps: int = DEFAULT_STEPS,
     rotations: bool = True,
     tol: float = DEFAULT_TOL,
+    force: bool = False,
 ) -> Placement:
     """Place a pattern in a bounded area: fewest nodes among the connected placements of highest coverage.
 
@@ -128,6 +168,7 @@ def place(
         steps: Offset grid: divisions per side of the fundamental cell (snap offsets are always added).
         rotations: Also try the pattern turned by 90 degrees.
         tol: Raster coverages within ``tol`` of the best connected one count as best.
+        force: Acknowledge a search the resource guard finds absurdly long (:func:`check_budget`).
 
     Returns:
         The placement; if no candidate is connected (possible on masks with obstacles) the best one, reported
@@ -136,6 +177,8 @@ def place(
     Raises:
         ValueError: Unknown pattern, ``r`` not finite and positive, ``steps < 1``, ``tol`` outside ``[0, 1)``,
             or a bad area (see :func:`as_area`).
+        AmronetError: The lattice would not fit in memory, or the search would take absurdly long without
+            ``force`` (:func:`check_budget`).
     """
     r = check_pattern(pattern, r)
     if not (isinstance(steps, int | np.integer) and steps >= 1):
@@ -143,6 +186,7 @@ def place(
     if not (0 <= tol < 1):
         raise ValueError(f"tol must be in [0, 1), got {tol!r}")
     pa = as_area(area, mask=mask, r=r)
+    check_budget(pattern, pa, r, int(steps), rotations, force)
     lat = lattice_basis(pattern, r)
     bounds = pa.bounds
     if pa.rectangle is None:  # nodes exactly on the far edge of the mask lie in no cell: snap just inside

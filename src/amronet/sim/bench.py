@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from amronet import __version__
+from amronet import __version__, limits
 from amronet.engine.robots import Role
 from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
@@ -52,18 +52,30 @@ def run_bench(
     seed: int = 0,
     r_c: float = 1.0,
     area_per_robot: float = 0.25,
+    force: bool = False,
 ) -> dict[str, Any]:
     """Time ``steps`` full steps of ``robots`` robots and return a report (robot-steps per second and more).
 
+    Before the map is scaled or a robot placed, the resource guard (:mod:`amronet.limits`) estimates the memory
+    (``BYTES_PER_ROBOT`` per robot, ``BYTES_PER_LINK`` per link at the density the benchmark sets up) and the work
+    (robots times steps, the warm-up step included).
+
     Raises:
-        AmronetError: ``robots`` or ``steps`` below 1, or ``r_c`` not a finite number > 0 (named as the options
-            of ``amronet bench``).
+        AmronetError: ``robots`` or ``steps`` below 1, ``r_c`` not a finite number > 0, more robots than the
+            memory available holds, or (without ``force``) more than ``limits.MAX_ROBOT_STEPS`` robot-steps (named
+            as the options of ``amronet bench``).
     """
     for option, value in (("--robots", robots), ("--steps", steps)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise AmronetError(f"{option}: must be a whole number >= 1, got {value!r}")
     if isinstance(r_c, bool) or not math.isfinite(r_c) or r_c <= 0:
         raise AmronetError(f"--rc: must be a finite number > 0, got {r_c!r}")
+    degree = min(math.pi * r_c**2 / area_per_robot, robots - 1.0)  # the density the scaled map gives
+    limits.check_memory(robots * (limits.BYTES_PER_ROBOT + degree * limits.BYTES_PER_LINK), "--robots",
+                        f"{robots} robots", "use fewer robots", error=AmronetError)
+    limits.check_work(robots * (steps + 1), limits.MAX_ROBOT_STEPS, "--robots",
+                      f"{robots} robots x {steps + 1} steps = {limits.format_count(robots * (steps + 1))} robot-steps",
+                      "use fewer robots or steps", force, error=AmronetError)
     omap = resolve_map(map_name)
     rng = np.random.default_rng(seed)
     largest = _largest_free_region(omap)
@@ -86,7 +98,7 @@ def run_bench(
         "sim": {"time_limit": 1e9, "stop_when_settled": False},
     })
     t0 = time.perf_counter()
-    sim = Simulation(scenario, seed, omap=omap)
+    sim = Simulation(scenario, seed, omap=omap, force=True)  # the work is checked above; time_limit is a sentinel
     setup_s = time.perf_counter() - t0
     sim.step()  # warm-up (numba compilation from cache, first allocations)
     for k in sim.phase_seconds:

@@ -39,7 +39,16 @@ from amronet.engine.sensing import range_scan
 from amronet.engine.streams import RunStreams
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario
-from amronet.sim.assemble import World, build_medium, build_swarm, build_world, medium_needs_rng, robot_model
+from amronet.sim.assemble import (
+    World,
+    build_medium,
+    build_swarm,
+    build_world,
+    load_scenario_map,
+    medium_needs_rng,
+    robot_model,
+)
+from amronet.sim.guard import check_scenario, check_world
 from amronet.sim.results import RunResult
 from amronet.sim.run import Metrics, Run
 from amronet.world.occupancy import OccupancyMap
@@ -88,12 +97,17 @@ class Loop:
         scenario: The validated scenario.
         seeds: One seed per run.
         omap: Use this map instead of loading the scenario's (for generated or scaled maps).
+        force: Run even what the resource guard (:mod:`amronet.sim.guard`) calls absurdly long: more than
+            ``amronet.limits.MAX_STEPS`` steps or ``MAX_ROBOT_STEPS`` robot-steps (``--force`` on the command line).
 
     Raises:
-        ScenarioError: A seed is invalid, or the scenario cannot be set up (see the scenario's fields).
+        ScenarioError: A seed is invalid, the scenario cannot be set up (see the scenario's fields), or the resource
+            guard refuses it (bodies that cannot fit, memory that is not there, absurd work without ``force``),
+            before anything is allocated.
     """
 
-    def __init__(self, scenario: Scenario, seeds: Sequence[int], omap: OccupancyMap | None = None) -> None:
+    def __init__(self, scenario: Scenario, seeds: Sequence[int], omap: OccupancyMap | None = None, *,
+                 force: bool = False) -> None:
         if len(seeds) == 0:
             raise ScenarioError("seeds", "a batch needs at least one seed")
         seeds = [_check_seed(s) for s in seeds]
@@ -101,13 +115,16 @@ class Loop:
         self.dt = sc.sim.dt
         params = sc.algorithm_params()
         controller_cls = ALGORITHMS.lookup(sc.algorithm.name, "algorithm.name")
+        r_start = controller_cls.start_range(params, sc.radio.r_c)
+        check_scenario(sc, runs=len(seeds), r_start=r_start, force=force)
+        omap = omap if omap is not None else load_scenario_map(sc)
+        check_world(sc, omap, runs=len(seeds), r_start=r_start)
         self.world: World = build_world(sc, omap)
         rngs = [np.random.default_rng(seed) for seed in seeds]
         if len(seeds) > 1 and medium_needs_rng(sc):
             raise ScenarioError("radio", "runs whose radio draws random numbers (shadowing, packet loss) cannot share "
                                 "one loop; run them one by one")
         self.medium = build_medium(sc, self.world.omap, rngs[0] if len(seeds) == 1 else None)
-        r_start = controller_cls.start_range(params, sc.radio.r_c)
         swarms = [build_swarm(sc, self.world, rng, r_start=r_start) for rng in rngs]
         if len(seeds) == 1:
             self.swarm, self.groups, blocks, rng = swarms[0], None, [slice(None)], rngs[0]
@@ -242,10 +259,12 @@ class Simulation(Loop):
         scenario: The validated scenario.
         seed: Seed of the run's random generator.
         omap: Use this map instead of loading the scenario's (for generated or scaled maps).
+        force: Run even what the resource guard calls absurdly long (see :class:`Loop`).
     """
 
-    def __init__(self, scenario: Scenario, seed: int, omap: OccupancyMap | None = None) -> None:
-        super().__init__(scenario, [seed], omap)
+    def __init__(self, scenario: Scenario, seed: int, omap: OccupancyMap | None = None, *,
+                 force: bool = False) -> None:
+        super().__init__(scenario, [seed], omap, force=force)
         self.books = self.runs[0]
         """The run's books (:class:`~amronet.sim.run.Run`): rows, stop reason, agents' connection."""
         self.seed = self.books.seed

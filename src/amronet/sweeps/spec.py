@@ -18,7 +18,14 @@ Keys are the dotted paths of ``--set`` (:func:`amronet.scenario.apply_overrides`
 ``points`` the sweep has one point, the base. Every point is validated as a whole scenario before anything
 runs: unknown keys (in the sweep file or in a point), empty grids, a seed count of 0, a seed outside
 ``[0, 2**63 - 1]`` (the range the result store's 64-bit integer column holds) or a bad value raise
-:class:`~amronet.errors.ScenarioError` with one line naming the field, and nothing is written. Then every
+:class:`~amronet.errors.ScenarioError` with one line naming the field, and nothing is written.
+
+The resource guard (:mod:`amronet.limits`) counts the points before the grid is expanded: a sweep whose points and
+runs would not fit in the memory available is refused, and one of more than ``MAX_SWEEP_POINTS`` points or
+``MAX_SWEEP_RUNS`` runs unless acknowledged (``force=True``, ``amronet sweep --force``). Every point's runs are
+checked as a run is (:func:`amronet.sim.guard.check_scenario`: bodies that fit, memory, steps); the workers run
+them unacknowledged, so a point whose runs would take absurdly long is refused whatever the sweep's ``force``.
+Then every
 distinct start is set up once (:func:`~amronet.sweeps.check.check_points`): a map that is neither a built-in
 name nor a file, a base station off the map or in a wall, or robots that do not fit their start region is the
 same one-line error, naming the sweep key (``grid``, ``points[i]``, ``overrides`` or ``base``) and the point.
@@ -34,6 +41,7 @@ defaults.
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -41,8 +49,10 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, ValidationError, model_validator
 
+from amronet import limits
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario, load_scenario, to_scenario_error
+from amronet.sim.guard import check_scenario
 from amronet.sweeps.check import check_points, owner_key
 from amronet.sweeps.identity import resolve_scenario, scenario_hash
 
@@ -193,11 +203,39 @@ def _point(base: Scenario, fixed: dict[str, Any], overrides: dict[str, Any], whe
         key = owner_key(exc.field, list(fixed))
         raise ScenarioError(f"overrides.{exc.field}" if key is not None else f"base: {exc.field}",
                             exc.message) from None
+    try:  # the workers run every point unacknowledged: so is the check
+        check_scenario(sc, acknowledge="or run that point alone with amronet run --force (a sweep's runs are "
+                                       "never forced)")
+    except ScenarioError as exc:
+        if where:
+            shown = ", ".join(f"{k} = {v!r}" for k, v in overrides.items())
+            raise ScenarioError(f"{where}.{exc.field}", f"{exc.message} (at point {index}: {shown})") from None
+        key = owner_key(exc.field, list(fixed))
+        raise ScenarioError(f"overrides.{exc.field}" if key is not None else f"base: {exc.field}",
+                            exc.message) from None
     return Point(index=index, overrides=dict(overrides), scenario=resolved, hash=scenario_hash(resolved))
 
 
+def _check_size(spec: SweepSpec, force: bool) -> None:
+    """Refuse, before the grid is expanded, a sweep too large for the memory or, unacknowledged, for patience."""
+    grid = math.prod(len(v) for v in spec.grid.values()) if spec.grid else 0
+    points = grid + len(spec.points or []) or 1
+    seeds = spec.seeds if isinstance(spec.seeds, int) else len(spec.seeds)
+    runs = points * seeds
+    field = "grid" if grid > len(spec.points or []) else "points"
+    what = (f"a grid of {' x '.join(str(len(v)) for v in spec.grid.values())} = {limits.format_count(grid)} points"
+            if field == "grid" else f"{points} points")
+    limits.check_memory(points * limits.BYTES_PER_SWEEP_POINT + runs * limits.BYTES_PER_SWEEP_RUN, field,
+                        f"{what} with {seeds} seed{'s' if seeds != 1 else ''} each",
+                        "split the sweep or give fewer values")
+    limits.check_work(points, limits.MAX_SWEEP_POINTS, field, what, "split the sweep or give fewer values", force)
+    limits.check_work(runs, limits.MAX_SWEEP_RUNS, "seeds",
+                      f"{limits.format_count(points)} points x {seeds} seeds = {limits.format_count(runs)} runs",
+                      "give fewer seeds or points", force)
+
+
 def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | None = None,
-                    check_start: bool = True) -> Sweep:
+                    check_start: bool = True, force: bool = False) -> Sweep:
     """Validate a sweep given as a spec or a mapping and expand its points.
 
     Args:
@@ -205,9 +243,11 @@ def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | Non
         base_dir: Folder that a relative ``base`` path and an inline base's relative map path are taken from.
         check_start: Also set up every distinct start once (:func:`~amronet.sweeps.check.check_points`: the
             maps load, the base stations and robots fit); ``False`` checks the fields only.
+        force: Acknowledge a sweep of more than ``limits.MAX_SWEEP_POINTS`` points or ``MAX_SWEEP_RUNS`` runs.
 
     Raises:
-        ScenarioError: The sweep or one of its points is invalid; one line naming the field.
+        ScenarioError: The sweep or one of its points is invalid, or the resource guard refuses it (see the
+            module docstring); one line naming the field.
     """
     if not isinstance(spec, SweepSpec):
         if not isinstance(spec, dict):
@@ -216,6 +256,7 @@ def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | Non
             spec = SweepSpec.model_validate(spec)
         except ValidationError as exc:
             raise to_scenario_error(exc, model=SweepSpec) from None
+    _check_size(spec, force)
     folder = str(Path(base_dir).resolve()) if base_dir is not None else None
     base = _base_scenario(spec, folder)
     fixed = _point(base, spec.overrides, {}, "", -1)  # the fixed overrides alone, so their errors name them
@@ -236,11 +277,12 @@ def sweep_from_spec(spec: SweepSpec | dict[str, Any], base_dir: str | Path | Non
     return Sweep(spec=spec, points=points, seeds=spec.seed_list(), keys=keys)
 
 
-def load_sweep(source: str | Path | dict[str, Any]) -> Sweep:
+def load_sweep(source: str | Path | dict[str, Any], force: bool = False) -> Sweep:
     """Load, validate and expand a sweep file (or mapping).
 
     Args:
         source: Path of a sweep YAML file, or its content as a mapping.
+        force: Acknowledge a sweep of more points or runs than the resource guard lets run unacknowledged.
 
     Returns:
         The sweep.
@@ -249,7 +291,7 @@ def load_sweep(source: str | Path | dict[str, Any]) -> Sweep:
         ScenarioError: The file cannot be read or the sweep is invalid; one line naming the field.
     """
     if isinstance(source, dict):
-        return sweep_from_spec(source)
+        return sweep_from_spec(source, force=force)
     path = Path(source)
     if not path.is_file():
         raise ScenarioError("sweep", f"no sweep file {str(path)!r}; give the path of a sweep YAML")
@@ -263,4 +305,4 @@ def load_sweep(source: str | Path | dict[str, Any]) -> Sweep:
         raise ScenarioError("sweep", f"{str(path)!r} is not valid YAML{where}; fix the syntax") from None
     if data is None:
         raise ScenarioError("sweep", f"{str(path)!r} is empty; give name, base and seeds (and grid or points)")
-    return sweep_from_spec(data, base_dir=path.resolve().parent)
+    return sweep_from_spec(data, base_dir=path.resolve().parent, force=force)

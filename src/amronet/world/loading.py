@@ -3,8 +3,10 @@
 The YAML keys and their meaning follow ROS ``map_server`` (ROS 1 ``image_loader``):
 
 * ``image`` (required): image file, relative to the YAML file's folder unless absolute.
-* ``resolution`` (required): metres per pixel, finite and positive.
-* ``origin`` (required): ``[x, y, yaw]``, world pose of the lower-left pixel; only ``yaw == 0`` is supported.
+* ``resolution`` (required): metres per pixel, finite, between ``1e-6`` and ``1e6``.
+* ``origin`` (required): ``[x, y, yaw]``, world pose of the lower-left pixel; only ``yaw == 0`` is supported. The
+  map must lie within ``MAX_COORDINATE_M`` (10^9 m) of the world origin, so that positions and cell indices stay
+  exact, finite numbers.
 * ``negate`` (required): ``0``/``1`` (or ``false``/``true``); ``1`` swaps black and white.
 * ``occupied_thresh``, ``free_thresh`` (required): in ``[0, 1]`` with ``free_thresh < occupied_thresh``.
 * ``mode`` (optional): ``trinary`` (default), ``scale`` or ``raw``.
@@ -20,6 +22,10 @@ three states has no room for ``map_server``'s intermediate probabilities. In ``r
 itself (``255 - v`` when negated) is an occupancy percentage, as ``map_server`` publishes it: values
 ``0..100`` are thresholded as ``p = value / 100`` with the same thresholds (so ``0`` is free and ``100``
 occupied), and any other value (``255`` is ``map_server``'s "unknown") is ``UNKNOWN``.
+
+Before an image is decoded, its header's size is checked against the memory available (the resource guard,
+:mod:`amronet.limits`: ``BYTES_PER_IMAGE_BAND`` per pixel and colour band, plus the grid), so that a huge image
+is one line saying how much it would need, not a ``MemoryError`` halfway.
 
 Fully transparent pixels (alpha 0, in RGBA, LA or palette images with transparency) are ``UNKNOWN`` in every
 mode. This differs from ``map_server``'s trinary mode, which averages alpha in with the colour channels.
@@ -39,6 +45,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -46,10 +53,11 @@ import numpy as np
 import yaml
 from PIL import Image, UnidentifiedImageError
 
+from amronet import limits
 from amronet.errors import MapError
 from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
-__all__ = ["MAP_MODES", "MAP_YAML_KEYS", "image_occupancy", "load_map_yaml"]
+__all__ = ["MAP_MODES", "MAP_YAML_KEYS", "MAX_COORDINATE_M", "image_occupancy", "load_map_yaml"]
 
 MAP_MODES: tuple[str, ...] = ("trinary", "scale", "raw")
 """Values allowed for the ``mode`` key."""
@@ -59,6 +67,11 @@ _OPTIONAL: tuple[str, ...] = ("mode", "licence")
 
 MAP_YAML_KEYS: frozenset[str] = frozenset(_REQUIRED + _OPTIONAL)
 """Every key a map YAML file may hold."""
+
+MAX_COORDINATE_M = 1e9
+"""Every corner of a map lies within this many metres of the world origin (a million kilometres: UTM coordinates
+fit). Farther, cell indices and distances lose their precision or overflow."""
+_RESOLUTION_RANGE = (1e-6, 1e6)
 
 
 def _one_line(text: object) -> str:
@@ -111,6 +124,10 @@ def _parse_params(data: dict[str, Any]) -> tuple[float, tuple[float, float], boo
     resolution = _number(data, "resolution")
     if resolution <= 0:
         raise MapError("map.resolution", f"must be positive (metres per pixel), got {resolution!r}")
+    low, high = _RESOLUTION_RANGE
+    if not low <= resolution <= high:
+        raise MapError("map.resolution", f"{resolution!r} metres per pixel is outside [{low:g}, {high:g}]; give "
+                                         "the size of one pixel in metres, e.g. 0.05")
 
     origin = data["origin"]
     if not isinstance(origin, list | tuple) or len(origin) != 3:
@@ -122,6 +139,9 @@ def _parse_params(data: dict[str, Any]) -> tuple[float, tuple[float, float], boo
         coords.append(float(value))
     if coords[2] != 0.0:
         raise MapError("map.origin", f"yaw {coords[2]!r} is not supported; rotate the image and set yaw to 0")
+    if max(abs(coords[0]), abs(coords[1])) > MAX_COORDINATE_M:
+        raise MapError("map.origin", f"[{coords[0]:g}, {coords[1]:g}] is more than {MAX_COORDINATE_M:g} m from the "
+                                     "world origin; give the map's lower-left corner in metres near it")
 
     negate = data["negate"]
     if negate not in (0, 1) or isinstance(negate, float):
@@ -203,15 +223,38 @@ def image_occupancy(
     return np.ascontiguousarray(cells[::-1])
 
 
-def _open_image(path: Path) -> Image.Image:
-    """Open and fully decode an image file, turning every failure into a ``MapError``."""
+def _check_size(path: Path, img: Image.Image, resolution: float, origin: tuple[float, float]) -> None:
+    """Refuse, from the image's header alone, a map that overflows the world or the memory available."""
+    w, h = img.size
+    for axis, start, cells in (("x", origin[0], w), ("y", origin[1], h)):
+        if abs(start + cells * resolution) > MAX_COORDINATE_M:
+            raise MapError("map.origin", f"the map's far edge in {axis} ({cells} pixels of {resolution:g} m from "
+                                         f"{start:g} m) is more than {MAX_COORDINATE_M:g} m from the world origin; "
+                                         "move the origin or use a coarser resolution")
+    bands = 4 if img.mode in ("P", "PA") else len(img.getbands())
+    need = w * h * (limits.BYTES_PER_IMAGE_BAND * bands + limits.BYTES_PER_IMAGE_PIXEL)
+    limits.check_memory(need, "map.image", f"decoding '{path.name}' ({w} x {h} pixels, {img.mode})",
+                        "use a smaller image (a coarser resolution)", error=MapError)
+
+
+def _open_image(path: Path, resolution: float, origin: tuple[float, float]) -> Image.Image:
+    """Open an image file, check its size from its header, decode it; every failure is a ``MapError``."""
     if not path.is_file():
         raise MapError(
             "map.image", f"image file '{path}' not found; the path is relative to the YAML file's folder"
         )
     try:
-        img = Image.open(path)
-        img.load()
+        with warnings.catch_warnings():  # the size is checked below, against this machine's memory
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            img = Image.open(path)
+        try:
+            _check_size(path, img, resolution, origin)
+            img.load()
+        except BaseException:
+            img.close()
+            raise
+    except MapError:
+        raise
     except (UnidentifiedImageError, OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
         raise MapError(
             "map.image", f"'{path}' is not a readable image ({_one_line(exc)}); give a PGM or PNG file"
@@ -245,7 +288,7 @@ def load_map_yaml(path: str | os.PathLike[str]) -> OccupancyMap:
     image_path = Path(image)
     if not image_path.is_absolute():
         image_path = path.parent / image_path
-    img = _open_image(image_path)
+    img = _open_image(image_path, resolution, origin)
 
     licence = data.get("licence")
     if licence is not None and not isinstance(licence, str):
