@@ -14,7 +14,16 @@ Choices the paper leaves open, and ours:
 * Where exactly the router is released: at ``agent radius + router radius + release_gap`` from the agent's
   centre toward the current reference; if that spot is blocked or taken, the nearest free direction (in steps
   of 30 degrees) that keeps the router within ``r_c`` of the reference and is reachable in a straight line;
-  failing all, at the agent's own position (the two bodies then overlap until the agent drives off).
+  failing all, the same on two rings farther out (in steps of 15 degrees, the straight line clear of walls and
+  bodies). A router is never put down on another body or a wall: with no free spot the agent releases nothing
+  this step (about to lose its last reference, it turns back toward it, as a tethered agent does, and tries
+  again; a triangle router is tried again at the next step).
+* Triangular deployment is an event, not a state: the paper's agent releases a triangle router when it
+  *encounters* a reference ``R_pq`` of another status from its current reference ``R_ij``. Each agent remembers
+  the pairs ``{R_ij, R_pq}`` it has served and releases at most one triangle router per pair, in every mode
+  (with ``none`` this is the only bound: at most ``agents x pairs`` triangle routers, where a pair is two
+  references of different status more than ``r_c`` and at most ``2 r_c`` apart). Without it an agent that
+  stays in range of both would release one at every step.
 * An agent that has no router left (``agents.routers_carried``) is tethered: when it is about to lose its last
   reference it turns back toward its current reference instead of going on, so it never loses its connection.
 * When the two references of a triangle are within ``r_c`` of each other no router is sent: they are linked.
@@ -98,6 +107,22 @@ def _track_agents(agents, current, is_reference, status, indptr, indices, dist, 
     return n_cand, n_losing
 
 
+def _pair_key(agent: int, ref_i: int, ref_j: int) -> tuple[int, int, int]:
+    """The key of a triangle served by ``agent`` for the references ``ref_i`` and ``ref_j`` (either order)."""
+    return (agent, min(ref_i, ref_j), max(ref_i, ref_j))
+
+
+def _segments_clear(p: np.ndarray, ends: np.ndarray, r: float, xy: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """Which segments ``p -> ends[m]`` a body of radius ``r`` can be carried along without touching a body."""
+    seg = ends - p
+    length2 = np.maximum(np.einsum("ij,ij->i", seg, seg), 1e-300)
+    rel = xy - p
+    t = np.clip((rel @ seg.T) / length2[None, :], 0.0, 1.0)
+    closest = p[None, None, :] + t[:, :, None] * seg[None, :, :]
+    d = np.linalg.norm(xy[:, None, :] - closest, axis=2)
+    return (d >= r + radius[:, None]).all(axis=0)
+
+
 @ALGORITHMS.register("agent-assisted")
 class AgentAssisted(Controller):
     """Controller of agents that carry and release routers."""
@@ -142,6 +167,9 @@ class AgentAssisted(Controller):
         self._other = np.empty(len(self.agents), dtype=np.int64)
         self._deployed: np.ndarray | None = None
         self._deployed_xy: np.ndarray | None = None
+        self.triangles_released: list[tuple[int, int, int]] = []
+        """Every triangle release as ``(agent, reference, reference)``, the references in increasing order."""
+        self._served: set[tuple[int, int, int]] = set()
 
     @classmethod
     def start_range(cls, params: AgentAssistedParams, r_c: float) -> float:  # noqa: D102
@@ -199,6 +227,9 @@ class AgentAssisted(Controller):
             assert current is not None
             other = self._other
             cand = np.flatnonzero((other >= 0) & (self.left[agents] >= 1))
+            if self._served:  # an agent serves a pair of references once
+                fresh = [_pair_key(int(agents[m]), int(current[m]), int(other[m])) not in self._served for m in cand]
+                cand = cand[np.array(fresh, dtype=bool)]
             committed = is_ref | (sw.state == State.TRIANGLE)
             go = select_triangles(self.params.triangular, agents[cand], current[cand], other[cand], sw.xy,
                                   self.r_c, self.disabled, table, committed)
@@ -206,11 +237,15 @@ class AgentAssisted(Controller):
                 self._release_triangle(int(agents[m]), int(current[m]), int(other[m]))
 
         losing = None
+        held = None
         if n_losing:
             assert current is not None
             losing = (current >= 0) & (self._nearest_d >= self.r_eff)
             for m in np.flatnonzero(losing & (self.left[agents] >= 1)):
-                self._release_reference(int(agents[m]), int(current[m]))
+                if not self._release_reference(int(agents[m]), int(current[m])):
+                    if held is None:
+                        held = np.zeros(len(agents), dtype=bool)
+                    held[m] = True  # no free spot to put a router down: turn back as a tethered agent does
 
         # agents: explore, or turn back when tethered (no router left and about to lose the last reference)
         scans = step.readings.of(agents, self.agent_model)
@@ -220,6 +255,8 @@ class AgentAssisted(Controller):
         if losing is not None:
             assert current is not None
             tethered = losing & (self.left[agents] < 1)
+            if held is not None:
+                tethered |= held
             if tethered.any():
                 back = sw.xy[current[tethered]] - sw.xy[agents[tethered]]
                 sw.heading[agents[tethered]] = np.arctan2(back[:, 1], back[:, 0])
@@ -245,26 +282,49 @@ class AgentAssisted(Controller):
         self.refused[movers] = refused
 
     # -- releasing routers (cold: a handful of events per run) ---------------------------------------------
-    def _release_spot(self, agent: int, toward: int) -> np.ndarray:
+    def _release_spot(self, agent: int, toward: int) -> np.ndarray | None:
+        """Where ``agent`` puts a router down, next to itself toward ``toward``; ``None`` when no spot is free.
+
+        First the ring right next to the agent (12 directions, nearest to the reference's first), then two rings
+        farther out (24 directions) whose straight line from the agent must also pass clear of every body. A
+        spot must be within ``r_c`` of the reference, clear of walls along the way and clear of every body.
+        """
         sw = self.swarm
         p = sw.xy[agent]
         ref = sw.xy[toward]
-        gap = sw.radius[agent] + self.router_model.radius + self.params.release_gap
+        r = self.router_model.radius
+        gap = sw.radius[agent] + r + self.params.release_gap
         base = np.arctan2(ref[1] - p[1], ref[0] - p[0])
+        others = np.delete(np.arange(len(sw)), agent)
         turns = np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6]) * (np.pi / 6)
         cand = p + gap * np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
         ok = np.linalg.norm(cand - ref, axis=1) <= self.r_c
-        ok &= self.path_clear(np.repeat(p[None], len(cand), axis=0), cand, np.full(len(cand), self.router_model.radius))
-        others = np.delete(np.arange(len(sw)), agent)
+        ok &= self.path_clear(np.repeat(p[None], len(cand), axis=0), cand, np.full(len(cand), r))
         if len(others):
             d = np.linalg.norm(cand[:, None, :] - sw.xy[None, others, :], axis=2)
-            ok &= (d >= self.router_model.radius + sw.radius[others][None, :]).all(axis=1)
+            ok &= (d >= r + sw.radius[others][None, :]).all(axis=1)
         hit = np.flatnonzero(ok)
-        return cand[hit[0]] if len(hit) else p.copy()
+        if len(hit):
+            return cand[hit[0]]
+        # farther out: the agent's own ring is full (other bodies, walls)
+        turns = np.concatenate([[0.0], np.repeat(np.arange(1, 12), 2) * np.array([1.0, -1.0] * 11), [12.0]]) * (
+            np.pi / 12)
+        step = 2.0 * r + self.params.release_gap
+        dirs = np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
+        cand = np.concatenate([p + (gap + k * step) * dirs for k in (1, 2)])
+        ok = np.linalg.norm(cand - ref, axis=1) <= self.r_c
+        ok[ok] &= self.path_clear(np.repeat(p[None], int(ok.sum()), axis=0), cand[ok], np.full(int(ok.sum()), r))
+        if len(others) and ok.any():
+            ok[ok] &= _segments_clear(p, cand[ok], r, sw.xy[others], sw.radius[others])
+        hit = np.flatnonzero(ok)
+        return cand[hit[0]] if len(hit) else None
 
-    def _add_router(self, agent: int, toward: int, state: int) -> int:
+    def _add_router(self, agent: int, toward: int, state: int) -> int | None:
+        """Release a router from ``agent`` next to itself toward ``toward``; its index, or ``None`` (no free spot)."""
         sw = self.swarm
         spot = self._release_spot(agent, toward)
+        if spot is None:
+            return None
         new = sw.extend(self.router_model, Role.ROUTER, state, spot[None], np.array([sw.status[agent]]),
                         heading=np.array([sw.heading[agent]]))
         self._grow(len(new))
@@ -273,12 +333,17 @@ class AgentAssisted(Controller):
         self.released += 1
         return int(new[0])
 
-    def _release_reference(self, agent: int, current: int) -> None:
-        self._add_router(agent, current, State.REFERENCE)
+    def _release_reference(self, agent: int, current: int) -> bool:
+        return self._add_router(agent, current, State.REFERENCE) is not None
 
     def _release_triangle(self, agent: int, ref_i: int, ref_j: int) -> None:
         sw = self.swarm
         new = self._add_router(agent, ref_i, State.TRIANGLE)
+        if new is None:
+            return  # no free spot next to the agent: the pair is not served yet, tried again next step
+        key = _pair_key(agent, ref_i, ref_j)
+        self._served.add(key)
+        self.triangles_released.append(key)
         self.moving_triangles += 1
         goal = triangle_goal(sw.xy[[ref_i]], sw.xy[[ref_j]], sw.xy[[agent]], self.r_eff)
         self.steering.start(np.array([new]), goal, np.array([[ref_i, ref_j]]))

@@ -151,9 +151,121 @@ def _sample_start(
             others = np.vstack([others, p])
             others_r = np.append(others_r, radius)
     if len(pts) < count:
-        raise ScenarioError(field, f"could place only {len(pts)} of {count} robots without overlap in the start "
-                                   "region; enlarge the base station's region or use fewer robots")
+        # random draws jam when the free part is tight (the first bodies block the rest): pack deterministically
+        packed = _pack_start(world, centre, region, count, radius, max_dist, taken, taken_r)
+        if len(packed) < count:
+            best = max(len(pts), len(packed))
+            raise ScenarioError(field, f"could place only {best} of {count} robots without overlap in the start "
+                                       "region; enlarge the base station's region, move the base station away "
+                                       "from the walls or use fewer robots")
+        return packed
     return pts
+
+
+_PACK_LATTICE_MAX = 1_000_000
+"""Most lattice points the deterministic start packing looks at (a coarser lattice for larger regions)."""
+_PACK_SEED = 20240518
+"""Seed of the fixed shuffles the start packing tries after its ordered sweeps."""
+_PACK_WORK = 20_000_000
+"""Rough budget of point visits for those shuffles (16 to 256 of them)."""
+
+
+def _start_lattice(
+    world: World, centre: np.ndarray, region: tuple[float, float], radius: float, max_dist: float
+) -> np.ndarray:
+    """Points of a lattice over the start region where a body of ``radius`` may stand, and which are clear.
+
+    The lattice divides every map cell into ``k x k`` points (a quarter cell apart or finer, and finer than half a
+    body), plus the region's edges (a sliver of free space along an edge is not lost between lattice points). A
+    point qualifies as a random draw does: it lies in the region and within ``max_dist`` of ``centre``, and its
+    cell is reachable free space with a clearance of at least ``radius``.
+
+    Returns:
+        ``(points (M, 2), clear (M,))``: ``clear`` marks the points whose cell's clearance is at least ``radius``
+        plus their distance from the cell's centre (clearance is measured from the centre), so that the body
+        keeps clear of the walls wherever in its cell it stands.
+    """
+    omap = world.omap
+    res = float(omap.resolution)
+    n_rows, n_cols = omap.shape
+    half = 0.5 * np.asarray(region, dtype=float)
+    lo, hi = centre - half, centre + half
+    k = max(4, int(np.ceil(2.0 * res / radius))) if radius > 0 else 4  # points per cell and axis
+    cells = (half[0] / res + 1) * (half[1] / res + 1) * 4
+    step = res / k if cells * k * k <= _PACK_LATTICE_MAX else res * max(1.0, np.sqrt(cells / _PACK_LATTICE_MAX))
+
+    def axis(a: int, n_cells: int) -> np.ndarray:
+        origin = float(omap.origin[a])
+        first = origin + (np.floor((max(lo[a], origin) - origin) / step) + 0.5) * step
+        last = min(hi[a], origin + n_cells * res)
+        inner = np.arange(first, last + 0.5 * step, step)
+        v = np.unique(np.concatenate([inner, [lo[a], hi[a]]]))
+        return v[(v >= lo[a]) & (v <= hi[a])]
+
+    gx, gy = np.meshgrid(axis(0, n_cols), axis(1, n_rows))
+    xy = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    xy = xy[omap.inside(xy) & (np.linalg.norm(xy - centre, axis=1) <= max_dist)]
+    rows, cols = omap.world_to_cell(xy)
+    room = clearance(omap)[rows, cols]
+    ok = world.reachable[rows, cols] & (room >= radius)
+    xy, rows, cols, room = xy[ok], rows[ok], cols[ok], room[ok]
+    off = np.linalg.norm(xy - omap.cell_centres(rows, cols), axis=1)
+    return xy, room >= radius + off
+
+
+def _pack_start(
+    world: World, centre: np.ndarray, region: tuple[float, float], count: int, radius: float, max_dist: float,
+    taken: np.ndarray, taken_r: np.ndarray,
+) -> np.ndarray:
+    """Deterministic packing of ``count`` bodies into the start region, after the random draws failed.
+
+    Greedy over the points of :func:`_start_lattice` clear of the bodies already placed: take the first point in
+    a fixed order, drop every point its body would overlap, repeat. The orders, tried in turn until one places
+    ``count``: nearest the base first; sweeps from each of the region's four corners, row by row and column by
+    column; farthest from the base first; then greedy passes in shuffled orders from a fixed seed (the same for
+    every run). Points whose body keeps clear of the walls wherever in its cell it stands are tried first; then,
+    if they cannot hold ``count``, every point a random draw would accept. Returns the fullest placement (fewer
+    than ``count`` if none fits).
+    """
+    cand, clear = _start_lattice(world, centre, region, radius, max_dist)
+    near = np.linalg.norm(taken - centre, axis=1) <= 0.5 * float(np.hypot(*region)) + radius + taken_r
+    for q, q_r in zip(taken[near], taken_r[near], strict=True):
+        free = np.sum((cand - q) ** 2, axis=1) >= (radius + q_r) ** 2
+        cand, clear = cand[free], clear[free]
+    best = _greedy_pack(cand[clear], centre, count, radius)
+    if len(best) < count and not clear.all():
+        loose = _greedy_pack(cand, centre, count, radius)
+        best = loose if len(loose) > len(best) else best
+    return best
+
+
+def _greedy_pack(cand: np.ndarray, centre: np.ndarray, count: int, radius: float) -> np.ndarray:
+    """The greedy passes of :func:`_pack_start` over the points ``cand``; the fullest placement."""
+    if len(cand) == 0:
+        return np.zeros((0, 2))
+    d = np.linalg.norm(cand - centre, axis=1)
+    x, y = cand[:, 0], cand[:, 1]
+    orders = [np.argsort(d, kind="stable")]
+    orders += [np.lexsort((sx * x, sy * y)) for sy in (1, -1) for sx in (1, -1)]
+    orders += [np.lexsort((sy * y, sx * x)) for sx in (1, -1) for sy in (1, -1)]
+    orders.append(np.argsort(-d, kind="stable"))
+    shuffle = np.random.default_rng(_PACK_SEED)  # not the run's: the packing does not depend on the seed
+    restarts = int(np.clip(_PACK_WORK // (len(cand) * count), 16, 256))
+    best = np.zeros((0, 2))
+    reach2 = (2.0 * radius) ** 2
+    for k in range(len(orders) + restarts):
+        order = orders[k] if k < len(orders) else shuffle.permutation(len(cand))
+        pool = cand[order]
+        placed = []
+        while len(pool) and len(placed) < count:
+            p = pool[0]
+            placed.append(p)
+            pool = pool[np.sum((pool - p) ** 2, axis=1) >= reach2]
+        if len(placed) > len(best):
+            best = np.asarray(placed)
+        if len(best) >= count:
+            break
+    return best
 
 
 def _scatter(
