@@ -9,8 +9,9 @@ Behaviours turn sensor readings into headings:
   something is close.
 
 :func:`integrate` moves robots along their headings and checks every move along its whole path: a move is
-refused if any cell the path touches is closer to an obstacle than the robot's radius, so no robot ever ends
-inside an obstacle or slips through a one-pixel wall; moves that would make two bodies overlap are refused too.
+refused if the disc, swept along the path, would come closer than its radius to a blocked cell's square (exact
+point-to-square distances, :func:`~amronet.world.space.path_is_clear`), so no body ever reaches into a wall or slips
+through a one-pixel wall; moves that would make two bodies overlap are refused too.
 """
 
 from __future__ import annotations
@@ -24,9 +25,8 @@ from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.sensing import beam_angles
 from amronet.engine.streams import RunStreams, draw_per_run
-from amronet.world.gridwalk import walk_next, walk_start
 from amronet.world.occupancy import OccupancyMap
-from amronet.world.space import clearance
+from amronet.world.space import clearance, path_is_clear
 
 __all__ = ["avoidance_heading", "drive", "escape_one", "integrate", "path_clear", "random_walk"]
 
@@ -145,27 +145,10 @@ def random_walk(
 
 
 @njit(cache=True)
-def _segment_ok(clear, ox, oy, res, x0, y0, x1, y1, radius):  # pragma: no cover - numba
-    """Walk every cell the segment touches (Amanatides-Woo) and require clearance >= radius in each."""
-    rows, cols = clear.shape
-    r, c, r_end, c_end, step_r, step_c, t_x, t_y, dt_x, dt_y = walk_start(ox, oy, res, x0, y0, x1, y1)
-    for _ in range(4 * (rows + cols) + 4):
-        if r < 0 or r >= rows or c < 0 or c >= cols:
-            return False
-        if clear[r, c] < radius:
-            return False
-        if r == r_end and c == c_end:
-            return True
-        r, c, t_x, t_y, past_end = walk_next(r, c, step_r, step_c, t_x, t_y, dt_x, dt_y)
-        if past_end:
-            return True
-    return True
-
-
-@njit(cache=True)
-def _paths_ok(clear, ox, oy, res, start, end, radius, out):  # pragma: no cover - numba
+def _paths_ok(blocked, clear, ox, oy, res, start, end, radius, out):  # pragma: no cover - numba
     for i in range(start.shape[0]):
-        out[i] = _segment_ok(clear, ox, oy, res, start[i, 0], start[i, 1], end[i, 0], end[i, 1], radius[i])
+        out[i] = path_is_clear(blocked, clear, ox, oy, res, start[i, 0], start[i, 1], end[i, 0], end[i, 1],
+                               radius[i])
 
 
 def path_clear(omap: OccupancyMap, start: np.ndarray, end: np.ndarray, radius: np.ndarray) -> np.ndarray:
@@ -178,20 +161,21 @@ def path_clear(omap: OccupancyMap, start: np.ndarray, end: np.ndarray, radius: n
         radius: Body radii ``(M,)``.
 
     Returns:
-        Boolean mask ``(M,)``: ``True`` where every cell the segment touches has clearance at least the radius.
+        Boolean mask ``(M,)``: ``True`` where the disc's whole path keeps at least its radius from every blocked
+        cell's square (:func:`~amronet.world.space.path_is_clear`).
     """
     out = np.empty(len(start), dtype=np.bool_)
     if len(start):
         _paths_ok(
-            clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution),
-            np.ascontiguousarray(start, dtype=float), np.ascontiguousarray(end, dtype=float),
+            omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
+            float(omap.resolution), np.ascontiguousarray(start, dtype=float), np.ascontiguousarray(end, dtype=float),
             np.ascontiguousarray(radius, dtype=float), out,
         )
     return out
 
 
 @njit(cache=True)
-def _drive(clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indptr, indices, dist, near,
+def _drive(blocked, clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indptr, indices, dist, near,
            refused, travelled):  # pragma: no cover - numba
     """Move robots one after another.
 
@@ -210,7 +194,7 @@ def _drive(clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indp
         r0 = int(math.floor((y0 - oy) / res))
         rows, cols = clear.shape
         roomy = 0 <= r0 < rows and 0 <= c0 < cols and clear[r0, c0] >= radius[i] + length[m] + 1.5 * res
-        if not roomy and not _segment_ok(clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
+        if not roomy and not path_is_clear(blocked, clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
             continue
         bad = False
         if bodies:
@@ -315,6 +299,6 @@ def drive(
             indptr, indices, dist = near.indptr, near.indices, near.dist
         else:
             indptr, indices, dist = neighbour_csr(xy, reach, None if table is None else table.groups)
-    _drive(clearance(omap), float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), movers, heading,
-           length, xy, radius, bodies, indptr, indices, dist, reach, refused, travelled)
+    _drive(omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
+           float(omap.resolution), movers, heading, length, xy, radius, bodies, indptr, indices, dist, reach, refused, travelled)
     return refused, travelled
