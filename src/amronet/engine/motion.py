@@ -300,5 +300,6 @@ def drive(
         else:
             indptr, indices, dist = neighbour_csr(xy, reach, None if table is None else table.groups)
     _drive(omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
-           float(omap.resolution), movers, heading, length, xy, radius, bodies, indptr, indices, dist, reach, refused, travelled)
+           float(omap.resolution), movers, heading, length, xy, radius, bodies, indptr, indices, dist, reach, refused,
+           travelled)
     return refused, travelled

@@ -15,7 +15,7 @@ from amronet.errors import MapError, ScenarioError
 from amronet.scenario import RobotRef, RobotSpec, Scenario
 from amronet.world.builtin import resolve_map
 from amronet.world.occupancy import OccupancyMap
-from amronet.world.space import clearance, reachable_free
+from amronet.world.space import clearance, reachable_free, wall_distance
 
 __all__ = ["World", "build_medium", "build_swarm", "build_world", "medium_needs_rng", "robot_model"]
 
@@ -140,6 +140,7 @@ def _sample_start(
         rows, cols = omap.world_to_cell(cand)
         ok = omap.inside(cand)
         ok[ok] &= world.reachable[rows[ok], cols[ok]] & (clear[rows[ok], cols[ok]] >= radius)
+        ok[ok] &= wall_distance(omap, cand[ok], cap=2.0 * radius) >= radius  # the body, exactly clear of walls
         ok &= np.linalg.norm(cand - centre, axis=1) <= max_dist
         for p in cand[ok]:
             if len(pts) >= count:

@@ -138,6 +138,8 @@ class Loop:
         self.controller: Controller = controller_cls(params, self._setup(rng))
         self.table: NeighbourTable = self.medium.update(self.swarm.xy, self.groups)
         self.steps = 0
+        self._places_robots = sc.agents.per_base > 0 and self.groups is None
+        """Whether the controller may put robots down in the decide phase (agents releasing routers; never batched)."""
         self.phase_seconds = {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0}
         target = sc.sim.coverage_target
         if target is None:
@@ -173,9 +175,13 @@ class Loop:
         t0 = clock()
         readings = sense(self.controller, sw, self.world.omap, self.table)
         t1 = clock()
+        before = sw.xy.copy() if self._places_robots else None
         command = self.controller.decide(StepInput(self.steps, self.t, self.dt, self.table, readings))
         t2 = clock()
-        move(self.controller, command, sw, self.world.omap, self.table, self.dt, self.scenario.sim.robot_collisions)
+        # a robot put down in the decide phase (a released router) is not where the table has it: the move phase
+        # then searches the bodies afresh, so nobody drives into a router released this step
+        bodies_table = self.table if before is None or np.array_equal(before, sw.xy) else None
+        move(self.controller, command, sw, self.world.omap, bodies_table, self.dt, self.scenario.sim.robot_collisions)
         t3 = clock()
         self.table = self.medium.update(sw.xy, self.groups)
         t4 = clock()
