@@ -1,8 +1,9 @@
 """The ``amronet sweep``, ``amronet results`` and ``amronet plot`` subcommands.
 
 * ``amronet sweep SWEEP.yaml --store results.sqlite [--workers N | --scheduler tcp://host:8786 | --cluster local]
-  [--retry-failed]`` runs every (point, seed) of the sweep that is not in the store yet, with a progress bar,
-  and prints a table per point. Exit status 1 when runs of the sweep are recorded as failed.
+  [--worker-timeout SECONDS] [--retry-failed]`` runs every (point, seed) of the sweep that is not in the store
+  yet, with a progress bar, and prints a table per point. Exit status 1 when runs of the sweep are recorded as
+  failed.
 * ``amronet results results.sqlite [--sweep NAME] [--export csv|parquet --out DIR]`` lists sweeps and runs, or
   writes the tidy tables.
 * ``amronet plot results.sqlite --x radio.r_c --y nodes_total [--hue algorithm.name] [--out plot.png]`` draws the
@@ -47,12 +48,16 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     from amronet.sweeps import ResultStore, load_sweep, run_sweep
+    from amronet.sweeps.executors import check_worker_timeout
     from amronet.sweeps.store import check_store_path
     from amronet.sweeps.tables import point_summary, run_rows
 
-    sweep = load_sweep(args.sweep)
+    sweep = load_sweep(args.sweep, force=args.force)
     check_store_path(Path(args.store))
+    check_worker_timeout(args.worker_timeout, dask=args.scheduler is not None or args.cluster is not None)
     with make_executor_from_args(args) as executor:
+        if args.worker_timeout is not None:
+            executor.worker_timeout = args.worker_timeout
         if not args.quiet:
             print(f"{sweep.name}: {len(sweep.points)} points x {len(sweep.seeds)} seeds = {len(sweep.runs())} runs "
                   f"on {executor.describe()}", file=sys.stderr)
@@ -69,7 +74,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"sweep": sweep.name, "sweep_id": report.sweep_id, "runs": report.total,
                           "already_in_store": report.already, "done_now": report.done, "failed_now": report.failed,
-                          "failed": failed, "wall_time_s": report.wall_time_s,
+                          "failed": failed, "finished_elsewhere": report.elsewhere, "wall_time_s": report.wall_time_s,
                           "points": point_summary(rows, sweep.keys)}, indent=2, default=str))
     elif not args.quiet:
         table = Table(title=f"{sweep.name} ({args.store})")
@@ -81,8 +86,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                           str(e["failed"]), f"{_fmt(e['nodes_total_mean'])} ± {_fmt(e['nodes_total_ci95'])}",
                           _fmt(100 * e["coverage_mean"]), _fmt(100 * e["connected_coverage_mean"]), e["stop_reason"])
         _console().print(table)
+        elsewhere = f", {report.elsewhere} by another sweep on the store" if report.elsewhere else ""
         print(f"{report.total} runs: {report.already} already in the store, {report.done} done and {report.failed} "
-              f"failed now, in {report.wall_time_s:.1f} s")
+              f"failed now{elsewhere}, in {report.wall_time_s:.1f} s")
     if failed:
         print(f"amronet: {failed} runs of sweep {sweep.name!r} failed (amronet results {args.store} --failed); "
               "run again with --retry-failed to retry them", file=sys.stderr)
@@ -173,9 +179,14 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("sweep", help="sweep YAML file")
     p.add_argument("--store", required=True, help="result store (SQLite file; created when missing)")
     add_executor_arguments(p)
+    p.add_argument("--worker-timeout", type=float, metavar="SECONDS",
+                   help="with Dask: stop when the scheduler has had no worker for this long (default 300; 0 waits "
+                        "forever); the finished runs stay in the store")
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded as failed")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no table")
+    p.add_argument("--force", action="store_true", help="run a sweep of more than 100 000 points or 1 000 000 runs "
+                                                        "(refused otherwise as absurdly long)")
     p.set_defaults(func=cmd_sweep)
 
     r = subparsers.add_parser("results", help="list the sweeps and runs of a result store, or export them")

@@ -8,11 +8,13 @@ failed, elapsed, ETA) on stderr.
 
 from __future__ import annotations
 
+import contextlib
+import sqlite3
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
@@ -21,10 +23,14 @@ from amronet.scenario import load_scenario
 from amronet.sim.batch import batchable
 from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, WorkerDiedError
 from amronet.sweeps.spec import Sweep
-from amronet.sweeps.store import ResultStore
+from amronet.sweeps.store import ClaimOwner, ResultStore
 from amronet.sweeps.worker import execute_batch
 
-__all__ = ["MAX_BATCH", "SweepReport", "execute_into_store", "pending_runs", "plan_batches", "run_sweep"]
+if TYPE_CHECKING:
+    from rich.progress import TaskID
+
+__all__ = ["CLAIM_POLL_S", "MAX_BATCH", "SweepReport", "execute_into_store", "pending_runs", "plan_batches",
+           "run_sweep"]
 
 StoreJob = tuple[str, int, dict[str, Any]]
 """``(scenario_hash, seed, resolved scenario)``."""
@@ -33,6 +39,8 @@ MAX_BATCH = 16
 """Most runs in one batch job. Per-run cost hardly falls beyond this (30 robots: 34 us per run-step at 10 runs,
 31 us at 25, against 115 us alone), while smaller batches share the work out more evenly and lose less when a
 sweep is interrupted (a batch's runs are recorded when the whole batch ends)."""
+CLAIM_POLL_S = 0.5
+"""How often a sweep looks again at runs that another process on the same store has claimed."""
 
 
 @dataclass
@@ -43,10 +51,12 @@ class SweepReport:
         sweep_id: The sweep's id in the store.
         total: Runs in the sweep.
         already: Runs found in the store (done, or failed and not retried) before starting.
-        done: Runs that finished now.
+        done: Runs that finished now (computed by this invocation).
         failed: Runs that raised now.
         wall_time_s: Seconds this invocation took.
         executor: Where the runs ran.
+        elsewhere: Runs that another process (a sweep on the same store at the same time) recorded while this one
+            ran: they were claimed by it, so not computed here.
     """
 
     sweep_id: int
@@ -56,6 +66,7 @@ class SweepReport:
     failed: int
     wall_time_s: float
     executor: str
+    elsewhere: int = 0
 
 
 def progress_bar(show: bool) -> Progress:
@@ -124,8 +135,14 @@ def execute_into_store(
 ) -> tuple[int, int]:
     """Run ``pending`` on ``executor`` and record each outcome in ``store`` as soon as it arrives.
 
+    Every run is claimed in the store before it is submitted (:meth:`~amronet.sweeps.store.ResultStore.claim`),
+    so that another process running a sweep on the same store at the same time never computes it too: runs
+    claimed by a live other process are waited for (polling the store every :data:`CLAIM_POLL_S` s) and taken over
+    when their claim turns stale (that process died). A run another process records meanwhile counts as finished
+    here, with the outcome ``{"status": ..., "elsewhere": True}`` for ``on_outcome``.
+
     Args:
-        store: The open store (only this process writes to it).
+        store: The open store.
         pending: The runs to run.
         executor: Where they run.
         description: Label of the progress bar.
@@ -135,40 +152,49 @@ def execute_into_store(
         already: ``(done, failed)`` runs of the sweep found in the store, for the bar's counts.
 
     Returns:
-        ``(done, failed)`` among ``pending``.
+        ``(done, failed)`` among ``pending`` (with those another process finished meanwhile).
 
     Raises:
         WorkerDiedError: A local worker process died (killed, out of memory); the runs recorded so far stay in the
             store, so running the same command again resumes.
-        ClusterLostError: The Dask scheduler connection was lost or workers died under a job; likewise.
+        ClusterLostError: The Dask scheduler connection was lost, workers died under a job, or the scheduler had no
+            worker for the executor's ``worker_timeout``; likewise.
     """
     total = len(pending) if total is None else total
-    slots = executor.slots if pending else 0
-    batches = plan_batches(pending, slots)
-    jobs = [{"scenario": pending[ks[0]][2], "seeds": [pending[k][1] for k in ks]} for ks in batches]
-    unfinished = dict(enumerate(len(ks) for ks in batches))  # in submission order: the first `slots` run
+    remaining: dict[tuple[str, int], StoreJob] = {}
+    for run in pending:
+        remaining.setdefault((run[0], int(run[1])), run)
+    versions = store.versions()
+    seen = {key: versions.get(key) for key in remaining}
+    owner = ClaimOwner.new()
+    counts = [0, 0]  # done, failed
+    claimed = False
 
-    def running() -> int:
-        return sum(list(unfinished.values())[:slots])
+    def count(h: str, seed: int, outcome: dict[str, Any]) -> None:
+        counts[outcome["status"] != "done"] += 1
+        bar.update(task, advance=1, done=already[0] + counts[0], failed=already[1] + counts[1])
+        if on_outcome is not None:
+            on_outcome(h, seed, outcome)
 
-    done = failed = 0
-    with progress_bar(show_progress) as bar:
+    keep_alive = store.heartbeat(owner) if remaining else contextlib.nullcontext()
+    with progress_bar(show_progress) as bar, keep_alive:
         task = bar.add_task(description, total=total, completed=total - len(pending), done=already[0],
-                            failed=already[1], running=running())
+                            failed=already[1], running=0)
         try:
-            for b, outcomes in executor.imap_unordered(execute_batch, jobs):
-                del unfinished[b]
-                for k, outcome in zip(batches[b], outcomes, strict=True):
-                    h, seed, scenario = pending[k]
-                    store.record(h, seed, scenario, outcome)
-                    if outcome["status"] == "done":
-                        done += 1
-                    else:
-                        failed += 1
-                    bar.update(task, advance=1, done=already[0] + done, failed=already[1] + failed,
-                               running=running())
-                    if on_outcome is not None:
-                        on_outcome(h, seed, outcome)
+            while remaining:
+                claims = store.claim(list(remaining), owner, seen)
+                claimed = claimed or bool(claims.claimed)
+                for key, status in claims.finished.items():
+                    h, seed, _ = remaining.pop(key)
+                    count(h, seed, {"status": status, "elsewhere": True})
+                if claims.claimed:
+                    bar.update(task, description=description)
+                    _run_claimed(store, [remaining.pop(key) for key in claims.claimed], executor, bar, task, count)
+                elif remaining:
+                    holders = ", ".join(sorted(set(claims.held.values())))
+                    bar.update(task, running=0, description=f"{description} (waiting for {len(claims.held)} runs "
+                                                            f"claimed by {holders})")
+                    time.sleep(CLAIM_POLL_S)
         except WorkerDiedError:
             raise WorkerDiedError(f"a worker process died (killed, or out of memory?); the finished runs are kept in "
                              f"{str(store.path)!r}: run the same command again to resume (with fewer --workers if "
@@ -177,7 +203,32 @@ def execute_into_store(
             raise ClusterLostError(exc.cause,
                 f"lost the Dask cluster ({exc.cause}); the finished runs are in {str(store.path)!r}: run the same "
                 "command again to resume") from None
-    return done, failed
+        finally:
+            if claimed:
+                with contextlib.suppress(sqlite3.Error):
+                    store.release(owner)  # runs claimed but not recorded (interrupted): free for the next sweep now
+    return counts[0], counts[1]
+
+
+def _run_claimed(store: ResultStore, runs: Sequence[StoreJob], executor: Executor, bar: Progress, task: TaskID,
+                 count: Callable[[str, int, dict[str, Any]], None]) -> None:
+    """Run ``runs`` (claimed) on ``executor`` in batches, recording each outcome as it arrives."""
+    slots = executor.slots
+    batches = plan_batches(runs, slots)
+    jobs = [{"scenario": runs[ks[0]][2], "seeds": [runs[k][1] for k in ks]} for ks in batches]
+    unfinished = dict(enumerate(len(ks) for ks in batches))  # in submission order: the first `slots` run
+
+    def running() -> int:
+        return sum(list(unfinished.values())[:slots])
+
+    bar.update(task, running=running())
+    for b, outcomes in executor.imap_unordered(execute_batch, jobs):
+        del unfinished[b]
+        for k, outcome in zip(batches[b], outcomes, strict=True):
+            h, seed, scenario = runs[k]
+            store.record(h, seed, scenario, outcome)
+            bar.update(task, running=running())
+            count(h, seed, outcome)
 
 
 def run_sweep(
@@ -203,6 +254,9 @@ def run_sweep(
         StoreError: The store path is not an amronet store.
         WorkerDiedError: A local worker process died; the finished runs are in the store, run again to resume.
         ClusterLostError: The Dask cluster was lost; likewise.
+
+    Another process may run a sweep on the same store at the same time: each run is computed by one of them (see
+    :func:`execute_into_store`), and each returns once every run of its sweep is in the store.
     """
     start = time.perf_counter()
     own = executor is None
@@ -216,12 +270,19 @@ def run_sweep(
             pending = pending_runs(store, [(p.hash, seed, p.scenario) for p, seed in runs], retry_failed)
             statuses, waiting = store.statuses(), {(h, s) for h, s, _ in pending}
             before = [statuses[(p.hash, s)] for p, s in runs if (p.hash, s) not in waiting]
+            elsewhere = [0, 0]
+
+            def by_others(h: str, seed: int, outcome: dict[str, Any]) -> None:
+                if outcome.get("elsewhere"):
+                    elsewhere[outcome["status"] != "done"] += 1
+
             done, failed = execute_into_store(store, pending, executor, description=sweep.name,
-                                              show_progress=show_progress, total=len(runs),
+                                              show_progress=show_progress, total=len(runs), on_outcome=by_others,
                                               already=(before.count("done"), before.count("failed")))
         where = executor.describe()
     finally:
         if own:
             executor.close()
-    return SweepReport(sweep_id=sweep_id, total=len(runs), already=len(runs) - len(pending), done=done,
-                       failed=failed, wall_time_s=time.perf_counter() - start, executor=where)
+    return SweepReport(sweep_id=sweep_id, total=len(runs), already=len(runs) - len(pending),
+                       done=done - elsewhere[0], failed=failed - elsewhere[1],
+                       wall_time_s=time.perf_counter() - start, executor=where, elsewhere=sum(elsewhere))

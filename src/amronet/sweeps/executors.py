@@ -6,11 +6,13 @@ worker function never raises for a failed run; see :mod:`amronet.sweeps.worker`)
 dies (killed, out of memory) raises :class:`WorkerDiedError`, one line, instead of ``BrokenProcessPool``.
 
 * :class:`LocalExecutor` — ``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes; one worker
-  runs the jobs in this process, one after another.
+  runs the jobs in this process, one after another. Its workers end when this process dies, even by ``kill -9``
+  (:func:`amronet.sweeps.worker.guard_worker`: a parent-death signal on Linux, a watchdog thread everywhere).
 * :class:`DaskExecutor` — a ``distributed.Client`` on an existing scheduler (``tcp://host:8786``; any cluster:
   ``dask scheduler`` + ``dask worker`` by hand, SLURM/PBS through ``dask-jobqueue``, Kubernetes...) or on a
-  ``LocalCluster`` it starts. Dask is optional: ``pip install 'amronet[cluster]'``. Losing the scheduler, or
-  workers dying under a job, raises :class:`ClusterLostError`, one line, instead of Dask's own exceptions.
+  ``LocalCluster`` it starts. Dask is optional: ``pip install 'amronet[cluster]'``. Losing the scheduler,
+  workers dying under a job, or no worker at all for ``worker_timeout`` seconds (the scheduler waits for workers
+  forever) raises :class:`ClusterLostError`, one line, instead of Dask's own exceptions or an endless wait.
 
 :func:`make_executor` picks one from command-line style options.
 """
@@ -22,17 +24,22 @@ import contextlib
 import importlib
 import logging
 import os
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from amronet.errors import AmronetError
+from amronet.sweeps.worker import guard_worker
 
-__all__ = ["ClusterLostError", "DaskExecutor", "Executor", "LocalExecutor", "WorkerDiedError", "default_workers",
-           "make_executor"]
+__all__ = ["DEFAULT_WORKER_TIMEOUT_S", "ClusterLostError", "DaskExecutor", "Executor", "LocalExecutor",
+           "WorkerDiedError", "check_worker_timeout", "default_workers", "make_executor"]
 
 CLUSTER_HINT = "pip install 'amronet[cluster]'"
+DEFAULT_WORKER_TIMEOUT_S = 300.0
+"""How long a sweep on Dask waits while the scheduler has no worker at all (``--worker-timeout``) before it stops."""
 
 
 class WorkerDiedError(AmronetError):
@@ -87,14 +94,33 @@ _DASK_LOGGERS = ("distributed.client", "distributed.core", "distributed.utils", 
 class _QuietWhenLost(logging.Filter):
     """Drop Dask's logging about a lost scheduler: :class:`ClusterLostError` says it in one line instead.
 
-    Drops the client's "Failed to reconnect to scheduler" line; once ``lost``, every record (the tracebacks of the
-    client's cancelled reconnection as it closes).
+    Drops the client's "Failed to reconnect to scheduler" and "Couldn't gather ... rescheduling" lines; once
+    ``lost``, every record (the tracebacks of the client's cancelled reconnection as it closes).
     """
 
     lost = False
 
     def filter(self, record: logging.LogRecord) -> bool:
-        return not self.lost and not str(record.msg).startswith("Failed to reconnect to scheduler")
+        # "Couldn't gather N keys, rescheduling": a finished job's worker died; Dask runs the job again (and the
+        # sweep gives up after --worker-timeout if no worker is left)
+        return not self.lost and not str(record.msg).startswith(("Failed to reconnect to scheduler",
+                                                                 "Couldn't gather"))
+
+
+def check_worker_timeout(worker_timeout: float | None, dask: bool) -> None:
+    """Check ``--worker-timeout``: at least 0, and only with Dask (``dask``: ``--scheduler`` or ``--cluster``).
+
+    Raises:
+        AmronetError: Otherwise.
+    """
+    if worker_timeout is None:
+        return
+    if not dask:
+        raise AmronetError("--worker-timeout: only with --scheduler ADDRESS or --cluster local (the local pool's "
+                           "workers cannot go missing)")
+    if not worker_timeout >= 0 or worker_timeout == float("inf"):
+        raise AmronetError(f"--worker-timeout: must be a number of seconds >= 0 (0 waits forever), got "
+                           f"{worker_timeout}")
 
 
 def default_workers() -> int:
@@ -158,7 +184,10 @@ class LocalExecutor(Executor):
                 yield k, fn(job)
             return
         if self._pool is None:
-            self._pool = ProcessPoolExecutor(max_workers=self.workers)
+            # the parent-death signal follows the thread that forks the workers: only from the main thread
+            death_signal = threading.current_thread() is threading.main_thread()
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=guard_worker,
+                                             initargs=(os.getpid(), death_signal))
         pending: dict[Future[Any], int] = {}
         try:
             for k, job in enumerate(jobs):
@@ -196,6 +225,8 @@ class DaskExecutor(Executor):
         scheduler: Address of a running scheduler (``tcp://host:8786``); ``None`` starts a ``LocalCluster``.
         workers: With a ``LocalCluster``: worker processes (default: the cores available), one thread each.
         timeout: Seconds to wait for the scheduler.
+        worker_timeout: Seconds to wait while the scheduler has no worker at all (all lost, or none started yet)
+            before :meth:`imap_unordered` gives up with :class:`ClusterLostError`; ``0`` or ``None`` waits forever.
 
     Raises:
         AmronetError: Dask is not installed, or the scheduler cannot be reached.
@@ -203,9 +234,12 @@ class DaskExecutor(Executor):
 
     name = "dask"
 
-    def __init__(self, scheduler: str | None = None, workers: int | None = None, timeout: float = 20.0) -> None:
+    def __init__(self, scheduler: str | None = None, workers: int | None = None, timeout: float = 20.0,
+                 worker_timeout: float | None = DEFAULT_WORKER_TIMEOUT_S) -> None:
+        check_worker_timeout(worker_timeout, dask=True)
         distributed = _distributed()
         self.scheduler = scheduler
+        self.worker_timeout = worker_timeout
         self.cluster = None
         self._quiet = _QuietWhenLost()
         for name in _DASK_LOGGERS:
@@ -243,20 +277,31 @@ class DaskExecutor(Executor):
     def imap_unordered(self, fn: Callable[[Any], Any], jobs: Sequence[Any]) -> Iterator[tuple[int, Any]]:
         """Run ``fn(job)`` on the cluster for every job; yield ``(index, result)`` as they finish.
 
+        While nothing arrives (no job finishes, or a finished job's result cannot be fetched because its worker
+        died and Dask computes it again), the scheduler's workers are counted about every second: with none for
+        ``worker_timeout`` seconds (all of them lost; the scheduler would wait for new ones forever) this gives up.
+
         Raises:
-            ClusterLostError: The scheduler connection was lost, or workers died under a job (``KilledWorker``).
+            ClusterLostError: The scheduler connection was lost, workers died under a job (``KilledWorker``), or the
+                scheduler had no worker for ``worker_timeout`` seconds.
         """
         distributed = _distributed()
         lost = _lost_cluster_errors()
         futures: list[Any] = []
+        watch = _WorkerWatch(self, self.worker_timeout)
         try:
             futures = self.client.map(fn, list(jobs), pure=False)
             index = {fut.key: k for k, fut in enumerate(futures)}
-            for fut in distributed.as_completed(futures):
+            for fut in watch.as_completed(distributed.as_completed(futures)):
                 k = index[fut.key]
-                result = fut.result()
+                result = watch.result(fut)
                 fut.release()
                 yield k, result
+        except ClusterLostError:
+            self._quiet.lost = True  # Dask's own complaints about the abandoned jobs, as the client closes
+            with contextlib.suppress(*lost):
+                self.client.cancel([f for f in futures if not f.done()])
+            raise
         except lost as exc:
             self._quiet.lost = True
             raise ClusterLostError(_cause(exc)) from None
@@ -264,6 +309,13 @@ class DaskExecutor(Executor):
             if not self._quiet.lost:
                 with contextlib.suppress(*lost):
                     self.client.cancel([f for f in futures if not f.done()])
+
+    def worker_count(self) -> int | None:
+        """Workers the scheduler knows now; ``None`` when it does not answer within 10 s."""
+        try:
+            return len(self.client.nthreads(callback_timeout=10))
+        except TimeoutError:
+            return None
 
     def _unquiet(self) -> None:
         for name in _DASK_LOGGERS:
@@ -286,13 +338,101 @@ class DaskExecutor(Executor):
             self._unquiet()
 
 
-def make_executor(workers: int | None = None, scheduler: str | None = None, cluster: str | None = None) -> Executor:
+class _WorkerWatch:
+    """Waits on Dask futures, but not forever for workers that are gone (see :meth:`DaskExecutor.imap_unordered`).
+
+    Args:
+        executor: Whose scheduler to ask for its workers.
+        timeout: Seconds without any worker before giving up; ``0`` or ``None``: never.
+    """
+
+    POLL_S = 1.0
+
+    def __init__(self, executor: DaskExecutor, timeout: float | None) -> None:
+        self.executor = executor
+        self.timeout = timeout
+        self.workerless_since: float | None = None
+        self.next_check = time.monotonic() + self.POLL_S
+
+    def progressed(self) -> None:
+        """Something arrived: the cluster works."""
+        self.workerless_since, self.next_check = None, time.monotonic() + self.POLL_S
+
+    def check(self) -> None:
+        """Count the workers when due; raise when there has been none for ``timeout`` seconds.
+
+        Raises:
+            ClusterLostError: No worker for ``timeout`` seconds.
+        """
+        now = time.monotonic()
+        if not self.timeout or now < self.next_check:
+            return
+        self.next_check = now + self.POLL_S
+        count = self.executor.worker_count()
+        if count is None:
+            return  # the scheduler was slow to answer: nothing learnt
+        if count > 0:
+            self.workerless_since = None
+        elif self.workerless_since is None:
+            self.workerless_since = now
+        elif now - self.workerless_since >= self.timeout:
+            raise ClusterLostError(f"no worker for {self.timeout:g} s; the scheduler is up but all its workers are "
+                                   "gone")
+
+    def as_completed(self, finished: Any) -> Iterator[Any]:
+        """The futures of ``finished`` (a ``distributed.as_completed``) as they complete."""
+        if not self.timeout:
+            yield from finished
+            return
+        condition = getattr(finished, "thread_condition", None)
+        while True:
+            batch = finished.next_batch(block=False)
+            if batch:
+                self.progressed()
+                yield from batch
+                continue
+            if finished.is_empty():
+                return
+            self.check()
+            if condition is not None:
+                with condition:
+                    condition.wait(timeout=0.1)
+            else:
+                time.sleep(0.05)
+
+    def result(self, future: Any) -> Any:
+        """``future.result()``, but not forever for workers that are gone.
+
+        A finished future whose worker died before its result was fetched is computed again by Dask ("Couldn't
+        gather ... rescheduling"), which needs a worker.
+        """
+        if not self.timeout:
+            return future.result()
+        while True:
+            try:
+                out = future.result(timeout=self.POLL_S)
+            except TimeoutError:
+                if future.status == "cancelled":
+                    raise
+                self.check()  # still on its way (pending again after its worker died): unless no worker is left
+                continue
+            self.progressed()
+            return out
+
+
+def make_executor(workers: int | None = None, scheduler: str | None = None, cluster: str | None = None,
+                  worker_timeout: float | None = None) -> Executor:
     """The executor the options ask for: ``--scheduler ADDRESS``, ``--cluster local`` or a local pool.
+
+    ``worker_timeout`` (``--worker-timeout``) goes with Dask: how long to wait while the scheduler has no worker
+    (default :data:`DEFAULT_WORKER_TIMEOUT_S`; 0 waits forever).
 
     Raises:
         AmronetError: Both ``scheduler`` and ``cluster``, ``workers`` with ``scheduler``, an unknown ``cluster``,
-            Dask missing, or an unreachable scheduler.
+            ``worker_timeout`` without Dask or below 0, Dask missing, or an unreachable scheduler.
     """
+    check_worker_timeout(worker_timeout, dask=scheduler is not None or cluster is not None)
+    dask_options = {} if worker_timeout is None else {"worker_timeout": worker_timeout}
     if scheduler is not None and cluster is not None:
         raise AmronetError("--scheduler: give either --scheduler ADDRESS or --cluster local, not both")
     if scheduler is not None and workers is not None:
@@ -302,7 +442,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None, clus
         if cluster != "local":
             raise AmronetError(f"--cluster: only 'local' (a Dask LocalCluster) is built in, got {cluster!r}; "
                                "for another cluster start its scheduler and pass --scheduler ADDRESS")
-        return DaskExecutor(workers=workers)
+        return DaskExecutor(workers=workers, **dask_options)
     if scheduler is not None:
-        return DaskExecutor(scheduler=scheduler)
+        return DaskExecutor(scheduler=scheduler, **dask_options)
     return LocalExecutor(workers)

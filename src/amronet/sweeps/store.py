@@ -12,10 +12,19 @@ Tables:
 * ``sweeps`` — ``id``, ``name``, ``spec`` (canonical JSON), ``spec_hash`` (unique), ``created``.
 * ``sweep_runs`` — which runs belong to which sweep, at which ``point``, with the point's ``labels`` (JSON: the
   swept keys' values, or a figure's labels). A run belongs to every sweep that contains it.
+* ``claims`` — the runs some process is computing right now: key, the ``owner`` (a random token per sweep
+  invocation), its ``host`` and ``pid``, ``claimed_at`` and a ``heartbeat`` (Unix time, refreshed every
+  :data:`CLAIM_HEARTBEAT_S` s). A claim is taken with ``BEGIN IMMEDIATE`` (:meth:`ResultStore.claim`) and
+  dropped in the transaction that records its run, or when its owner stops. So two sweeps on one store never
+  compute a run twice: the second leaves a run claimed by a live owner to it, and takes over a *stale* claim —
+  its owner's process is gone (same host) or its heartbeat is older than :data:`CLAIM_LEASE_S` s (any host).
+  Stores written before claims existed gain the (empty) table when a sweep opens them.
 
 Every finished run is written in one transaction with ``synchronous = FULL``: after a crash (``SIGKILL``, power
 loss) the file holds every run whose transaction committed and nothing of the others, so running the sweep
-again completes exactly the missing ones. Only one process (the parent of the workers) writes.
+again completes exactly the missing ones. Only the parents of the workers write (one per sweep process).
+Creating the store tolerates other processes creating it at the same instant: the schema is created with
+``IF NOT EXISTS`` in one ``BEGIN IMMEDIATE`` transaction, behind SQLite's busy timeout.
 
 A path that exists but is not an amronet store (another SQLite database, a text file) is refused before it is
 opened, so it is left byte for byte as it was.
@@ -24,19 +33,26 @@ opened, so it is left byte for byte as it was.
 from __future__ import annotations
 
 import json
+import os
 import re
+import socket
 import sqlite3
+import threading
+import time
+import uuid
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 from amronet.errors import AmronetError
 from amronet.sweeps.identity import canonical_json
-from amronet.sweeps.worker import SUMMARY_EXTRAS
+from amronet.sweeps.worker import SUMMARY_EXTRAS, pid_alive
 
-__all__ = ["APPLICATION_ID", "METRIC_COLUMNS", "ResultStore", "StoreError"]
+__all__ = ["APPLICATION_ID", "CLAIM_HEARTBEAT_S", "CLAIM_LEASE_S", "METRIC_COLUMNS", "ClaimOwner", "Claims",
+           "ResultStore", "StoreError"]
 
 APPLICATION_ID = 0x414D524E
 """SQLite ``application_id`` of an amronet result store ("AMRN")."""
@@ -46,19 +62,36 @@ METRIC_COLUMNS = ("nodes_total", "routers_deployed", "coverage", "connected_cove
 TIMESERIES_COLUMNS = ("t", "coverage", "connected_coverage", "routers_deployed", "components", "agents_connected")
 WALL_TIME_COLUMNS = ("wall_time_s", "finished_at", "created")
 """Columns that differ between two otherwise identical sweeps."""
+CLAIM_LEASE_S = 60.0
+"""A claim whose heartbeat is older than this is stale: another process may take its run over."""
+CLAIM_HEARTBEAT_S = 5.0
+"""How often a sweep refreshes the heartbeat of its claims."""
 
 _MAGIC = b"SQLite format 3\x00"
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
+_CLAIMS = """
+CREATE TABLE IF NOT EXISTS claims (
+    scenario_hash TEXT NOT NULL,
+    seed INTEGER NOT NULL,
+    owner TEXT NOT NULL,
+    host TEXT NOT NULL,
+    pid INTEGER NOT NULL,
+    claimed_at TEXT NOT NULL,
+    heartbeat REAL NOT NULL,
+    PRIMARY KEY (scenario_hash, seed)
+) WITHOUT ROWID;
+"""
+
 _SCHEMA = f"""
-CREATE TABLE sweeps (
+CREATE TABLE IF NOT EXISTS sweeps (
     id INTEGER PRIMARY KEY,
     name TEXT NOT NULL,
     spec TEXT NOT NULL,
     spec_hash TEXT NOT NULL UNIQUE,
     created TEXT NOT NULL
 );
-CREATE TABLE runs (
+CREATE TABLE IF NOT EXISTS runs (
     scenario_hash TEXT NOT NULL,
     seed INTEGER NOT NULL,
     scenario TEXT NOT NULL,
@@ -78,7 +111,7 @@ CREATE TABLE runs (
     finished_at TEXT NOT NULL,
     PRIMARY KEY (scenario_hash, seed)
 ) WITHOUT ROWID;
-CREATE TABLE sweep_runs (
+CREATE TABLE IF NOT EXISTS sweep_runs (
     sweep_id INTEGER NOT NULL REFERENCES sweeps (id),
     scenario_hash TEXT NOT NULL,
     seed INTEGER NOT NULL,
@@ -86,7 +119,7 @@ CREATE TABLE sweep_runs (
     labels TEXT NOT NULL,
     PRIMARY KEY (sweep_id, scenario_hash, seed)
 ) WITHOUT ROWID;
-CREATE TABLE timeseries (
+CREATE TABLE IF NOT EXISTS timeseries (
     scenario_hash TEXT NOT NULL,
     seed INTEGER NOT NULL,
     k INTEGER NOT NULL,
@@ -98,6 +131,7 @@ CREATE TABLE timeseries (
     agents_connected REAL,
     PRIMARY KEY (scenario_hash, seed, k)
 ) WITHOUT ROWID;
+{_CLAIMS}
 PRAGMA application_id = {APPLICATION_ID};
 PRAGMA user_version = {SCHEMA_VERSION};
 """
@@ -109,6 +143,41 @@ class StoreError(AmronetError):
 
 def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
+
+
+RunKey = tuple[str, int]
+"""``(scenario_hash, seed)``."""
+RunVersion = tuple[str, str, float | None]
+"""A stored run's ``(status, finished_at, wall_time_s)``: tells one recording of a run from the next."""
+
+
+@dataclass(frozen=True)
+class ClaimOwner:
+    """Who holds claims: one sweep invocation (a random token), on a host, in a process."""
+
+    token: str
+    host: str
+    pid: int
+
+    @classmethod
+    def new(cls) -> ClaimOwner:
+        """A fresh owner for this process."""
+        return cls(uuid.uuid4().hex, socket.gethostname(), os.getpid())
+
+
+@dataclass
+class Claims:
+    """What :meth:`ResultStore.claim` found for the runs asked about.
+
+    Attributes:
+        claimed: Runs claimed now by the caller: compute them.
+        finished: Runs recorded by another process since the caller looked (``status`` by key): do not compute.
+        held: Runs claimed by another live owner (``"pid P on HOST"`` by key): wait for them.
+    """
+
+    claimed: list[RunKey] = field(default_factory=list)
+    finished: dict[RunKey, str] = field(default_factory=dict)
+    held: dict[RunKey, str] = field(default_factory=dict)
 
 
 def check_store_path(path: Path, must_exist: bool = False, option: str = "--store") -> bool:
@@ -173,21 +242,43 @@ class ResultStore:
         try:
             self.conn.execute("PRAGMA busy_timeout = 60000")
             if not exists:
-                # created in rollback-journal mode, so the header with the application id reaches the main file
+                # created in rollback-journal mode, so the header with the application id reaches the main file;
+                # IF NOT EXISTS: another process may have created it since we looked (two sweeps started at once)
                 self.conn.executescript("BEGIN IMMEDIATE;" + _SCHEMA + "COMMIT;")
             else:
                 version = self.conn.execute("PRAGMA user_version").fetchone()[0]
                 if version > SCHEMA_VERSION:
                     raise StoreError(f"{option}: {str(self.path)!r} was written by a newer amronet "
                                      f"(schema {version}); upgrade amronet")
-            self.conn.execute("PRAGMA journal_mode = WAL")
+            self._use_wal()
             self.conn.execute("PRAGMA synchronous = FULL")
             self._ts_columns = [r[1] for r in self.conn.execute("PRAGMA table_info(timeseries)")]
+            self._claims_table = self._has_claims()
+            if not must_exist and not self._claims_table:
+                self.conn.execute(_CLAIMS)  # a store from before claims: add the table (nothing else changes)
+                self._claims_table = True
         except sqlite3.DatabaseError as exc:
             self.conn.close()
             raise StoreError(f"{option}: {str(self.path)!r} is damaged or not a result store: {exc}") from None
 
     # -- plumbing --------------------------------------------------------------------------------------------
+    def _use_wal(self, timeout: float = 60.0) -> None:
+        """Switch the file to WAL mode (once; a no-op after).
+
+        SQLite may refuse the switch with "database is locked" without waiting while other processes open the same
+        new store, so this retries for ``timeout`` seconds.
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                if self.conn.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
+                    self.conn.execute("PRAGMA journal_mode = WAL")
+                return
+            except sqlite3.OperationalError as exc:
+                if ("locked" not in str(exc) and "busy" not in str(exc)) or time.monotonic() > deadline:
+                    raise
+                time.sleep(0.01)
+
     def close(self) -> None:
         """Close the store (the WAL is checkpointed into the main file)."""
         self.conn.close()
@@ -260,6 +351,97 @@ class ResultStore:
             raise StoreError(f"--sweep: no sweep {name_or_id!r} in {str(self.path)!r}; sweeps: {names}")
         return int(row[0])
 
+    # -- claims ----------------------------------------------------------------------------------------------
+    def _has_claims(self) -> bool:
+        return self.conn.execute("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'claims'").fetchone() \
+            is not None
+
+    def versions(self) -> dict[RunKey, RunVersion]:
+        """``(scenario_hash, seed) -> (status, finished_at, wall_time_s)`` of every stored run."""
+        return {(h, s): (st, f, w) for h, s, st, f, w in self.conn.execute(
+            "SELECT scenario_hash, seed, status, finished_at, wall_time_s FROM runs")}
+
+    def claim(self, keys: Iterable[RunKey], owner: ClaimOwner, seen: dict[RunKey, RunVersion | None],
+              lease: float = CLAIM_LEASE_S) -> Claims:
+        """Claim the runs ``keys`` for ``owner``, in one ``BEGIN IMMEDIATE`` transaction.
+
+        A run is claimed when it is still as the caller saw it (``seen``: missing, or the failed recording it
+        means to retry) and nobody else holds a live claim on it (none, the caller's own, or a stale one: its
+        owner's process is gone on this host, or its heartbeat is older than ``lease`` seconds).
+
+        Returns:
+            :class:`Claims`: claimed now, finished by another process meanwhile, held by another live owner.
+        """
+        out = Claims()
+        now = time.time()
+        alive: dict[tuple[str, int], bool] = {}
+
+        def stale(host: str, pid: int, heartbeat: float) -> bool:
+            if now - heartbeat > lease:
+                return True
+            if host != owner.host:
+                return False
+            if (host, pid) not in alive:
+                alive[(host, pid)] = pid_alive(pid)
+            return not alive[(host, pid)]
+
+        with self._transaction() as c:
+            if not self._claims_table:
+                c.execute(_CLAIMS)
+                self._claims_table = True
+            versions = self.versions()
+            holders = {(h, s): (o, host, pid, hb) for h, s, o, host, pid, hb in c.execute(
+                "SELECT scenario_hash, seed, owner, host, pid, heartbeat FROM claims")}
+            rows = []
+            for key in keys:
+                key = (key[0], int(key[1]))
+                version = versions.get(key)
+                if version is not None and (version[0] == "done" or version != seen.get(key)):
+                    out.finished[key] = version[0]
+                    continue
+                holder = holders.get(key)
+                if holder is not None and holder[0] != owner.token and not stale(*holder[1:]):
+                    out.held[key] = f"pid {holder[2]} on {holder[1]}"
+                    continue
+                out.claimed.append(key)
+                rows.append((*key, owner.token, owner.host, owner.pid, _now(), now))
+            c.executemany("INSERT OR REPLACE INTO claims VALUES (?, ?, ?, ?, ?, ?, ?)", rows)
+        return out
+
+    def release(self, owner: ClaimOwner) -> None:
+        """Drop every claim of ``owner`` (its runs not recorded yet become free for others)."""
+        if self._claims_table:
+            with self._transaction() as c:
+                c.execute("DELETE FROM claims WHERE owner = ?", (owner.token,))
+
+    @contextmanager
+    def heartbeat(self, owner: ClaimOwner, interval: float = CLAIM_HEARTBEAT_S) -> Iterator[None]:
+        """Refresh the heartbeat of ``owner``'s claims every ``interval`` seconds while the block runs.
+
+        A thread with its own connection does it, so that other processes see the claims live however long a run
+        takes.
+        """
+        stop = threading.Event()
+
+        def beat() -> None:
+            conn = sqlite3.connect(self.path, isolation_level=None, timeout=interval)
+            try:
+                while not stop.wait(interval):
+                    try:
+                        conn.execute("UPDATE claims SET heartbeat = ? WHERE owner = ?", (time.time(), owner.token))
+                    except sqlite3.Error:
+                        continue  # busy for a whole interval: the next beat
+            finally:
+                conn.close()
+
+        thread = threading.Thread(target=beat, name="amronet-claims-heartbeat", daemon=True)
+        thread.start()
+        try:
+            yield
+        finally:
+            stop.set()
+            thread.join(timeout=2 * interval)
+
     # -- runs ------------------------------------------------------------------------------------------------
     def statuses(self) -> dict[tuple[str, int], str]:
         """``(scenario_hash, seed) -> status`` of every stored run."""
@@ -286,6 +468,8 @@ class ResultStore:
                     self._ts_columns.append(name)
             c.execute("DELETE FROM timeseries WHERE scenario_hash = ? AND seed = ?", (scenario_hash, int(seed)))
             c.execute(f"INSERT OR REPLACE INTO runs VALUES ({', '.join('?' * len(row))})", row)
+            if self._claims_table:
+                c.execute("DELETE FROM claims WHERE scenario_hash = ? AND seed = ?", (scenario_hash, int(seed)))
             if ts:
                 names = list(ts)
                 n = len(ts[names[0]])

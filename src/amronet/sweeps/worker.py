@@ -2,11 +2,21 @@
 
 Workers (local processes or Dask workers) never touch the result store; the parent process records what they
 return, one transaction per run.
+
+A local pool's worker also never outlives the sweep that started it (:func:`guard_worker`, the pool's
+initializer): on Linux the kernel kills it when its parent dies (``prctl(PR_SET_PDEATHSIG, SIGKILL)``), and on
+every system a watchdog thread in the worker exits it within a second or so of its parent going away (the
+parent's pid gone, or the worker re-parented). So ``kill -9`` of ``amronet sweep`` leaves no idle workers.
 """
 
 from __future__ import annotations
 
+import ctypes
+import os
+import signal
 import socket
+import sys
+import threading
 import time
 from typing import Any
 
@@ -16,10 +26,85 @@ from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.sim.batch import run_seeds
 
-__all__ = ["SUMMARY_EXTRAS", "execute_batch", "execute_job", "one_line_error"]
+__all__ = ["SUMMARY_EXTRAS", "execute_batch", "execute_job", "guard_worker", "one_line_error", "pid_alive"]
 
 SUMMARY_EXTRAS = ("wall_time_s", "amronet_version", "scenario")
 """Summary fields the store keeps in their own columns rather than in the summary JSON (in this order, last)."""
+
+
+PR_SET_PDEATHSIG = 1
+"""``prctl`` option (``<linux/prctl.h>``): the signal the kernel sends this process when its parent dies."""
+WATCHDOG_INTERVAL_S = 0.5
+"""How often a worker's watchdog looks at its parent."""
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists on this machine and is not a zombie (dead, waiting to be reaped)."""
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass  # exists, under another user
+    except OSError:
+        return False
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            state = fh.read().rsplit(b")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True  # no /proc (macOS...): os.kill said it exists
+    return state not in (b"Z", b"X")
+
+
+def _set_parent_death_signal() -> bool:
+    """Ask Linux to SIGKILL this process when its parent dies; ``False`` where that is not available."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        return libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def guard_worker(parent_pid: int, death_signal: bool = True) -> str:
+    """Make this worker process exit when the process that started its pool dies (the pool's initializer).
+
+    Two mechanisms, so that ``kill -9`` of the sweep leaves no worker behind:
+
+    * Linux, ``death_signal``: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``, then the parent is checked once more (it may
+      have died between the fork and the ``prctl``). The kernel sends the signal when the *thread* that forked
+      the worker ends, so the pool asks for it only when its main thread starts the workers.
+    * Everywhere: a daemon thread that checks every :data:`WATCHDOG_INTERVAL_S` seconds whether the worker was
+      re-parented (``os.getppid()`` changed) or ``parent_pid`` is gone, and then ends the process with
+      ``os._exit``. It covers other systems, pools started by another thread, and the ``forkserver`` start
+      method (whose workers are children of the fork server, which ends with the parent).
+
+    Args:
+        parent_pid: The pid of the process that owns the pool.
+        death_signal: Use the parent-death signal where available.
+
+    Returns:
+        ``"pdeathsig+watchdog"`` or ``"watchdog"``: what guards this worker.
+    """
+    ppid = os.getppid()
+
+    def parent_gone() -> bool:
+        return os.getppid() != ppid or (parent_pid != ppid and not pid_alive(parent_pid))
+
+    used = "pdeathsig+watchdog" if death_signal and _set_parent_death_signal() else "watchdog"
+    if parent_gone():  # the parent died before the signal was armed
+        os._exit(1)
+
+    def watch() -> None:
+        while not parent_gone():
+            time.sleep(WATCHDOG_INTERVAL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="amronet-parent-watchdog", daemon=True).start()
+    return used
 
 
 def one_line_error(exc: BaseException) -> str:
