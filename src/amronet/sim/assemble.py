@@ -182,9 +182,8 @@ def _start_lattice(
     cell is reachable free space with a clearance of at least ``radius``.
 
     Returns:
-        ``(points (M, 2), clear (M,))``: ``clear`` marks the points whose cell's clearance is at least ``radius``
-        plus their distance from the cell's centre (clearance is measured from the centre), so that the body
-        keeps clear of the walls wherever in its cell it stands.
+        ``(points (M, 2), clear (M,))``: ``clear`` marks the points whose body keeps clear of every wall's square
+        (:func:`~amronet.world.space.wall_distance` at least ``radius``).
     """
     omap = world.omap
     res = float(omap.resolution)
@@ -210,8 +209,7 @@ def _start_lattice(
     room = clearance(omap)[rows, cols]
     ok = world.reachable[rows, cols] & (room >= radius)
     xy, rows, cols, room = xy[ok], rows[ok], cols[ok], room[ok]
-    off = np.linalg.norm(xy - omap.cell_centres(rows, cols), axis=1)
-    return xy, room >= radius + off
+    return xy, wall_distance(omap, xy, cap=2.0 * radius) >= radius
 
 
 def _pack_start(
@@ -224,20 +222,15 @@ def _pack_start(
     a fixed order, drop every point its body would overlap, repeat. The orders, tried in turn until one places
     ``count``: nearest the base first; sweeps from each of the region's four corners, row by row and column by
     column; farthest from the base first; then greedy passes in shuffled orders from a fixed seed (the same for
-    every run). Points whose body keeps clear of the walls wherever in its cell it stands are tried first; then,
-    if they cannot hold ``count``, every point a random draw would accept. Returns the fullest placement (fewer
-    than ``count`` if none fits).
+    every run). Only points whose body keeps exactly clear of the walls are used (as a random draw requires).
+    Returns the fullest placement (fewer than ``count`` if none fits).
     """
     cand, clear = _start_lattice(world, centre, region, radius, max_dist)
     near = np.linalg.norm(taken - centre, axis=1) <= 0.5 * float(np.hypot(*region)) + radius + taken_r
     for q, q_r in zip(taken[near], taken_r[near], strict=True):
         free = np.sum((cand - q) ** 2, axis=1) >= (radius + q_r) ** 2
         cand, clear = cand[free], clear[free]
-    best = _greedy_pack(cand[clear], centre, count, radius)
-    if len(best) < count and not clear.all():
-        loose = _greedy_pack(cand, centre, count, radius)
-        best = loose if len(loose) > len(best) else best
-    return best
+    return _greedy_pack(cand[clear], centre, count, radius)
 
 
 def _greedy_pack(cand: np.ndarray, centre: np.ndarray, count: int, radius: float) -> np.ndarray:
@@ -296,6 +289,7 @@ def _scatter(
         # of every clashing pair drop the later robot (a new candidate), so earlier placements stay
         if len(clash):
             bad[np.maximum(clash[:, 0], clash[:, 1])] = True
+        bad[first_new:] |= wall_distance(omap, cand, cap=2.0 * radius) < radius  # bodies exactly clear of walls
         out = np.vstack([out, cand[~bad[first_new:]]])
     if len(out) < count:
         raise ScenarioError("routers.count", f"could scatter only {len(out)} of {count} routers without overlap; "
