@@ -67,11 +67,47 @@ def _drop_default_radio_fields(summary: dict) -> None:
             del radio[key]
 
 
+_KEPT_AGENTS_FIELDS = ("per_base", "robot", "routers_carried")
+"""The scenario's ``agents`` fields that were there when the fingerprints were taken: always in the digest."""
+
+
+def _drop_default_agents_fields(summary: dict) -> None:
+    """Leave out the scenario's agents fields that are at their defaults, but for the original three.
+
+    Fields added to ``agents`` since the fingerprints were taken (drop rules and the like) are in every scenario;
+    left at their defaults they change nothing the runs compute, and leaving them out of the digest keeps it what
+    it was before they existed. Written against :class:`amronet.scenario.AgentsSpec`'s defaults, so a field added
+    later is covered too.
+    """
+    from amronet.scenario import AgentsSpec
+
+    agents = summary.get("scenario", {}).get("agents", {})
+    defaults = AgentsSpec().model_dump(mode="json")
+    for key in list(agents):
+        if key not in _KEPT_AGENTS_FIELDS and key in defaults and agents[key] == defaults[key]:
+            del agents[key]
+
+
+def _drop_mission(summary: dict) -> None:
+    """Leave out the summary's ``mission`` section.
+
+    Issue #19 added it (the agents' outages, relays used, distance travelled) after the fingerprints were taken;
+    it is derived from the same run and changes none of the keys that were there, whose digest stays what it was.
+    """
+    summary.pop("mission", None)
+
+
 def result_fingerprint(result) -> dict[str, str]:
-    """Digests of a run's ``network.json``, ``timeseries.csv`` and ``summary.json`` (less wall-clock fields)."""
+    """Digests of a run's ``network.json``, ``timeseries.csv`` and ``summary.json`` (less wall-clock fields).
+
+    The summary's digest leaves out what was added later without changing results: radio and agents fields at
+    their defaults and the ``mission`` section.
+    """
     files = result.files(snapshot=False)
     summary = {k: v for k, v in json.loads(files["summary.json"]).items() if k not in _WALL_FIELDS}
     _drop_default_radio_fields(summary)
+    _drop_default_agents_fields(summary)
+    _drop_mission(summary)
     return {"network.json": _sha(files["network.json"]), "timeseries.csv": _sha(files["timeseries.csv"]),
             "summary": _sha(json.dumps(summary, sort_keys=True).encode()),
             "coverage": f"{summary['coverage']:.6f}", "nodes_total": str(summary["nodes_total"])}

@@ -176,7 +176,15 @@ class AgentsSpec(_Strict):
     """Agents per base station; they start next to its reference node with its status."""
     robot: RobotRef = "pioneer"
     routers_carried: Annotated[StrictInt, Field(ge=0)] | None = None
-    """Routers each agent carries; ``null`` for unlimited."""
+    """Routers each agent carries; ``null`` for unlimited (DARPA SubT robots carried 6 to 12)."""
+    when_empty: Literal["tether", "continue"] = "tether"
+    """An agent with no router left: ``tether`` turns back when it is about to lose its last reference (it never
+    loses its connection); ``continue`` goes on exploring and is cut off (the outage is counted)."""
+    drop_settle_s: NonNegativeFloat = 0.0
+    """Seconds after it is put down before a router relays and serves as a reference (DARPA SubT: 3 s)."""
+    reverse_drop: PositiveFloat | None = None
+    """Seconds out of contact after which an agent backs up along its own path until contact returns and drops a
+    router there (MARBLE's reverse drop); ``null``: off."""
 
 
 class SimSpec(_Strict):

@@ -32,17 +32,20 @@ Choices the paper leaves open, and ours:
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 from numba import njit
-from pydantic import BaseModel, ConfigDict, Field, StrictInt
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
+from amronet.algorithms.drops import DROP_RULES, AgentView, DropContext, validate_drop_params
+from amronet.algorithms.drops.trail import Trails
 from amronet.algorithms.explorers import EXPLORERS
 from amronet.algorithms.goto import GoalSteering
-from amronet.algorithms.references import check_loss_band, track_row
+from amronet.algorithms.references import best_reference_margin, check_loss_band, track_row
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
+from amronet.engine.network import agents_connected
 from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
 
@@ -62,6 +65,9 @@ class AgentAssistedParams(BaseModel):
         avoid_range: Sonar readings nearer than this (metres) make an agent turn away.
         give_up_steps: Consecutive blocked steps after which a triangle router stops short of its goal.
         release_gap: Gap in metres between an agent's body and the router it releases.
+        drop_rule: When an agent puts a router down (:data:`amronet.algorithms.drops.DROP_RULES`); the paper's
+            ``last-reference`` by default.
+        drop: The drop rule's own parameters (e.g. ``{drop_margin_db: 3}`` for ``link-quality``).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -73,6 +79,17 @@ class AgentAssistedParams(BaseModel):
     avoid_range: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 0.6
     give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
     release_gap: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.02
+    drop_rule: str = "last-reference"
+    drop: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _check_drop_rule(self) -> AgentAssistedParams:
+        rule = DROP_RULES.get(self.drop_rule)
+        if rule is None:
+            raise ValueError(f"@algorithm.params.drop_rule@unknown drop rule {self.drop_rule!r}; choose one of: "
+                             + ", ".join(sorted(DROP_RULES)))
+        validate_drop_params(rule, self.drop, "algorithm.params.drop")
+        return self
 
 
 @njit(cache=True)
@@ -170,6 +187,30 @@ class AgentAssisted(Controller):
         self.triangles_released: list[tuple[int, int, int]] = []
         """Every triangle release as ``(agent, reference, reference)``, the references in increasing order."""
         self._served: set[tuple[int, int, int]] = set()
+        # the drop rule and the realism switches (agents.when_empty, drop_settle_s, reverse_drop)
+        rule_cls = DROP_RULES.lookup(self.params.drop_rule, "algorithm.params.drop_rule")
+        sensor_range = sw.models[self.agent_model].sensor_range
+        self.drop_rule = rule_cls(validate_drop_params(rule_cls, self.params.drop, "algorithm.params.drop"),
+                                  DropContext(self.r_c, self.r_eff, self.dt, len(self.agents), sensor_range))
+        self.tether = stock.when_empty == "tether"
+        self.settle_s = stock.settle_s
+        self.reverse_after_s = stock.reverse_after_s
+        self.released_by = np.zeros(len(self.agents), dtype=np.int64)
+        """Routers each agent has put down (references and triangle routers)."""
+        self.bases = np.flatnonzero(sw.role == Role.BASE)
+        self.pending_until = np.full(len(self.agents), -np.inf)
+        """Until when each agent's last router is still settling (it drops no other meanwhile)."""
+        self.settle_at: dict[int, float] = {}
+        """Routers put down and not relaying yet → the time they start to."""
+        self.contact_since = np.zeros(len(self.agents))
+        """The last time each agent was in contact with a base station (reverse drop)."""
+        self.reversing = np.zeros(len(self.agents), dtype=bool)
+        self.reverse_drops = 0
+        self.trails = (Trails(sw.xy[self.agents], spacing=0.125 * self.r_c) if self.reverse_after_s is not None
+                       else None)
+        self._general = (self.params.drop_rule != "last-reference" or self.settle_s > 0 or not self.tether
+                         or self.reverse_after_s is not None)
+        """Whether every step takes the general drop path (the paper's rule alone acts only on "about to lose")."""
 
     @classmethod
     def start_range(cls, params: AgentAssistedParams, r_c: float) -> float:  # noqa: D102
@@ -213,6 +254,8 @@ class AgentAssisted(Controller):
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm
         agents = self.agents
+        if self.settle_at:
+            self._settle_dropped(step.t)
         n_before = len(sw)
         is_ref, _ = self._deployed_nodes()
         table = step.table
@@ -238,14 +281,31 @@ class AgentAssisted(Controller):
 
         losing = None
         held = None
-        if n_losing:
-            assert current is not None
-            losing = (current >= 0) & (self._nearest_d >= self.r_eff)
-            for m in np.flatnonzero(losing & (self.left[agents] >= 1)):
-                if not self._release_reference(int(agents[m]), int(current[m])):
+        view = None
+        if n_losing or self._general:
+            if current is None:
+                current = self.current[agents]
+            view = self._view(step, current)
+            losing = self.drop_rule.losing(view)
+            drop = self.drop_rule.decide(view)
+            if self.reversing.any():
+                drop = self._reverse_drops(view, drop)
+            dropped = np.zeros(len(agents), dtype=bool)
+            for m in np.flatnonzero(drop):
+                toward = self._toward(m, view)
+                if toward >= 0 and self._release_reference(int(agents[m]), toward, step.t):
+                    dropped[m] = True
+                elif losing[m]:
                     if held is None:
                         held = np.zeros(len(agents), dtype=bool)
                     held[m] = True  # no free spot to put a router down: turn back as a tethered agent does
+            if dropped.any():
+                self.drop_rule.dropped(dropped, view)
+                if self.settle_s > 0:
+                    self.pending_until[dropped] = step.t + self.settle_s
+                if self.reversing.any():
+                    self.reverse_drops += int(np.count_nonzero(dropped & self.reversing))
+                    self.reversing &= ~dropped
 
         # agents: explore, or turn back when tethered (no router left and about to lose the last reference)
         scans = step.readings.of(agents, self.agent_model)
@@ -253,13 +313,17 @@ class AgentAssisted(Controller):
         self.explorer.steer(sw.heading, agents, scans, sensor_range, self.refused[agents], self.rng, sw.xy,
                             self._deployed_nodes()[1])
         if losing is not None:
-            assert current is not None
-            tethered = losing & (self.left[agents] < 1)
+            assert view is not None
+            tethered = losing & (self.left[agents] < 1) if self.tether else np.zeros(len(agents), dtype=bool)
             if held is not None:
                 tethered |= held
-            if tethered.any():
-                back = sw.xy[current[tethered]] - sw.xy[agents[tethered]]
-                sw.heading[agents[tethered]] = np.arctan2(back[:, 1], back[:, 0])
+            for m in np.flatnonzero(tethered):
+                toward = self._toward(m, view)
+                if toward >= 0:
+                    back = sw.xy[toward] - sw.xy[agents[m]]
+                    sw.heading[agents[m]] = np.arctan2(back[1], back[0])
+        if self.trails is not None:
+            self._back_up(view)
         speed = self.agent_speed.copy()
 
         # triangle routers released before this step drive to their goals
@@ -276,6 +340,80 @@ class AgentAssisted(Controller):
                     self._nodes_changed()
                 return Command(np.concatenate([agents, tri]), np.concatenate([speed, length / self.dt]))
         return Command(agents, speed)
+
+    # -- the drop rule's view and the realism switches ----------------------------------------------------------
+    def _view(self, step: StepInput, current: np.ndarray) -> AgentView:
+        """What the agents know this step (:class:`~amronet.algorithms.drops.AgentView`)."""
+        sw, agents, rule = self.swarm, self.agents, self.drop_rule
+        is_ref, ref_xy = self._deployed_nodes()
+        settling = sw.state == State.DROPPED
+        relay_xy = np.concatenate([ref_xy, sw.xy[settling]]) if self.settle_at else ref_xy
+        contact = None
+        if rule.needs_contact or self.reverse_after_s is not None:
+            contact = agents_connected(step.table, agents, self.bases, sw.relaying)
+        best = (best_reference_margin(step.table, agents, is_ref) if not rule.reads_positions
+                else np.full(len(agents), -np.inf))
+        return AgentView(
+            t=step.t, current=current, nearest_d=self._nearest_d, best_margin=best, xy=sw.xy[agents],
+            heading=sw.heading[agents], relay_xy=relay_xy, base_xy=sw.xy[self.bases], in_contact=contact,
+            scans=step.readings.of(agents, self.agent_model) if rule.needs_scans else None,
+            can_drop=(self.left[agents] >= 1) & (self.pending_until <= step.t))
+
+    def _toward(self, m: int, view: AgentView) -> int:
+        """The node agent ``m`` puts a router down next to or turns back to (-1: none).
+
+        Its current reference, or when it hears none, the nearest known relay.
+        """
+        if view.current[m] >= 0:
+            return int(view.current[m])
+        deployed = np.flatnonzero(self._deployed_nodes()[0])
+        if len(deployed) == 0:
+            return -1
+        d = np.linalg.norm(self.swarm.xy[deployed] - view.xy[m], axis=1)
+        return int(deployed[np.argmin(d)])
+
+    def _settle_dropped(self, t: float) -> None:
+        """Routers whose settling time is over start to relay and serve as references."""
+        ready = [i for i, at in self.settle_at.items() if at <= t]
+        if ready:
+            self.swarm.state[ready] = State.REFERENCE
+            for i in ready:
+                del self.settle_at[i]
+            self._nodes_changed()
+
+    def _reverse_drops(self, view: AgentView, drop: np.ndarray) -> np.ndarray:
+        """Agents backing up that are in contact again drop there (MARBLE's reverse drop)."""
+        assert view.in_contact is not None
+        return drop | (self.reversing & view.in_contact & view.can_drop)
+
+    def _back_up(self, view: AgentView | None) -> None:
+        """MARBLE's reverse drop: an agent out of contact for ``reverse_after_s`` backs up along its own path."""
+        assert self.trails is not None and view is not None and view.in_contact is not None
+        sw, agents = self.swarm, self.agents
+        contact = view.in_contact
+        self.contact_since[contact] = view.t
+        self.reversing &= ~contact
+        self.trails.update(sw.xy[agents], ~self.reversing)
+        start = ~contact & ~self.reversing & (view.t - self.contact_since > self.reverse_after_s)
+        self.reversing |= start & (self.left[agents] >= 1)
+        for m in np.flatnonzero(self.reversing):
+            target = self.trails.back(int(m), sw.xy[agents[m]])
+            if target is None:  # back at the start of its path and still cut off: give up backing
+                self.reversing[m] = False
+                self.contact_since[m] = view.t
+                continue
+            d = target - sw.xy[agents[m]]
+            sw.heading[agents[m]] = np.arctan2(d[1], d[0])
+
+    def mission_report(self) -> dict[str, object]:
+        """Relays used and who put them down, the drop rule and what it counted (the summary's ``mission``)."""
+        out: dict[str, object] = {"drop_rule": self.params.drop_rule, "relays_used": int(self.released),
+                                  "released_per_agent": [int(k) for k in self.released_by],
+                                  "triangle_relays": len(self.triangles_released)}
+        if self.reverse_after_s is not None:
+            out["reverse_drops"] = self.reverse_drops
+        out.update(self.drop_rule.report())
+        return out
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
         self.refused[:] = False
@@ -298,7 +436,8 @@ class AgentAssisted(Controller):
         others = np.delete(np.arange(len(sw)), agent)
         turns = np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6]) * (np.pi / 6)
         cand = p + gap * np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
-        ok = np.linalg.norm(cand - ref, axis=1) <= self.r_c
+        within = self.r_c if self.drop_rule.near_reference else np.inf
+        ok = np.linalg.norm(cand - ref, axis=1) <= within
         ok &= self.path_clear(np.repeat(p[None], len(cand), axis=0), cand, np.full(len(cand), r))
         if len(others):
             d = np.linalg.norm(cand[:, None, :] - sw.xy[None, others, :], axis=2)
@@ -312,7 +451,7 @@ class AgentAssisted(Controller):
         step = 2.0 * r + self.params.release_gap
         dirs = np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
         cand = np.concatenate([p + (gap + k * step) * dirs for k in (1, 2)])
-        ok = np.linalg.norm(cand - ref, axis=1) <= self.r_c
+        ok = np.linalg.norm(cand - ref, axis=1) <= within
         ok[ok] &= self.path_clear(np.repeat(p[None], int(ok.sum()), axis=0), cand[ok], np.full(int(ok.sum()), r))
         if len(others) and ok.any():
             ok[ok] &= _segments_clear(p, cand[ok], r, sw.xy[others], sw.radius[others])
@@ -331,10 +470,18 @@ class AgentAssisted(Controller):
         self._nodes_changed()
         self.left[agent] -= 1
         self.released += 1
+        self.released_by[np.searchsorted(self.agents, agent)] += 1
         return int(new[0])
 
-    def _release_reference(self, agent: int, current: int) -> bool:
-        return self._add_router(agent, current, State.REFERENCE) is not None
+    def _release_reference(self, agent: int, current: int, t: float) -> bool:
+        """Put a reference router down (one that first settles for ``settle_s`` when that is set)."""
+        if self.settle_s <= 0:
+            return self._add_router(agent, current, State.REFERENCE) is not None
+        new = self._add_router(agent, current, State.DROPPED)
+        if new is None:
+            return False
+        self.settle_at[new] = t + self.settle_s
+        return True
 
     def _release_triangle(self, agent: int, ref_i: int, ref_j: int) -> None:
         sw = self.swarm

@@ -100,11 +100,18 @@ class RouterStock:
         per_agent: Routers each agent carries (``None``: unlimited).
         path_clear: The agent's hand: ``path_clear(start (M, 2), end (M, 2), radius (M,))`` says which bodies of
             the given radii could be put down along those segments without touching an obstacle.
+        when_empty: What an agent with no router left does: ``tether`` or ``continue`` (``agents.when_empty``).
+        settle_s: Seconds before a router put down relays (``agents.drop_settle_s``).
+        reverse_after_s: Seconds out of contact before an agent backs up to drop (``agents.reverse_drop``;
+            ``None``: never).
     """
 
     robot: RobotModel
     per_agent: int | None
     path_clear: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    when_empty: str = "tether"
+    settle_s: float = 0.0
+    reverse_after_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -181,6 +188,10 @@ class Controller(ABC):
 
     def report(self) -> dict[str, object]:
         """Algorithm-specific numbers for the run's summary (default: none)."""
+        return {}
+
+    def mission_report(self) -> dict[str, object]:
+        """Numbers for the summary's ``mission`` section (default: none), e.g. ``relays_used``."""
         return {}
 
     def report_run(self, robots: slice) -> dict[str, object]:

@@ -35,7 +35,7 @@ def check_loss_band(loss_margin: float, r_c: float, step: float, who: str) -> fl
         )
     return r_c - band
 
-__all__ = ["ReferenceView", "check_loss_band", "track_references", "track_row"]
+__all__ = ["ReferenceView", "best_reference_margin", "check_loss_band", "track_references", "track_row"]
 
 
 @dataclass(frozen=True)
@@ -149,3 +149,25 @@ def track_references(
     _track(np.asarray(who, dtype=np.int64), np.asarray(current, dtype=np.int64), is_reference,
            status, table.indptr, table.indices, table.dist, want_other, new_current, nearest_d, other, other_d)
     return ReferenceView(new_current, nearest_d, other, other_d)
+
+
+@njit(cache=True)
+def _best_margin(who, is_reference, indptr, indices, margin, out):  # pragma: no cover - numba
+    for m in range(who.shape[0]):
+        i = who[m]
+        best = -np.inf
+        for e in range(indptr[i], indptr[i + 1]):
+            if is_reference[indices[e]] and margin[e] > best:
+                best = margin[e]
+        out[m] = best
+
+
+def best_reference_margin(table: NeighbourTable, who: np.ndarray, is_reference: np.ndarray) -> np.ndarray:
+    """The best link margin (dB over the usable threshold) from each robot of ``who`` to a reference it hears.
+
+    What a robot's radio measures of its links, no positions: ``-inf`` for a robot that hears no reference.
+    """
+    out = np.empty(len(who))
+    _best_margin(np.asarray(who, dtype=np.int64), np.asarray(is_reference, dtype=np.bool_), table.indptr,
+                 table.indices, np.asarray(table.margin, dtype=np.float64), out)
+    return out

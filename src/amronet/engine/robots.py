@@ -62,9 +62,11 @@ class State:
     """Router that finished its triangular deployment; serves as a reference."""
     AGENT = 5
     """An agent."""
+    DROPPED = 6
+    """Router an agent has put down that does not relay yet (``agents.drop_settle_s``); then a reference."""
 
 
-STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent")
+STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped")
 ROLE_NAMES: tuple[str, ...] = ("base", "router", "agent")
 
 DEPLOYED_STATES: tuple[int, ...] = (State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED)
@@ -231,6 +233,11 @@ class Swarm:
     def in_states(self, states: tuple[int, ...]) -> np.ndarray:
         """Boolean mask of robots whose state is one of ``states``."""
         return state_lookup(states)[self.state]
+
+    @property
+    def relaying(self) -> np.ndarray:
+        """Boolean mask of the nodes that relay: base nodes and routers, less routers dropped and not relaying yet."""
+        return (self.role != Role.AGENT) & (self.state != State.DROPPED)
 
     @property
     def deployed(self) -> np.ndarray:

@@ -157,7 +157,9 @@ class Loop:
         if sc.agents.per_base > 0:
             stock = RouterStock(robot=robot_model(sc.routers.robot, "routers.robot"),
                                 per_agent=sc.agents.routers_carried,
-                                path_clear=lambda start, end, radius: path_clear(omap, start, end, radius))
+                                path_clear=lambda start, end, radius: path_clear(omap, start, end, radius),
+                                when_empty=sc.agents.when_empty, settle_s=sc.agents.drop_settle_s,
+                                reverse_after_s=sc.agents.reverse_drop)
         area = AreaKnowledge(extent=omap.extent,
                              free_area_m2=float(np.count_nonzero(omap.free)) * (omap.resolution**2))
         return Setup(robots=self.swarm, r_c=sc.radio.r_c, dt=self.dt, rng=rng, area=area, stock=stock)

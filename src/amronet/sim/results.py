@@ -54,6 +54,7 @@ class RunResult:
         sc, sw = sim.scenario, sim.swarm
         routers = sw.role == Role.ROUTER
         deployed_routers = int(np.count_nonzero(sw.deployed & routers))
+        report = sim.report()
         summary = {
             "algorithm": sc.algorithm.name,
             "map": sim.world.omap.name,
@@ -80,7 +81,8 @@ class RunResult:
             "states": sim.state_counts(),
             "settled_at_s": None if sim.settled_at is None else round(sim.settled_at, 9),
             "routers_connected_fraction": _routers_connected(sim),
-            **sim.report(),
+            "mission": _mission(sim, final, sim.mission_report(), deployed_routers),
+            **report,
             "wall_time_s": wall_time_s,
             "amronet_version": __version__,
             "scenario": sc.to_dict(),
@@ -123,7 +125,7 @@ class RunResult:
         sim = self.run
         sw = sim.swarm
         r_c = sim.scenario.radio.r_c
-        covered = sim.medium.covered_mask(sim.world.coverage, sw.xy[sw.role != Role.AGENT])
+        covered = sim.medium.covered_mask(sim.world.coverage, sw.xy[sim.relay_mask])
         s = self.summary
         title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
                  f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")
@@ -169,5 +171,55 @@ def _routers_connected(sim: Run) -> float:
     routers = sw.role == Role.ROUTER
     if not routers.any():
         return 1.0
-    linked = connected_to(sim.table, sim.bases, sw.role != Role.AGENT)
+    linked = connected_to(sim.table, sim.bases, sim.relay_mask)
     return float(np.count_nonzero(linked & routers) / np.count_nonzero(routers))
+
+
+def _mission(sim: Run, final: Metrics, report: dict[str, Any], deployed_routers: int) -> dict[str, Any] | None:
+    """The summary's ``mission`` section: how well the agents stayed connected and what it cost (issue #19).
+
+    Args:
+        sim: The finished run.
+        final: Its final metrics.
+        report: The controller's mission report for the run (``Controller.mission_report``): ``relays_used`` and
+            ``released_per_agent`` are used when there, its other keys (the drop rule, what it counted) are copied.
+        deployed_routers: Routers deployed at the end (``relays_used`` when the report has no such key).
+
+    Returns:
+        ``None`` for a run without agents; else ``connected_fraction`` (= ``agents_connected_fraction``),
+        ``longest_outage_s`` (over agents), ``outages`` (total), ``time_all_connected_fraction``, ``relays_used``,
+        ``relays_per_100m2_covered`` (``None`` when nothing is covered), ``distance_travelled_m`` (total over
+        agents) and ``per_agent``: per agent in id order ``id`` (its node id in ``network.json``),
+        ``connected_fraction``, ``longest_outage_s``, ``outages``, ``distance_m`` and, when the report has
+        ``released_per_agent``, ``relays_dropped``.
+    """
+    links = sim.agent_links
+    if links is None:
+        return None
+    dt = sim.dt
+    fractions = links.connected_fraction
+    outages = links.outages
+    longest = links.longest_outage_steps
+    distance = sim.swarm.distance[sim.agents]
+    released = report.get("released_per_agent")
+    relays_used = int(report["relays_used"]) if "relays_used" in report else deployed_routers
+    covered_m2 = final.coverage * sim.world.coverage.area_m2
+    per_agent = []
+    for k, node in enumerate(sim.agents):
+        entry: dict[str, Any] = {"id": int(node), "connected_fraction": float(fractions[k]),
+                                 "longest_outage_s": round(int(longest[k]) * dt, 9), "outages": int(outages[k]),
+                                 "distance_m": float(distance[k])}
+        if released is not None:
+            entry["relays_dropped"] = int(released[k])
+        per_agent.append(entry)
+    return {
+        "connected_fraction": sim.agents_connected_fraction,
+        "longest_outage_s": round(int(longest.max()) * dt, 9),
+        "outages": int(outages.sum()),
+        "time_all_connected_fraction": float(links.all_connected_fraction),
+        "relays_used": relays_used,
+        "relays_per_100m2_covered": float(relays_used / (covered_m2 / 100)) if covered_m2 > 0 else None,
+        "distance_travelled_m": float(distance.sum()),
+        **{k: v for k, v in report.items() if k not in ("relays_used", "released_per_agent")},
+        "per_agent": per_agent,
+    }

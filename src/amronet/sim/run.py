@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from amronet.sim.assemble import World
     from amronet.sim.loop import Loop
 
-__all__ = ["Metrics", "Run"]
+__all__ = ["Metrics", "OutageTracker", "Run"]
 
 STOP_REASONS = ("coverage_target", "settled", "time_limit")
 """Why a run ends: the first two *terminate* it (the task ended), the last *truncates* it."""
@@ -36,6 +36,80 @@ class Metrics:
     connected_coverage: float
     routers_deployed: int
     components: int
+
+
+class OutageTracker:
+    """Per agent, step by step: steps connected to a base station, outages and the longest outage.
+
+    An *outage* is a maximal stretch of consecutive observed steps in which an agent has no path to a base
+    station. It is counted when it begins and its length grows while it lasts, so an outage still going on when
+    the run ends counts, closed at the end. Every update is a handful of array operations over the agents.
+
+    The initial state (before the first step) is what the tracker is made with; like
+    :attr:`Run.agents_connected_fraction`, it counts only while no step has been observed: then it stands as the
+    one observation (an agent cut off in it has one outage, of 0 steps: no time has passed).
+
+    Args:
+        initial: Which agents are connected in the initial state, boolean ``(A,)``.
+    """
+
+    def __init__(self, initial: np.ndarray) -> None:
+        self.initial = np.array(initial, dtype=bool)
+        n = len(self.initial)
+        self.steps = 0
+        """Steps observed."""
+        self.all_connected_steps = 0
+        """Steps in which every agent was connected."""
+        self.connected_steps = np.zeros(n, dtype=np.int64)
+        self._outages = np.zeros(n, dtype=np.int64)
+        self._longest = np.zeros(n, dtype=np.int64)
+        self._current = np.zeros(n, dtype=np.int64)
+        """Length in steps of each agent's outage going on now (0: connected at the last step)."""
+        self._any_current = False
+
+    def observe(self, linked: np.ndarray) -> None:
+        """Account for one step: ``linked`` says which agents are connected after it, boolean ``(A,)``."""
+        self.steps += 1
+        if linked.all():
+            self.all_connected_steps += 1
+            self.connected_steps += 1
+            if self._any_current:
+                self._current[:] = 0
+                self._any_current = False
+            return
+        down = ~linked
+        self.connected_steps += linked
+        self._outages += down & (self._current == 0)
+        self._current += down
+        self._current[linked] = 0
+        np.maximum(self._longest, self._current, out=self._longest)
+        self._any_current = True
+
+    @property
+    def connected_fraction(self) -> np.ndarray:
+        """Per agent, the fraction of steps connected (without steps: 1 or 0 by the initial state)."""
+        if self.steps == 0:
+            return self.initial.astype(float)
+        return self.connected_steps / self.steps
+
+    @property
+    def outages(self) -> np.ndarray:
+        """Per agent, the number of outages (without steps: 1 for an agent cut off in the initial state)."""
+        if self.steps == 0:
+            return (~self.initial).astype(np.int64)
+        return self._outages.copy()
+
+    @property
+    def longest_outage_steps(self) -> np.ndarray:
+        """Per agent, the length in steps of its longest outage (0 without one)."""
+        return self._longest.copy()
+
+    @property
+    def all_connected_fraction(self) -> float:
+        """Fraction of steps in which every agent was connected (without steps: by the initial state)."""
+        if self.steps == 0:
+            return float(self.initial.all())
+        return self.all_connected_steps / self.steps
 
 
 class Run:
@@ -71,7 +145,10 @@ class Run:
         self.agents = np.flatnonzero(sw.role == Role.AGENT)
         self.agents_connected_steps = 0
         self.agents_connected_sum = 0.0
-        self.agents_connected_window = self._agents_connected()
+        linked = self._agents_linked()
+        self.agent_links: OutageTracker | None = OutageTracker(linked) if len(self.agents) else None
+        """Per-agent connection, outages included (``None`` without agents)."""
+        self.agents_connected_window = self._fraction(linked)
         self.agents_connected_min = self.agents_connected_window
 
     # -- the run's view of the loop ------------------------------------------------------------------------
@@ -107,6 +184,15 @@ class Run:
         return table if self.robots == slice(None) else table.block(self.robots)
 
     @property
+    def relay_mask(self) -> np.ndarray:
+        """Nodes that relay: base nodes and routers, less routers put down that do not relay yet, boolean ``(N,)``.
+
+        The AMRoNet as every metric sees it: coverage, paths to a base station, the agents' connection
+        (:attr:`~amronet.engine.robots.Swarm.relaying`).
+        """
+        return self.swarm.relaying
+
+    @property
     def controller(self) -> Controller:
         """The loop's controller (it drives every run of the loop)."""
         return self.loop.controller
@@ -114,6 +200,10 @@ class Run:
     def report(self) -> dict[str, object]:
         """The algorithm's own numbers for this run (``Controller.report_run``)."""
         return self.loop.controller.report_run(self.robots)
+
+    def mission_report(self) -> dict[str, object]:
+        """The controller's numbers for the summary's ``mission`` section (runs alone in their loop; else none)."""
+        return self.loop.controller.mission_report() if self.robots == slice(None) else {}
 
     @property
     def terminated(self) -> bool:
@@ -134,7 +224,7 @@ class Run:
         """
         sw, table = self.swarm, self.table
         method = method or self.scenario.sim.coverage_method
-        network = sw.role != Role.AGENT
+        network = self.relay_mask
         linked = connected_to(table, self.bases, network)
         deployed = sw.deployed
         n_comp, _ = components(table, deployed)
@@ -148,17 +238,25 @@ class Run:
             components=n_comp,
         )
 
-    def _agents_connected(self) -> float:
-        """Fraction of agents with a multi-hop path to a base station through the AMRoNet right now."""
+    def _agents_linked(self) -> np.ndarray:
+        """Which agents have a multi-hop path to a base station through the AMRoNet right now, boolean ``(A,)``."""
         if len(self.agents) == 0:
+            return np.zeros(0, dtype=bool)
+        return agents_connected(self.table, self.agents, self.bases, self.relay_mask)
+
+    @staticmethod
+    def _fraction(linked: np.ndarray) -> float:
+        """Fraction of agents connected (1 without agents)."""
+        if len(linked) == 0:
             return 1.0
-        network = self.swarm.role != Role.AGENT
-        linked = agents_connected(self.table, self.agents, self.bases, network)
         return np.count_nonzero(linked) / len(linked)  # the mean, exactly, at a tenth of ndarray.mean's cost
 
     def observe_agents(self) -> None:
-        """Account for the agents' connection after a step (runs with agents only)."""
-        frac = self._agents_connected()
+        """Account for the agents' connection after a step (runs with agents only): fractions and outages."""
+        linked = self._agents_linked()
+        if self.agent_links is not None:
+            self.agent_links.observe(linked)
+        frac = self._fraction(linked)
         self.agents_connected_steps += 1
         self.agents_connected_sum += frac
         self.agents_connected_window = min(self.agents_connected_window, frac)

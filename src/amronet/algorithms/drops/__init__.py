@@ -1,0 +1,23 @@
+"""Drop rules of agent-assisted deployment, registered by name in :data:`DROP_RULES` (``algorithm.params.drop_rule``).
+
+A rule decides *when* an agent puts a router down (:mod:`~amronet.algorithms.drops.base`); the controller decides
+where. Modules, one rule each:
+
+* :mod:`~amronet.algorithms.drops.last_reference` — ``last-reference``, the paper's greedy rule (the default);
+* :mod:`~amronet.algorithms.drops.link_quality` — ``link-quality``, location-free (paper section 6; SPAWAR, NIST);
+* :mod:`~amronet.algorithms.drops.radius` — ``radius``, Robotika's breadcrumb radius (DARPA SubT);
+* :mod:`~amronet.algorithms.drops.junction` — ``distance-junction``, MARBLE's distance, junction and turn rules.
+
+Importing this package registers them all.
+"""
+
+from amronet.algorithms.drops import junction, last_reference, link_quality, radius  # noqa: F401 (register)
+from amronet.algorithms.drops.base import (
+    DROP_RULES,
+    AgentView,
+    DropContext,
+    DropRule,
+    validate_drop_params,
+)
+
+__all__ = ["DROP_RULES", "AgentView", "DropContext", "DropRule", "validate_drop_params"]
