@@ -77,7 +77,7 @@ def test_a_wall_kills_the_link_before_the_distance_rule_fires_but_not_before_the
     ref = np.array([0.5, 1.0])
     context = DropContext(r_c=r_c, r_eff=0.95 * r_c, dt=0.1, n_agents=1, sensor_range=2.0)
     last_ref = rule("last-reference", context)
-    lq = rule("link-quality", context)  # the defaults: 3 dB, 1 dB, 0.5 s
+    lq = rule("link-quality", context, drop_margin_db=3.0)  # less than the margin left at the wall
     fired = {"last-reference": None, "link-quality": None}
     lost_at = None
     for k, x in enumerate(np.arange(0.8, 9.0, 0.05)):

@@ -19,16 +19,40 @@ START_LOCATIONS = (*CORNERS, (16.0, 16.0))
 
 
 def agent_scenario(map_name: str, r_c: float, bases: tuple[tuple[float, float], ...], agents_per_base: int,
-                   explorer: str, time_limit: float, dt: float = 0.25) -> dict[str, Any]:
-    """The agent-assisted scenario of paper 5.1 as plain data."""
+                   explorer: str, time_limit: float, dt: float = 0.25, *, radio: dict[str, Any] | None = None,
+                   drop_rule: str | None = None, drop: dict[str, Any] | None = None,
+                   agents: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The agent-assisted scenario of paper 5.1 as plain data.
+
+    Args:
+        map_name: The map.
+        r_c: Communication radius (the median range under other radio models), metres.
+        bases: Base-station positions.
+        agents_per_base: Agents per base station.
+        explorer: The agents' exploration strategy.
+        time_limit: Simulated seconds at most.
+        dt: Step length.
+        radio: Further ``radio`` fields (e.g. ``{"model": "multi-wall", "shadowing_db": 4}``); default the unit disk.
+        drop_rule: ``algorithm.params.drop_rule`` (default: left out, the paper's rule).
+        drop: ``algorithm.params.drop``, the rule's parameters (default: left out).
+        agents: Further ``agents`` fields (e.g. ``{"routers_carried": 12, "when_empty": "continue"}``).
+
+    Left at their defaults the optional fields are not written, so the scenario (and its hash in a result store) is
+    the one the figures have always used.
+    """
+    params: dict[str, Any] = {"triangular": "local", "explorer": explorer}
+    if drop_rule is not None:
+        params["drop_rule"] = drop_rule
+    if drop:
+        params["drop"] = dict(drop)
     return {
         "name": f"agent-assisted-{map_name}",
         "map": map_name,
-        "algorithm": {"name": "agent-assisted", "params": {"triangular": "local", "explorer": explorer}},
-        "radio": {"model": "unit-disk", "r_c": float(r_c)},
+        "algorithm": {"name": "agent-assisted", "params": params},
+        "radio": {"model": "unit-disk", "r_c": float(r_c), **(radio or {})},
         "base_stations": [{"x": x, "y": y, "region": [1.6, 1.6]} for x, y in bases],
         "routers": {"count": 0, "robot": "bebot"},
-        "agents": {"per_base": int(agents_per_base), "robot": "pioneer"},
+        "agents": {"per_base": int(agents_per_base), "robot": "pioneer", **(agents or {})},
         "sim": {"dt": dt, "time_limit": float(time_limit), "record_every": 40, "coverage_target": 0.99},
     }
 

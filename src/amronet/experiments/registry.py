@@ -114,3 +114,6 @@ _add(Figure("fig10", "amronet.experiments.fig10:run_coverage_over_time", kwargs=
             quick={"runs": 2, "time_limit": 30.0}, without={"explorer": "it runs no agents"}))
 _add(Figure("fig11", "amronet.experiments.fig10:run_coverage_over_time", kwargs={"figure": "fig11"},
             quick={"runs": 2, "time_limit": 30.0}, without={"explorer": "it runs no agents"}))
+_add(Figure("buildings", "amronet.experiments.buildings:run_buildings",
+            quick={"buildings": ("office-32x32", "cave"), "rules": ("last-reference", "link-quality"),
+                   "stocks": (None, 6), "runs": 2, "time_limit": 120.0}))
