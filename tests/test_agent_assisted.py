@@ -6,22 +6,13 @@ import pytest
 from amronet.engine.network import agents_connected, connected_to
 from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
-from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.world.space import clearance
+from helpers import open_field_agents
 
 
 def agent_scenario(**over):
-    base = {
-        "map": "open-32x32",
-        "algorithm": {"name": "agent-assisted", "params": {"triangular": "local"}},
-        "radio": {"r_c": 4.0},
-        "base_stations": [{"x": 2.0, "y": 2.0, "region": [1.6, 1.6]}],
-        "routers": {"count": 0},
-        "agents": {"per_base": 2},
-        "sim": {"dt": 0.25, "time_limit": 400.0, "record_every": 8},
-    }
-    return load_scenario(base, overrides=over)
+    return open_field_agents(**over)
 
 
 def check_every_step(sim: Simulation, steps: int) -> None:

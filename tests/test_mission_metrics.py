@@ -17,6 +17,7 @@ from amronet.sweeps import ResultStore
 from amronet.sweeps.plot import plot_groups
 from amronet.sweeps.tables import run_rows
 from amronet.sweeps.worker import execute_job
+from helpers import open_field_agents
 
 MISSION_KEYS = {"connected_fraction", "longest_outage_s", "outages", "time_all_connected_fraction", "relays_used",
                 "relays_per_100m2_covered", "distance_travelled_m", "per_agent"}
@@ -25,16 +26,7 @@ PER_AGENT_KEYS = {"id", "connected_fraction", "longest_outage_s", "outages", "di
 
 def agent_scenario(**over: object) -> Scenario:
     """Agent-assisted deployment in an open field, two agents, short: under a second a run."""
-    base = {
-        "map": "open-32x32",
-        "algorithm": {"name": "agent-assisted", "params": {"triangular": "local"}},
-        "radio": {"r_c": 4.0},
-        "base_stations": [{"x": 2.0, "y": 2.0, "region": [1.6, 1.6]}],
-        "routers": {"count": 0},
-        "agents": {"per_base": 2},
-        "sim": {"dt": 0.25, "time_limit": 100.0, "record_every": 8},
-    }
-    return amronet.load_scenario(base, overrides=over)
+    return open_field_agents(**{"sim.time_limit": 100.0, **over})
 
 
 def cut_off_scenario() -> Scenario:
