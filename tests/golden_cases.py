@@ -88,6 +88,13 @@ def _drop_default_agents_fields(summary: dict) -> None:
             del agents[key]
 
 
+def _drop_no_faults(summary: dict) -> None:
+    """Leave out the scenario's ``faults`` list when it is empty (issue #16 added it; empty, it changes nothing)."""
+    scenario = summary.get("scenario", {})
+    if scenario.get("faults") == []:
+        del scenario["faults"]
+
+
 def _drop_mission(summary: dict) -> None:
     """Leave out the summary's ``mission`` section.
 
@@ -108,6 +115,7 @@ def result_fingerprint(result) -> dict[str, str]:
     _drop_default_radio_fields(summary)
     _drop_default_agents_fields(summary)
     _drop_mission(summary)
+    _drop_no_faults(summary)
     return {"network.json": _sha(files["network.json"]), "timeseries.csv": _sha(files["timeseries.csv"]),
             "summary": _sha(json.dumps(summary, sort_keys=True).encode()),
             "coverage": f"{summary['coverage']:.6f}", "nodes_total": str(summary["nodes_total"])}

@@ -41,6 +41,7 @@ from amronet.errors import ScenarioError
 __all__ = [
     "AgentsSpec",
     "BaseStationSpec",
+    "FaultSpec",
     "RadioSpec",
     "RobotSpec",
     "RoutersSpec",
@@ -199,6 +200,29 @@ class SimSpec(_Strict):
     robot_collisions: StrictBool = True
 
 
+class FaultSpec(_Strict):
+    """One entry of ``faults``: nodes that fail (they stop sending and relaying and stay where they are).
+
+    Exactly one of ``routers`` (this fraction of the routers deployed at ``at``, drawn by the run's generator),
+    ``ids`` (these nodes, at ``at``), ``base_station`` (this base station's reference node, at ``at``) or
+    ``rate_per_hour`` (every deployed router fails as a Poisson process of this rate, from ``at`` on, default 0).
+    """
+
+    at: NonNegativeFloat | None = None
+    routers: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] | None = None
+    ids: Annotated[list[Annotated[StrictInt, Field(ge=0)]], Field(min_length=1)] | None = None
+    rate_per_hour: PositiveFloat | None = None
+    base_station: Annotated[StrictInt, Field(ge=0)] | None = None
+
+    @property
+    def kind(self) -> str:
+        """Which of the four kinds the entry is (``routers``, ``ids``, ``rate_per_hour``, ``base_station``)."""
+        return next(k for k in FAULT_KINDS if getattr(self, k) is not None)
+
+
+FAULT_KINDS = ("routers", "ids", "rate_per_hour", "base_station")
+
+
 class AlgorithmSpec(_Strict):
     """Which deployment algorithm runs, with its own parameters (validated by the algorithm)."""
 
@@ -222,6 +246,8 @@ class Scenario(_Strict):
     routers: RoutersSpec = Field(default_factory=RoutersSpec)
     agents: AgentsSpec = Field(default_factory=AgentsSpec)
     sim: SimSpec = Field(default_factory=SimSpec)
+    faults: list[FaultSpec] = Field(default_factory=list)
+    """Node failures (:class:`FaultSpec`); none by default."""
     base_dir: str | None = Field(default=None, exclude=True)
 
     @model_validator(mode="after")
@@ -234,6 +260,16 @@ class Scenario(_Strict):
         if self.radio.model not in MEDIA:
             raise ValueError(f"@radio.model@unknown radio model {self.radio.model!r}; choose one of: "
                              + ", ".join(sorted(MEDIA)))
+        for k, fault in enumerate(self.faults):
+            kinds = [name for name in FAULT_KINDS if getattr(fault, name) is not None]
+            if len(kinds) != 1:
+                raise ValueError(f"@faults[{k}]@give exactly one of {', '.join(FAULT_KINDS)}, got "
+                                 + (", ".join(kinds) or "none") + "; e.g. {at: 120, routers: 0.2}")
+            if kinds[0] != "rate_per_hour" and fault.at is None:
+                raise ValueError(f"@faults[{k}].at@required: the time in seconds at which the {kinds[0]} fail(s)")
+            if fault.base_station is not None and fault.base_station >= len(self.base_stations):
+                raise ValueError(f"@faults[{k}].base_station@no base station {fault.base_station}; the scenario has "
+                                 f"{len(self.base_stations)} (numbered from 0)")
         if self.radio.model != "unit-disk" and self.sim.coverage_method != "raster":
             raise ValueError(f"@sim.coverage_method@{self.sim.coverage_method!r} is defined for the unit disk only; "
                              f"coverage under {self.radio.model} is decided cell by cell: use raster")

@@ -221,8 +221,13 @@ class RadioMedium:
         """Mask of candidate links (CSR order) a model drops by a rule of its own; ``None`` keeps them. Symmetric."""
         return None
 
-    def update(self, xy: np.ndarray, groups: np.ndarray | None = None) -> NeighbourTable:
-        """Build this step's neighbour table from all robot positions ``(N, 2)`` (of several runs: ``groups``)."""
+    def update(self, xy: np.ndarray, groups: np.ndarray | None = None, silent: np.ndarray | None = None
+               ) -> NeighbourTable:
+        """Build this step's neighbour table from all robot positions ``(N, 2)`` (of several runs: ``groups``).
+
+        ``silent``: mask of nodes that send nothing (failed nodes): they have no links, but stay in the geometric
+        table (:attr:`NeighbourTable.geometric`) that body sensors and collisions read.
+        """
         xy = np.array(xy, dtype=float)
         b = self.budget
         indptr, indices, dist = neighbour_csr(xy, self.reach, groups)
@@ -232,6 +237,10 @@ class RadioMedium:
         extra = self.keep(xy, indptr, indices, dist)
         if extra is not None:
             keep = extra if keep is None else keep & extra
+        if silent is not None and silent.any():
+            rows = np.repeat(np.arange(len(xy)), np.diff(indptr))
+            heard = ~(silent[rows] | silent[indices])
+            keep = heard if keep is None else keep & heard
         if self.packet_loss:
             lost = self._losses(indptr, indices, b.margin_db(dist) if margin is None else margin)
             keep = ~lost if keep is None else keep & ~lost

@@ -64,9 +64,12 @@ class State:
     """An agent."""
     DROPPED = 6
     """Router an agent has put down that does not relay yet (``agents.drop_settle_s``); then a reference."""
+    FAILED = 7
+    """Node that failed (``faults``): it stays where it is as an obstacle and neither sends nor relays."""
 
 
-STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped")
+STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped",
+                                 "failed")
 ROLE_NAMES: tuple[str, ...] = ("base", "router", "agent")
 
 DEPLOYED_STATES: tuple[int, ...] = (State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED)
@@ -236,8 +239,11 @@ class Swarm:
 
     @property
     def relaying(self) -> np.ndarray:
-        """Boolean mask of the nodes that relay: base nodes and routers, less routers dropped and not relaying yet."""
-        return (self.role != Role.AGENT) & (self.state != State.DROPPED)
+        """Boolean mask of the nodes that relay: base nodes and routers, less the failed ones and those dropped.
+
+        A router an agent has just put down relays once it has settled (``agents.drop_settle_s``).
+        """
+        return (self.role != Role.AGENT) & ~state_lookup((State.DROPPED, State.FAILED))[self.state]
 
     @property
     def deployed(self) -> np.ndarray:

@@ -54,7 +54,7 @@ from amronet.engine.coverage import CoverageArea
 from amronet.engine.neighbours import neighbour_csr, pairs_from_csr
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import MEDIA, RadioMedium, make_medium
-from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role
+from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role, State, state_lookup
 from amronet.errors import AmronetError
 from amronet.outputs.recording_codec import (
     Q_MAX,
@@ -328,8 +328,11 @@ class Recording:
         """Links ``(M, 2)`` (``i < j``) of frame ``f``: stored ones, or the unit-disk pairs within ``r_c``."""
         if self.link_offsets is not None and self.link_pairs is not None:
             return self.link_pairs[self.link_offsets[f]: self.link_offsets[f + 1]]
-        indptr, indices, _ = neighbour_csr(self.frame(f)["xy"], self.r_c)
-        return pairs_from_csr(indptr, indices)
+        fr = self.frame(f)
+        indptr, indices, _ = neighbour_csr(fr["xy"], self.r_c)
+        pairs = pairs_from_csr(indptr, indices)
+        failed = fr["state"] == State.FAILED
+        return pairs[~(failed[pairs[:, 0]] | failed[pairs[:, 1]])] if failed.any() else pairs
 
     def trails(self, f: int) -> dict[int, np.ndarray]:
         """Agent id → its path ``(f + 1, 2)`` over frames ``0..f``."""
@@ -353,9 +356,13 @@ class Recording:
         return self._medium
 
     def network_xy(self, f: int) -> np.ndarray:
-        """Positions ``(k, 2)`` of the routers and base nodes (not the agents) present in frame ``f``."""
+        """Positions ``(k, 2)`` of the nodes that relay in frame ``f`` (see ``Swarm.relaying``).
+
+        Routers and base nodes, less the failed ones and those dropped but not relaying yet.
+        """
         fr = self.frame(f)
-        return fr["xy"][fr["kind"] != Role.AGENT]
+        silent = state_lookup((State.DROPPED, State.FAILED))[fr["state"]]
+        return fr["xy"][(fr["kind"] != Role.AGENT) & ~silent]
 
     def covered(self, f: int) -> np.ndarray:
         """Cells of the area that counts where a receiver hears a router or base node of frame ``f``.

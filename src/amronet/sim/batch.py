@@ -37,7 +37,7 @@ __all__ = ["BatchSimulation", "batchable", "run_seeds"]
 def batchable(scenario: Scenario) -> bool:
     """Whether runs of ``scenario`` can be stepped together by :class:`BatchSimulation`."""
     return (ALGORITHMS.lookup(scenario.algorithm.name, "algorithm.name").batchable and scenario.agents.per_base == 0
-            and not medium_needs_rng(scenario))
+            and not medium_needs_rng(scenario) and not scenario.faults)
 
 
 def run_seeds(scenario: Scenario, seeds: Sequence[int]) -> list[RunResult]:

@@ -2,6 +2,8 @@
 
 The life of a step, in this order and nowhere else (:meth:`Loop.step`):
 
+0. **faults** — nodes whose failure is due (scenario ``faults``, :mod:`amronet.sim.faults`) fail: they stop sending
+   and relaying and the table loses their links at once (only in runs with faults);
 1. **sense**  — the range rings of every moving robot are ray-cast against the map and the other robots (skipped
    when the controller reads no range readings);
 2. **decide** — the algorithm's controller reads those readings and the radio medium's neighbour table, and
@@ -34,7 +36,7 @@ import numpy as np
 from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, Readings, RouterStock, Setup, StepInput
 from amronet.engine.motion import drive, path_clear
 from amronet.engine.radio import NeighbourTable
-from amronet.engine.robots import MOBILE_STATES, Role, Swarm
+from amronet.engine.robots import MOBILE_STATES, Role, State, Swarm
 from amronet.engine.sensing import range_scan
 from amronet.engine.streams import RunStreams
 from amronet.errors import ScenarioError
@@ -124,6 +126,8 @@ class Loop:
         if len(seeds) > 1 and medium_needs_rng(sc):
             raise ScenarioError("radio", "runs whose radio draws random numbers (shadowing, packet loss) cannot share "
                                 "one loop; run them one by one")
+        if len(seeds) > 1 and sc.faults:
+            raise ScenarioError("faults", "runs with faults cannot share one loop; run them one by one")
         self.medium = build_medium(sc, self.world.omap, rngs[0] if len(seeds) == 1 else None)
         swarms = [build_swarm(sc, self.world, rng, r_start=r_start) for rng in rngs]
         if len(seeds) == 1:
@@ -146,6 +150,8 @@ class Loop:
             target = controller_cls.default_coverage_target
         self.runs = [Run(self, g, seed, rngs[g], blocks[g], target) for g, seed in enumerate(seeds)]
         self._with_agents = [run for run in self.runs if len(run.agents)]
+        self._faulty = self.runs[0] if sc.faults else None
+        """The run whose nodes may fail (faults are never batched), or ``None``."""
         settled = self._settled_runs()
         for run, now in zip(self.runs, settled, strict=True):
             run.settled_at = 0.0 if now else None
@@ -171,9 +177,11 @@ class Loop:
 
     # -- the step --------------------------------------------------------------------------------------------
     def step(self) -> None:
-        """Advance every run by one step: sense → decide → move → radio, then the agents' connection."""
+        """Advance every run by one step: faults → sense → decide → move → radio, then the agents' connection."""
         sw = self.swarm
         clock = time.perf_counter
+        if self._faulty is not None:
+            self._fail_nodes(self._faulty)
         t0 = clock()
         readings = sense(self.controller, sw, self.world.omap, self.table)
         t1 = clock()
@@ -183,15 +191,37 @@ class Loop:
         # a robot put down in the decide phase (a released router) is not where the table has it: the move phase
         # then searches the bodies afresh, so nobody drives into a router released this step
         bodies_table = self.table if before is None or np.array_equal(before, sw.xy) else None
+        if self._faulty is not None:  # a failed robot moves no more, whatever its controller asks
+            command = Command(command.movers, np.where(sw.state[command.movers] == State.FAILED, 0.0, command.speed))
         move(self.controller, command, sw, self.world.omap, bodies_table, self.dt, self.scenario.sim.robot_collisions)
         t3 = clock()
-        self.table = self.medium.update(sw.xy, self.groups)
+        self.table = self.medium.update(sw.xy, self.groups, self._silent())
         t4 = clock()
         self.steps += 1
         for run in self._with_agents:
             run.observe_agents()
+        if self._faulty is not None:
+            assert self._faulty.fault_book is not None
+            self._faulty.fault_book.observe(self._faulty)
         for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
             self.phase_seconds[name] += dt
+
+    def _silent(self) -> np.ndarray | None:
+        """Nodes that send nothing (failed ones), or ``None`` when none can have failed."""
+        return None if self._faulty is None else self.swarm.state == State.FAILED
+
+    def _fail_nodes(self, run: Run) -> None:
+        """The faults phase: nodes whose fault is due fail, and the table loses their links at once.
+
+        Cold: it does something only in the steps of a fault event (or a Poisson failure).
+        """
+        assert run.faults is not None and run.fault_book is not None
+        sw = self.swarm
+        for kind, ids in run.faults.due(self.t, sw.role, sw.state, sw.deployed):
+            run.fault_book.before(run, self.t, kind, ids)
+            sw.state[ids] = State.FAILED
+            self.table = self.medium.update(sw.xy, self.groups, self._silent())
+            run.fault_book.after(run)
 
     def _settled_runs(self) -> np.ndarray:
         """Per run: no robot of it will move again."""

@@ -82,6 +82,7 @@ class RunResult:
             "settled_at_s": None if sim.settled_at is None else round(sim.settled_at, 9),
             "routers_connected_fraction": _routers_connected(sim),
             "mission": _mission(sim, final, sim.mission_report(), deployed_routers),
+            **({"faults": sim.fault_book.summary(sim, sim.faults)} if sim.fault_book is not None else {}),
             **report,
             "wall_time_s": wall_time_s,
             "amronet_version": __version__,
@@ -171,7 +172,7 @@ def _routers_connected(sim: Run) -> float:
     routers = sw.role == Role.ROUTER
     if not routers.any():
         return 1.0
-    linked = connected_to(sim.table, sim.bases, sim.relay_mask)
+    linked = connected_to(sim.table, sim.live_bases, sim.relay_mask)
     return float(np.count_nonzero(linked & routers) / np.count_nonzero(routers))
 
 

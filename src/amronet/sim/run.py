@@ -14,7 +14,8 @@ import numpy as np
 
 from amronet.engine.network import agents_connected, components, connected_to
 from amronet.engine.radio import NeighbourTable, RadioMedium
-from amronet.engine.robots import STATE_NAMES, Role, Swarm
+from amronet.engine.robots import STATE_NAMES, Role, State, Swarm
+from amronet.sim.faults import FaultBook, FaultSchedule
 
 if TYPE_CHECKING:
     from amronet.algorithms import Controller
@@ -148,6 +149,11 @@ class Run:
         linked = self._agents_linked()
         self.agent_links: OutageTracker | None = OutageTracker(linked) if len(self.agents) else None
         """Per-agent connection, outages included (``None`` without agents)."""
+        self.faults: FaultSchedule | None = None
+        self.fault_book: FaultBook | None = None
+        if self.scenario.faults:  # spawned after the radio medium's streams: the run's other draws stay the same
+            self.faults = FaultSchedule(list(self.scenario.faults), self.bases, self.dt, rng)
+            self.fault_book = FaultBook()
         self.agents_connected_window = self._fraction(linked)
         self.agents_connected_min = self.agents_connected_window
 
@@ -193,6 +199,11 @@ class Run:
         return self.swarm.relaying
 
     @property
+    def live_bases(self) -> np.ndarray:
+        """The base reference nodes that have not failed: the sources of every path to a base station."""
+        return self.bases[self.swarm.state[self.bases] != State.FAILED]
+
+    @property
     def controller(self) -> Controller:
         """The loop's controller (it drives every run of the loop)."""
         return self.loop.controller
@@ -225,7 +236,7 @@ class Run:
         sw, table = self.swarm, self.table
         method = method or self.scenario.sim.coverage_method
         network = self.relay_mask
-        linked = connected_to(table, self.bases, network)
+        linked = connected_to(table, self.live_bases, network)
         deployed = sw.deployed
         n_comp, _ = components(table, deployed)
         medium, area = self.medium, self.world.coverage
@@ -242,7 +253,7 @@ class Run:
         """Which agents have a multi-hop path to a base station through the AMRoNet right now, boolean ``(A,)``."""
         if len(self.agents) == 0:
             return np.zeros(0, dtype=bool)
-        return agents_connected(self.table, self.agents, self.bases, self.relay_mask)
+        return agents_connected(self.table, self.agents, self.live_bases, self.relay_mask)
 
     @staticmethod
     def _fraction(linked: np.ndarray) -> float:

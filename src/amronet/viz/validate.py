@@ -11,7 +11,8 @@ __all__ = ["KINDS", "STATES", "check_mask", "validate_nodes"]
 KINDS: tuple[str, ...] = ("base", "router", "agent")
 """Allowed values of the ``kind`` array."""
 
-STATES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped")
+STATES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped",
+                             "failed")
 """Allowed values of the ``state`` array."""
 
 

@@ -1,0 +1,179 @@
+"""Node failures (scenario ``faults``) and what they cost: which nodes fail when, and the books of the repair.
+
+A failed node stops sending and relaying at once and stays where it is, as an obstacle (state ``failed``): the radio
+medium gives it no links, the metrics count it nowhere, and no controller is told. The survivors notice only what
+they sense or hear: a reference gone from their row of the neighbour table. Faults are the first phase of a step
+(:meth:`amronet.sim.loop.Loop.step`), before sensing, so the step's controllers already hear the network without the
+failed nodes.
+
+Randomness: which routers fail (``routers: 0.2``) and the Poisson failures (``rate_per_hour``) are drawn from a
+stream spawned from the run's generator when the run starts, after the radio medium's, so a run's own draws (start
+positions, random walks) and its shadowing are the same with and without faults.
+
+The books (:class:`FaultBook`), per fault event: the time, the nodes, coverage and connected coverage just before
+and just after, and how long until every surviving agent and every deployed router again had a path to a base
+station (``restored_after_s``; ``None`` if never within the run). Over the run: nodes failed, routers added after
+the first fault (extra routers), and the distance travelled after it by the routers that were deployed then (the
+repair's distance) and how many of them moved (its scope).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from amronet.engine.network import agents_connected, connected_to
+from amronet.engine.robots import Role, State
+
+if TYPE_CHECKING:
+    from amronet.scenario import FaultSpec
+    from amronet.sim.run import Run
+
+__all__ = ["FaultBook", "FaultSchedule"]
+
+
+class FaultSchedule:
+    """Which nodes of one run fail at which step.
+
+    Args:
+        specs: The scenario's ``faults``.
+        bases: Node ids of the base reference nodes, in the order of the scenario's base stations.
+        dt: Step length, seconds.
+        rng: The run's generator (a child stream is spawned from it).
+    """
+
+    def __init__(self, specs: list[FaultSpec], bases: np.ndarray, dt: float, rng: np.random.Generator) -> None:
+        self.timed = sorted(((float(s.at), k, s) for k, s in enumerate(specs) if s.kind != "rate_per_hour"),
+                            key=lambda e: (e[0], e[1]))
+        self.poisson = [s for s in specs if s.kind == "rate_per_hour"]
+        self.bases = bases
+        self.dt = dt
+        self.rng = rng.spawn(1)[0]
+        self.skipped: list[str] = []
+        """Entries that named nodes that could not fail (not there yet, agents, failed already), one line each."""
+
+    def due(self, t: float, role: np.ndarray, state: np.ndarray, deployed: np.ndarray) -> list[tuple[str, np.ndarray]]:
+        """The faults of the step that starts at ``t``: ``(kind, node ids)`` per event, ids sorted.
+
+        Args:
+            t: Start time of the step, seconds.
+            role: Roles of all nodes.
+            state: States of all nodes.
+            deployed: Mask of the deployed nodes (base nodes and deployed routers).
+        """
+        events = []
+        alive = state != State.FAILED
+        eps = 1e-9 * max(1.0, t)
+        while self.timed and self.timed[0][0] <= t + eps:
+            _, k, spec = self.timed.pop(0)
+            if spec.kind == "routers":
+                pool = np.flatnonzero(deployed & (role == Role.ROUTER) & alive)
+                count = round(spec.routers * len(pool))
+                ids = np.sort(self.rng.choice(pool, size=count, replace=False)) if count else pool[:0]
+            elif spec.kind == "base_station":
+                ids = self.bases[[spec.base_station]]
+            else:
+                wanted = np.array(spec.ids, dtype=np.int64)
+                ok = (wanted < len(role))
+                ok[ok] &= (role[wanted[ok]] != Role.AGENT) & alive[wanted[ok]]
+                if not ok.all():
+                    self.skipped.append(f"faults[{k}]: nodes {wanted[~ok].tolist()} did not exist, were agents or had "
+                                        f"failed at t = {t:g} s")
+                ids = np.unique(wanted[ok])
+            events.append((spec.kind, ids))
+            alive[ids] = False
+        for spec in self.poisson:
+            if t + eps < (spec.at or 0.0):
+                continue
+            pool = np.flatnonzero(deployed & (role == Role.ROUTER) & alive)
+            p = -np.expm1(-spec.rate_per_hour * self.dt / 3600.0)
+            hit = pool[self.rng.random(len(pool)) < p]
+            if len(hit):
+                events.append(("rate_per_hour", hit))
+                alive[hit] = False
+        return events
+
+
+@dataclass
+class _Event:
+    t: float
+    kind: str
+    nodes: list[int]
+    coverage_before: float
+    connected_coverage_before: float
+    coverage_after: float = float("nan")
+    connected_coverage_after: float = float("nan")
+    restored_at: float | None = None
+
+
+@dataclass
+class FaultBook:
+    """The repair's books of one run (see the module docstring)."""
+
+    events: list[_Event] = field(default_factory=list)
+    routers_at_first: int | None = None
+    distance_at_first: np.ndarray | None = None
+    """Distance travelled so far by each node when the first fault struck (routers deployed then count)."""
+    deployed_at_first: np.ndarray | None = None
+
+    def before(self, run: Run, t: float, kind: str, ids: np.ndarray) -> None:
+        """Note the state of the network just before nodes ``ids`` fail."""
+        m = run.metrics()
+        sw = run.swarm
+        if self.routers_at_first is None:
+            self.routers_at_first = int(np.count_nonzero(sw.role == Role.ROUTER))
+            self.distance_at_first = sw.distance.copy()
+            self.deployed_at_first = sw.deployed & (sw.role == Role.ROUTER)
+        self.events.append(_Event(t, kind, [int(i) for i in ids], m.coverage, m.connected_coverage))
+
+    def after(self, run: Run) -> None:
+        """Note the network just after the last event's nodes failed (the table already without them)."""
+        m = run.metrics()
+        ev = self.events[-1]
+        ev.coverage_after, ev.connected_coverage_after = m.coverage, m.connected_coverage
+
+    @property
+    def restoring(self) -> bool:
+        """Whether some event's damage is not repaired yet."""
+        return any(ev.restored_at is None for ev in self.events)
+
+    def observe(self, run: Run) -> None:
+        """After a step: whether every surviving agent and deployed router has a path to a base station again."""
+        if not self.restoring:
+            return
+        sw, table = run.swarm, run.table
+        live_bases = run.bases[sw.state[run.bases] != State.FAILED]
+        relays = sw.relaying
+        routers = sw.deployed & (sw.role == Role.ROUTER)
+        ok = bool(connected_to(table, live_bases, relays)[routers].all()) if len(live_bases) else not routers.any()
+        if ok and len(run.agents):
+            ok = bool(agents_connected(table, run.agents, live_bases, relays).all()) if len(live_bases) else False
+        if ok:
+            for ev in self.events:
+                if ev.restored_at is None:
+                    ev.restored_at = run.t
+
+    def summary(self, run: Run, schedule: FaultSchedule | None) -> dict[str, Any]:
+        """The ``faults`` section of ``summary.json``."""
+        sw = run.swarm
+        out: dict[str, Any] = {"nodes_failed": int(np.count_nonzero(sw.state == State.FAILED)), "events": []}
+        for ev in self.events:
+            out["events"].append({
+                "t": round(ev.t, 9), "kind": ev.kind, "nodes": ev.nodes,
+                "coverage_before": ev.coverage_before, "coverage_after": ev.coverage_after,
+                "connected_coverage_before": ev.connected_coverage_before,
+                "connected_coverage_after": ev.connected_coverage_after,
+                "restored_after_s": None if ev.restored_at is None else round(ev.restored_at - ev.t, 9)})
+        if self.routers_at_first is not None:
+            assert self.distance_at_first is not None and self.deployed_at_first is not None
+            n0 = len(self.distance_at_first)
+            moved = sw.distance[:n0] - self.distance_at_first
+            repairing = self.deployed_at_first & (moved > 0)
+            out.update(extra_routers=int(np.count_nonzero(sw.role == Role.ROUTER)) - self.routers_at_first,
+                       repair_distance_m=float(moved[self.deployed_at_first].sum()),
+                       routers_moved=int(np.count_nonzero(repairing)))
+        if schedule is not None and schedule.skipped:
+            out["skipped"] = list(schedule.skipped)
+        return out

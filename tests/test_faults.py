@@ -1,0 +1,116 @@
+"""Node failures (issue #16): parsing, scheduling, what a failed node is, and the books of the damage."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import amronet
+from amronet.engine.network import connected_to
+from amronet.engine.robots import Role, State
+from amronet.errors import ScenarioError
+from amronet.sim import Simulation
+from amronet.sim.batch import batchable
+
+
+def spreading(faults, **over):
+    base = {"faults": faults, "sim.time_limit": 120.0, "sim.stop_when_settled": False}
+    return amronet.load_scenario("self-spreading-6x6", overrides={**base, **over})
+
+
+@pytest.mark.parametrize(("faults", "field"), [
+    ([{"at": 10}], "faults[0]"),
+    ([{"at": 10, "routers": 0.2, "ids": [1]}], "faults[0]"),
+    ([{"routers": 0.2}], "faults[0].at"),
+    ([{"at": 10, "routers": 1.5}], "faults[0].routers"),
+    ([{"at": -1, "ids": [2]}], "faults[0].at"),
+    ([{"at": 1, "ids": [2]}, {"at": 5, "base_station": 2}], "faults[1].base_station"),
+    ([{"rate_per_hour": 0}], "faults[0].rate_per_hour"),
+    ([{"at": 1, "nodes": [2]}], "faults[0].nodes"),
+])
+def test_bad_fault_entries_are_one_line_errors(faults, field):
+    with pytest.raises(ScenarioError) as err:
+        spreading(faults)
+    assert err.value.field == field and "\n" not in str(err.value)
+
+
+def test_bad_faults_on_the_command_line_exit_2_and_write_nothing(tmp_path, capsys):
+    from amronet.cli.main import main
+
+    code = main(["run", "--preset", "self-spreading-6x6", "--out", str(tmp_path / "r"), "--set", "faults=[{at: 5}]"])
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "faults[0]" in err
+    assert not (tmp_path / "r").exists()
+
+
+def test_a_fraction_of_the_deployed_routers_fails_when_due_and_is_silent_from_then_on():
+    sim = Simulation(spreading([{"at": 60.0, "routers": 0.5}]), seed=3)
+    while sim.t < 60.0:
+        sim.step()
+        assert not (sim.swarm.state == State.FAILED).any()
+    deployed = np.flatnonzero(sim.swarm.deployed & (sim.swarm.role == Role.ROUTER))
+    sim.step()
+    failed = np.flatnonzero(sim.swarm.state == State.FAILED)
+    assert len(failed) == round(0.5 * len(deployed)) and set(failed) <= set(deployed)
+    positions = sim.swarm.xy[failed].copy()
+    for _ in range(50):
+        sim.step()
+    table = sim.table
+    assert all(table.indptr[i] == table.indptr[i + 1] for i in failed)  # no links: they send nothing
+    geometric = table.geometric
+    assert any(geometric.indptr[i + 1] > geometric.indptr[i] for i in failed)  # still bodies the others sense
+    assert np.array_equal(sim.swarm.xy[failed], positions)  # and they stay where they are
+    linked = connected_to(table, sim.books.live_bases, sim.swarm.relaying)
+    assert not linked[failed].any()
+
+
+def test_faults_are_deterministic_and_leave_the_run_before_them_unchanged():
+    plain = amronet.run(spreading([]), seed=5)
+    a = amronet.run(spreading([{"at": 80.0, "routers": 0.3}, {"rate_per_hour": 200.0, "at": 90.0}]), seed=5)
+    b = amronet.run(spreading([{"at": 80.0, "routers": 0.3}, {"rate_per_hour": 200.0, "at": 90.0}]), seed=5)
+    assert a.network == b.network and a.summary["faults"] == b.summary["faults"]
+    rows_before = [r for r in plain.timeseries["t"] if r < 80.0]
+    k = len(rows_before)
+    for name in ("coverage", "connected_coverage", "routers_deployed"):
+        assert np.array_equal(plain.timeseries[name][:k], a.timeseries[name][:k])
+    kinds = [e["kind"] for e in a.summary["faults"]["events"]]
+    assert kinds[0] == "routers" and "rate_per_hour" in kinds
+    assert a.summary["faults"]["nodes_failed"] == sum(len(e["nodes"]) for e in a.summary["faults"]["events"])
+    assert "faults" not in plain.summary
+
+
+def test_a_base_station_that_fails_takes_its_network_down():
+    result = amronet.run(spreading([{"at": 60.0, "base_station": 0}]), seed=2)
+    event = result.summary["faults"]["events"][0]
+    assert event["nodes"] == [0] and event["connected_coverage_after"] == 0.0
+    assert event["coverage_before"] > 0.0 and event["restored_after_s"] is None
+    assert result.summary["connected_coverage"] == 0.0 and result.summary["routers_connected_fraction"] == 0.0
+
+
+def test_unknown_ids_are_skipped_and_said():
+    result = amronet.run(spreading([{"at": 30.0, "ids": [2, 999]}]), seed=1)
+    faults = result.summary["faults"]
+    assert faults["events"][0]["nodes"] == [2]
+    assert "999" in faults["skipped"][0]
+
+
+def test_a_cut_in_the_agents_chain_is_counted_until_repaired():
+    """Agents in an open field: a router of the chain fails; the agents' outages and the restore time say so."""
+    sc = amronet.load_scenario("agent-assisted-office", overrides={
+        "map": "open-32x32", "radio.r_c": 4.0, "agents.per_base": 1, "algorithm.params.explorer": "frontier",
+        "sim.time_limit": 160.0, "sim.coverage_target": 1.0, "faults": [{"at": 100.0, "routers": 1.0}]})
+    result = amronet.run(sc, seed=1)
+    faults = result.summary["faults"]
+    event = faults["events"][0]
+    assert len(event["nodes"]) >= 2 and event["connected_coverage_after"] < event["connected_coverage_before"]
+    mission = result.summary["mission"]
+    assert mission["outages"] >= 1  # the agent was cut off: its whole chain failed
+    restored = event["restored_after_s"]
+    assert restored is None or restored > 0
+    assert faults["extra_routers"] >= 0
+
+
+def test_runs_with_faults_are_not_batched():
+    assert batchable(spreading([]))
+    assert not batchable(spreading([{"at": 5.0, "routers": 0.1}]))
