@@ -114,3 +114,18 @@ def test_a_cut_in_the_agents_chain_is_counted_until_repaired():
 def test_runs_with_faults_are_not_batched():
     assert batchable(spreading([]))
     assert not batchable(spreading([{"at": 5.0, "routers": 0.1}]))
+
+
+def test_the_failures_experiment_writes_its_table_and_figure(tmp_path):
+    from amronet.experiments.failures import run_failures
+    from amronet.experiments.options import RunOptions
+
+    out = tmp_path / "failures"
+    report = run_failures(out, maps=("autolab",), fractions=(0.3,), runs=2, fault_at=40.0, after=20.0,
+                          options=RunOptions(workers=1, show_progress=False))
+    assert len(report["rows"]) == 4 and {r["algorithm"] for r in report["rows"]} == {"self-spreading",
+                                                                                      "agent-assisted"}
+    for r in report["rows"]:
+        assert r["failed"] >= 1 and r["connected_after"] <= r["connected_before"] + 1e-12
+    assert (out / "failures.png").read_bytes()[:4] == b"\x89PNG"
+    assert "| autolab | agent-assisted | 30 % |" in (out / "failures.md").read_text()

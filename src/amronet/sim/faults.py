@@ -129,10 +129,16 @@ class FaultBook:
         self.events.append(_Event(t, kind, [int(i) for i in ids], m.coverage, m.connected_coverage))
 
     def after(self, run: Run) -> None:
-        """Note the network just after the last event's nodes failed (the table already without them)."""
+        """Note the network just after the last event's nodes failed (the table already without them).
+
+        A fault that cut nobody off (every surviving agent and deployed router still has a path to a base station)
+        is restored after 0 s.
+        """
         m = run.metrics()
         ev = self.events[-1]
         ev.coverage_after, ev.connected_coverage_after = m.coverage, m.connected_coverage
+        if self._all_linked(run):
+            ev.restored_at = ev.t
 
     @property
     def restoring(self) -> bool:
@@ -141,19 +147,24 @@ class FaultBook:
 
     def observe(self, run: Run) -> None:
         """After a step: whether every surviving agent and deployed router has a path to a base station again."""
-        if not self.restoring:
+        if not self.restoring or not self._all_linked(run):
             return
+        for ev in self.events:
+            if ev.restored_at is None:
+                ev.restored_at = run.t
+
+    @staticmethod
+    def _all_linked(run: Run) -> bool:
+        """Whether every surviving agent and deployed router has a path to a base station that has not failed."""
         sw, table = run.swarm, run.table
-        live_bases = run.bases[sw.state[run.bases] != State.FAILED]
+        live_bases = run.live_bases
         relays = sw.relaying
         routers = sw.deployed & (sw.role == Role.ROUTER)
-        ok = bool(connected_to(table, live_bases, relays)[routers].all()) if len(live_bases) else not routers.any()
-        if ok and len(run.agents):
-            ok = bool(agents_connected(table, run.agents, live_bases, relays).all()) if len(live_bases) else False
-        if ok:
-            for ev in self.events:
-                if ev.restored_at is None:
-                    ev.restored_at = run.t
+        if len(live_bases) == 0:
+            return not routers.any() and not len(run.agents)
+        if not connected_to(table, live_bases, relays)[routers].all():
+            return False
+        return not len(run.agents) or bool(agents_connected(table, run.agents, live_bases, relays).all())
 
     def summary(self, run: Run, schedule: FaultSchedule | None) -> dict[str, Any]:
         """The ``faults`` section of ``summary.json``."""

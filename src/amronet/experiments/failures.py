@@ -1,0 +1,183 @@
+"""``amronet reproduce failures``: what a network loses when routers fail at once, and what it regains.
+
+On ``office-32x32`` and ``autolab``, a fraction (10, 20, 30 %) of the deployed routers fails at ``fault_at`` (600 s,
+after deployment has settled: agent-assisted runs reach 99 % coverage within 110-470 s there, and self-spreading's
+coverage has levelled off), and the run goes on for ``after`` seconds (600). Algorithms: self-spreading (the presets
+``self-spreading-office``, 160 routers from four corners at ``r_c`` 4 m, and ``self-spreading-autolab``, 60 routers
+at 2 m; routers still exploring refill holes by the paper's rules) and agent-assisted deployment (3 agents from one
+base station, as in ``reproduce buildings``, frontier explorer; agents repair by their drop rule with the references
+they still hear; the coverage target is switched off so the agents keep going). ``runs`` seeds per cell.
+
+Per run: connected coverage just before and just after the fault and at the end, the time until every surviving
+agent and deployed router again had a path to a base station, extra routers, the agents' outages. A figure shows
+connected coverage over time around the fault, mean and 95 % band per fraction.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from amronet.experiments.buildings import BUILDINGS
+from amronet.experiments.common import agent_scenario, csv_text, write_outputs
+from amronet.experiments.options import RunOptions
+from amronet.experiments.runner import run_jobs
+from amronet.sweeps.stats import mean_ci, mean_ci_columns
+
+__all__ = ["ALGORITHMS", "run_failures"]
+
+ALGORITHMS = ("self-spreading", "agent-assisted")
+SPREADING_PRESETS = {"office-32x32": "self-spreading-office", "autolab": "self-spreading-autolab"}
+
+
+def _scenario(algorithm: str, map_name: str, fraction: float, fault_at: float, after: float,
+              explorer: str) -> dict[str, Any]:
+    from amronet.scenario import load_scenario
+
+    fault = [{"at": float(fault_at), "routers": float(fraction)}]
+    limit = float(fault_at + after)
+    if algorithm == "self-spreading":
+        sc = load_scenario(SPREADING_PRESETS[map_name]).to_dict()
+        sc["faults"] = fault
+        sc["sim"] = {**sc["sim"], "time_limit": limit, "stop_when_settled": False, "record_every": 50}
+        return sc
+    b = BUILDINGS[map_name]
+    sc = agent_scenario(b.map, b.r_c, (b.base,), 3, explorer, limit)
+    sc["faults"] = fault
+    sc["sim"] = {**sc["sim"], "coverage_target": 1.0, "record_every": 20}
+    return sc
+
+
+def run_failures(
+    out_dir: Path,
+    maps: tuple[str, ...] = ("office-32x32", "autolab"),
+    algorithms: tuple[str, ...] = ALGORITHMS,
+    fractions: tuple[float, ...] = (0.1, 0.2, 0.3),
+    runs: int = 20,
+    fault_at: float = 600.0,
+    after: float = 600.0,
+    options: RunOptions | None = None,
+) -> dict[str, Any]:
+    """Run the experiment; write ``failures_runs.csv``, ``failures_table.csv``, ``failures.md``, ``failures.png``.
+
+    Args:
+        out_dir: Output folder (replaced atomically; its result store is kept).
+        maps: ``office-32x32`` and/or ``autolab``.
+        algorithms: ``self-spreading`` and/or ``agent-assisted``.
+        fractions: Fractions of the deployed routers that fail at once.
+        runs: Seeded runs per cell.
+        fault_at: When the routers fail, simulated seconds.
+        after: How long each run goes on after the fault.
+        options: How the runs are made (default :class:`RunOptions`): the agents' ``explorer``; ``seed``: job ``k``
+            uses ``seed * 100000 + 80000 + k``; ``time_limit``, when given, is the length of a run: the fault then
+            strikes at ``min(fault_at, time_limit / 2)`` and the rest follows it.
+
+    Returns:
+        ``{"rows", "table", "markdown"}``.
+    """
+    options = options or RunOptions()
+    if options.time_limit is not None:
+        fault_at = min(fault_at, options.time_limit / 2)
+        after = options.time_limit - fault_at
+    jobs = []
+    for map_name in maps:
+        for algorithm in algorithms:
+            for fraction in fractions:
+                scenario = _scenario(algorithm, map_name, fraction, fault_at, after, options.explorer)
+                for k in range(runs):
+                    labels = {"map": map_name, "algorithm": algorithm, "fraction": fraction, "run": k}
+                    jobs.append({"scenario": scenario, "seed": options.seed * 100_000 + 80_000 + len(jobs),
+                                 "labels": labels, "timeseries": True})
+    results = run_jobs(jobs, options, description="failures")
+    rows, curves = [], {}
+    for res in results:
+        lab, s, ts = res["labels"], res["summary"], res["timeseries"]
+        event = s["faults"]["events"][0] if s["faults"]["events"] else None
+        mission = s.get("mission") or {}
+        rows.append({**lab, "seed": res["seed"], "failed": s["faults"]["nodes_failed"],
+                     "connected_before": None if event is None else round(event["connected_coverage_before"], 6),
+                     "connected_after": None if event is None else round(event["connected_coverage_after"], 6),
+                     "connected_end": round(s["connected_coverage"], 6),
+                     "restored_after_s": None if event is None else event["restored_after_s"],
+                     "extra_routers": s["faults"].get("extra_routers", 0),
+                     "outages": mission.get("outages"), "wall_time_s": round(s["wall_time_s"], 3)})
+        key = (lab["map"], lab["algorithm"], lab["fraction"])
+        curves.setdefault(key, []).append((np.asarray(ts["t"]), np.asarray(ts["connected_coverage"])))
+    table = _table(rows)
+    markdown = _markdown(table, runs, fault_at, after)
+    files = {"failures_runs.csv": csv_text(rows), "failures_table.csv": csv_text(table), "failures.md": markdown,
+             "failures.png": _figure(curves, maps, algorithms, fault_at)}
+    write_outputs(out_dir, files)
+    return {"rows": rows, "table": table, "markdown": markdown}
+
+
+def _table(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    cells: dict[tuple, list[dict[str, Any]]] = {}
+    for r in rows:
+        cells.setdefault((r["map"], r["algorithm"], r["fraction"]), []).append(r)
+    table = []
+    for (map_name, algorithm, fraction), sel in cells.items():
+        entry: dict[str, Any] = {"map": map_name, "algorithm": algorithm, "fraction": fraction, "runs": len(sel)}
+        for name in ("failed", "connected_before", "connected_after", "connected_end", "extra_routers"):
+            values = np.array([np.nan if r[name] is None else r[name] for r in sel], dtype=float)
+            entry[f"{name}_mean"], entry[f"{name}_ci95"] = mean_ci(values)
+        restored = [r["restored_after_s"] for r in sel if r["restored_after_s"] is not None]
+        entry["restored_runs"] = len(restored)
+        entry["restored_median_s"] = float(np.median(restored)) if restored else None
+        table.append(entry)
+    return table
+
+
+def _markdown(table: list[dict[str, Any]], runs: int, fault_at: float, after: float) -> str:
+    lines = ["# Routers that fail", "",
+             f"A fraction of the deployed routers fails at once at t = {fault_at:g} s; {after:g} s follow. "
+             f"{runs} runs per cell; connected coverage as mean ± 95 % CI.", "",
+             "| map | algorithm | fails | routers failed | connected before | just after | at the end | "
+             "restored (runs, median s) | extra routers |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for e in table:
+        med = "" if e["restored_median_s"] is None else f", {e['restored_median_s']:g} s"
+        lines.append(f"| {e['map']} | {e['algorithm']} | {100 * e['fraction']:g} % | {e['failed_mean']:.1f} | "
+                     f"{100 * e['connected_before_mean']:.1f} ± {100 * e['connected_before_ci95']:.1f} % | "
+                     f"{100 * e['connected_after_mean']:.1f} ± {100 * e['connected_after_ci95']:.1f} % | "
+                     f"{100 * e['connected_end_mean']:.1f} ± {100 * e['connected_end_ci95']:.1f} % | "
+                     f"{e['restored_runs']}/{e['runs']}{med} | {e['extra_routers_mean']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def _figure(curves: dict[tuple, list[tuple[np.ndarray, np.ndarray]]], maps: tuple[str, ...],
+            algorithms: tuple[str, ...], fault_at: float) -> bytes:
+    """Connected coverage over time, mean and 95 % band per fraction; a panel per map and algorithm."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4.2 * len(algorithms), 3.2 * len(maps)))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(maps), len(algorithms), squeeze=False)
+    fractions = sorted({k[2] for k in curves})
+    for i, map_name in enumerate(maps):
+        for j, algorithm in enumerate(algorithms):
+            ax = axes[i][j]
+            for c, fraction in enumerate(fractions):
+                series = curves.get((map_name, algorithm, fraction), [])
+                if not series:
+                    continue
+                t = series[0][0]
+                n = min(len(s[1]) for s in series)
+                mean, half = mean_ci_columns(np.array([s[1][:n] for s in series]))
+                ax.plot(t[:n], 100 * mean, color=f"C{c}", label=f"{100 * fraction:g} % fail")
+                ax.fill_between(t[:n], 100 * (mean - half), 100 * (mean + half), color=f"C{c}", alpha=0.2)
+            ax.axvline(fault_at, color="0.3", lw=0.8, ls="--")
+            ax.set_title(f"{algorithm} on {map_name}", fontsize=9)
+            ax.set_ylim(0, 102)
+            ax.grid(True, alpha=0.3)
+            ax.set_xlabel("t (s)")
+            if j == 0:
+                ax.set_ylabel("connected coverage (%)")
+            ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return buf.getvalue()
