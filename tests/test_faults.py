@@ -129,3 +129,13 @@ def test_the_failures_experiment_writes_its_table_and_figure(tmp_path):
         assert r["failed"] >= 1 and r["connected_after"] <= r["connected_before"] + 1e-12
     assert (out / "failures.png").read_bytes()[:4] == b"\x89PNG"
     assert "| autolab | agent-assisted | 30 % |" in (out / "failures.md").read_text()
+
+
+def test_coverage_target_off_lets_agents_go_on_after_full_coverage():
+    sc = amronet.load_scenario("agent-assisted-office", overrides={
+        "map": "open-32x32", "radio.r_c": 10.0, "algorithm.params.explorer": "frontier", "sim.time_limit": 120.0,
+        "sim.coverage_target": "off"})
+    result = amronet.run(sc, seed=1)
+    assert result.summary["stop_reason"] == "time_limit" and result.summary["coverage_target"] is None
+    with pytest.raises(ScenarioError, match="sim.coverage_target"):
+        amronet.load_scenario("agent-assisted-office", overrides={"sim.coverage_target": "never"})

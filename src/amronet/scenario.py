@@ -30,6 +30,7 @@ from pydantic import (
     StrictInt,
     Tag,
     ValidationError,
+    field_validator,
     model_validator,
 )
 
@@ -194,10 +195,22 @@ class SimSpec(_Strict):
     dt: PositiveFloat = 0.1
     time_limit: PositiveFloat = 300.0
     record_every: Annotated[StrictInt, Field(ge=1)] = 10
-    coverage_target: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] | None = None
+    coverage_target: float | str | None = None
+    """Coverage at which a run ends, in (0, 1]; ``null``: the algorithm's default (0.99 for agent-assisted deployment,
+    none for the others); ``off``: none (the run goes on until it settles or reaches its time limit)."""
     coverage_method: Literal["raster", "exact"] = "raster"
     stop_when_settled: StrictBool = True
     robot_collisions: StrictBool = True
+
+    @field_validator("coverage_target", mode="before")
+    @classmethod
+    def _target(cls, value: Any) -> Any:
+        ok = value is None or value == "off" or (
+            isinstance(value, float) and math.isfinite(value) and 0 < value <= 1)
+        if not ok:
+            raise ValueError(f"@sim.coverage_target@{value!r} is not a fraction in (0, 1] (with a decimal point) "
+                             "nor off; give e.g. 0.99, or off for no target")
+        return value
 
 
 class FaultSpec(_Strict):

@@ -148,6 +148,8 @@ class Loop:
         target = sc.sim.coverage_target
         if target is None:
             target = controller_cls.default_coverage_target
+        elif target == "off":
+            target = None
         self.runs = [Run(self, g, seed, rngs[g], blocks[g], target) for g, seed in enumerate(seeds)]
         self._with_agents = [run for run in self.runs if len(run.agents)]
         self._faulty = self.runs[0] if sc.faults else None
