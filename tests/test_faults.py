@@ -137,5 +137,5 @@ def test_coverage_target_off_lets_agents_go_on_after_full_coverage():
         "sim.coverage_target": "off"})
     result = amronet.run(sc, seed=1)
     assert result.summary["stop_reason"] == "time_limit" and result.summary["coverage_target"] is None
-    with pytest.raises(ScenarioError, match="sim.coverage_target"):
+    with pytest.raises(ScenarioError, match=r"sim\.coverage_target"):
         amronet.load_scenario("agent-assisted-office", overrides={"sim.coverage_target": "never"})
