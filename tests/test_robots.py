@@ -26,7 +26,8 @@ from amronet.engine.robots import (
     state_lookup,
 )
 
-ALL_STATES = (State.BASE, State.EXPLORE, State.REFERENCE, State.TRIANGLE, State.TRIANGLE_SETTLED, State.AGENT)
+ALL_STATES = (State.BASE, State.EXPLORE, State.REFERENCE, State.TRIANGLE, State.TRIANGLE_SETTLED, State.AGENT,
+              State.DROPPED, State.FAILED)
 ROW_FIELDS = ("xy", "heading", "role", "state", "status", "radius", "max_speed", "model", "distance")
 CUSTOM = RobotModel("custom", radius=0.1, max_speed=0.3, sensor_beams=4, sensor_range=0.5)
 
@@ -98,6 +99,8 @@ def test_state_codes_index_the_state_names() -> None:
     assert STATE_NAMES[State.TRIANGLE] == "triangle"
     assert STATE_NAMES[State.TRIANGLE_SETTLED] == "triangle-settled"
     assert STATE_NAMES[State.AGENT] == "agent"
+    assert STATE_NAMES[State.DROPPED] == "dropped"
+    assert STATE_NAMES[State.FAILED] == "failed"
     assert sorted(ALL_STATES) == list(range(len(STATE_NAMES)))
     assert len(set(STATE_NAMES)) == len(STATE_NAMES)
 
@@ -108,11 +111,20 @@ def test_codes_are_plain_ints_that_fit_int8() -> None:
         assert -128 <= code <= 127
 
 
-def test_every_state_is_either_deployed_or_mobile() -> None:
+def test_every_state_is_deployed_mobile_or_silent() -> None:
     assert set(DEPLOYED_STATES) == {State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED}
     assert set(MOBILE_STATES) == {State.EXPLORE, State.TRIANGLE, State.AGENT}
     assert not set(DEPLOYED_STATES) & set(MOBILE_STATES)
-    assert set(DEPLOYED_STATES) | set(MOBILE_STATES) == set(ALL_STATES)
+    silent = {State.DROPPED, State.FAILED}  # still, and relaying nothing
+    assert set(DEPLOYED_STATES) | set(MOBILE_STATES) | silent == set(ALL_STATES)
+
+
+def test_relaying_leaves_out_agents_and_silent_routers() -> None:
+    sw = Swarm.build([(BEBOT, Role.ROUTER, State.REFERENCE, np.zeros((4, 2)), np.zeros(4)),
+                      (PIONEER, Role.AGENT, State.AGENT, np.zeros((1, 2)), np.zeros(1))])
+    sw.state[1], sw.state[2] = State.DROPPED, State.FAILED
+    assert sw.relaying.tolist() == [True, False, False, True, False]
+    assert sw.deployed.tolist() == [True, False, False, True, False]
 
 
 def test_settling_states_are_the_mobile_router_states() -> None:
