@@ -123,8 +123,8 @@ def test_the_failures_experiment_writes_its_table_and_figure(tmp_path):
     out = tmp_path / "failures"
     report = run_failures(out, maps=("autolab",), fractions=(0.3,), runs=2, fault_at=40.0, after=20.0,
                           options=RunOptions(workers=1, show_progress=False))
-    assert len(report["rows"]) == 4 and {r["algorithm"] for r in report["rows"]} == {"self-spreading",
-                                                                                      "agent-assisted"}
+    assert len(report["rows"]) == 6 and {r["algorithm"] for r in report["rows"]} == {
+        "self-spreading", "agent-assisted", "agent-assisted-relocate"}
     for r in report["rows"]:
         assert r["failed"] >= 1 and r["connected_after"] <= r["connected_before"] + 1e-12
     assert (out / "failures.png").read_bytes()[:4] == b"\x89PNG"
@@ -139,3 +139,42 @@ def test_coverage_target_off_lets_agents_go_on_after_full_coverage():
     assert result.summary["stop_reason"] == "time_limit" and result.summary["coverage_target"] is None
     with pytest.raises(ScenarioError, match=r"sim\.coverage_target"):
         amronet.load_scenario("agent-assisted-office", overrides={"sim.coverage_target": "never"})
+
+
+def corridor_run(repair: str, seed: int = 1):
+    """One agent lays a chain along a 30 m corridor; at t = 100 s the second router of the chain fails."""
+    from amronet.world.occupancy import FREE, OCCUPIED, OccupancyMap
+
+    cells = np.full((30, 600), FREE, dtype=np.int8)
+    cells[0, :] = cells[-1, :] = cells[:, 0] = cells[:, -1] = OCCUPIED
+    omap = OccupancyMap(name="corridor", resolution=0.05, origin=(0.0, 0.0), cells=cells)
+    sc = amronet.load_scenario({
+        "map": "open-32x32", "radio": {"r_c": 4.0},
+        "algorithm": {"name": "agent-assisted", "params": {"explorer": "frontier", "repair": repair}},
+        "base_stations": [{"x": 0.75, "y": 0.75, "region": [1.0, 1.0]}], "routers": {"count": 0},
+        "agents": {"per_base": 1}, "sim": {"dt": 0.25, "time_limit": 200.0, "coverage_target": "off"},
+        "faults": [{"at": 100.0, "ids": [3]}]})
+    sim = Simulation(sc, seed=seed, omap=omap)
+    return sim, sim.run()
+
+
+def test_relocation_bridges_a_cut_in_a_corridor_and_the_chain_stays_without_it():
+    _, plain = corridor_run("none")
+    event = plain.summary["faults"]["events"][0]
+    assert event["nodes"] == [3] and event["connected_coverage_after"] < 0.5
+    assert event["restored_after_s"] is None and plain.summary["routers_connected_fraction"] < 0.5
+    sim, fixed = corridor_run("relocate")
+    faults = fixed.summary["faults"]
+    assert faults["events"][0]["restored_after_s"] is not None  # every survivor has a path again
+    assert faults["routers_moved"] >= 1 and faults["repair_distance_m"] > 0
+    assert fixed.summary["mission"]["relocations"] >= 1
+    assert fixed.summary["routers_connected_fraction"] == 1.0 and fixed.summary["connected_coverage"] > 0.95
+    sw = sim.swarm
+    assert sw.state[3] == State.FAILED and not connected_to(sim.table, sim.books.live_bases, sw.relaying)[3]
+    assert not (sw.state == State.RELOCATING).any()  # every relocation ended
+
+
+def test_relocation_is_deterministic():
+    _, a = corridor_run("relocate", seed=2)
+    _, b = corridor_run("relocate", seed=2)
+    assert a.network == b.network and a.summary["faults"] == b.summary["faults"]

@@ -32,7 +32,7 @@ Choices the paper leaves open, and ours:
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numba import njit
@@ -44,6 +44,7 @@ from amronet.algorithms.drops.trail import Trails
 from amronet.algorithms.explorers import EXPLORERS
 from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.references import best_reference_margin, check_loss_band, track_row
+from amronet.algorithms.relocate import Relocator
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.engine.network import agents_connected
 from amronet.engine.robots import Role, State
@@ -68,6 +69,9 @@ class AgentAssistedParams(BaseModel):
         drop_rule: When an agent puts a router down (:data:`amronet.algorithms.drops.DROP_RULES`); the paper's
             ``last-reference`` by default.
         drop: The drop rule's own parameters (e.g. ``{drop_margin_db: 3}`` for ``link-quality``).
+        repair: ``none``, or ``relocate``: deployed routers that a failure cut off move to bridge the cut
+            (:mod:`amronet.algorithms.relocate`).
+        repair_confirm_s: How long a neighbour must be missing before a router counts it as lost, seconds.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -81,6 +85,8 @@ class AgentAssistedParams(BaseModel):
     release_gap: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.02
     drop_rule: str = "last-reference"
     drop: dict[str, Any] = Field(default_factory=dict)
+    repair: Literal["none", "relocate"] = "none"
+    repair_confirm_s: Annotated[float, Field(strict=True, ge=0, le=600, allow_inf_nan=False)] = 1.0
 
     @model_validator(mode="after")
     def _check_drop_rule(self) -> AgentAssistedParams:
@@ -210,6 +216,8 @@ class AgentAssisted(Controller):
                        else None)
         self._general = (self.params.drop_rule != "last-reference" or self.settle_s > 0 or not self.tether
                          or self.reverse_after_s is not None)
+        self.relocator = (Relocator(n, self.params.repair_confirm_s, self.params.give_up_steps)
+                          if self.params.repair == "relocate" else None)
         """Whether every step takes the general drop path (the paper's rule alone acts only on "about to lose")."""
 
     @classmethod
@@ -232,6 +240,8 @@ class AgentAssisted(Controller):
         st = self.steering
         st.goal, st.anchors = pad(st.goal, 0.0), pad(st.anchors, -1)
         st.last_to_goal, st.blocked_steps = pad(st.last_to_goal, np.inf), pad(st.blocked_steps, 0)
+        if self.relocator is not None:
+            self.relocator.grow(n_new)
 
     # -- the deployed nodes (they change only when this controller releases a router or one settles) ---------
     def _deployed_nodes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -325,6 +335,7 @@ class AgentAssisted(Controller):
         if self.trails is not None:
             self._back_up(view)
         speed = self.agent_speed.copy()
+        movers, speeds = [agents], [speed]
 
         # triangle routers released before this step drive to their goals
         if self.moving_triangles:
@@ -338,8 +349,41 @@ class AgentAssisted(Controller):
                     sw.state[tri[done]] = State.TRIANGLE_SETTLED
                     self.moving_triangles -= int(np.count_nonzero(done))
                     self._nodes_changed()
-                return Command(np.concatenate([agents, tri]), np.concatenate([speed, length / self.dt]))
-        return Command(agents, speed)
+                movers.append(tri)
+                speeds.append(length / self.dt)
+        if self.relocator is not None:
+            moving, length = self._relocate(step, n_before)
+            if len(moving):
+                movers.append(moving)
+                speeds.append(length / self.dt)
+        if len(movers) == 1:
+            return Command(agents, speed)
+        return Command(np.concatenate(movers), np.concatenate(speeds))
+
+    def _relocate(self, step: StepInput, n_before: int) -> tuple[np.ndarray, np.ndarray]:
+        """The relocation repair: start and stop relocations, steer the routers that relocate (sensed this step)."""
+        assert self.relocator is not None
+        sw = self.swarm
+        started, stopped = self.relocator.update(step.t, step.table, sw)
+        if len(started) or len(stopped):
+            sw.state[started] = State.RELOCATING
+            sw.state[stopped] = State.REFERENCE
+            self._nodes_changed()
+        moving = np.flatnonzero(sw.state[:n_before] == State.RELOCATING)
+        if not len(moving):
+            return moving, np.zeros(0)
+        model = int(sw.model[moving[0]])
+        sensed = step.readings.groups.get(model, (np.zeros(0, dtype=np.int64), None))[0]
+        moving = moving[np.isin(moving, sensed)]  # those that started this step move from the next one
+        if not len(moving):
+            return moving, np.zeros(0)
+        length, done = self.relocator.steering.steer(moving, sw.xy, sw.heading, step.readings.of(moving, model),
+                                                     sw.models[model].sensor_range, sw.max_speed[moving] * self.dt,
+                                                     self.r_eff)
+        if done.any():  # arrived or blocked: it stays where it is and serves as a reference again
+            sw.state[moving[done]] = State.REFERENCE
+            self._nodes_changed()
+        return moving, length
 
     # -- the drop rule's view and the realism switches ----------------------------------------------------------
     def _view(self, step: StepInput, current: np.ndarray) -> AgentView:
@@ -412,6 +456,8 @@ class AgentAssisted(Controller):
                                   "triangle_relays": len(self.triangles_released)}
         if self.reverse_after_s is not None:
             out["reverse_drops"] = self.reverse_drops
+        if self.relocator is not None:
+            out["relocations"] = self.relocator.moves
         out.update(self.drop_rule.report())
         return out
 

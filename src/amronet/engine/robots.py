@@ -66,15 +66,18 @@ class State:
     """Router an agent has put down that does not relay yet (``agents.drop_settle_s``); then a reference."""
     FAILED = 7
     """Node that failed (``faults``): it stays where it is as an obstacle and neither sends nor relays."""
+    RELOCATING = 8
+    """Deployed router cut off by a failure, moving to bridge the cut (agent-assisted ``repair: relocate``); it
+    relays but serves as no reference until it has settled again."""
 
 
 STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped",
-                                 "failed")
+                                 "failed", "relocating")
 ROLE_NAMES: tuple[str, ...] = ("base", "router", "agent")
 
 DEPLOYED_STATES: tuple[int, ...] = (State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED)
 """States of nodes that stay put and act as references for routers and agents."""
-MOBILE_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE, State.AGENT)
+MOBILE_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE, State.AGENT, State.RELOCATING)
 """States of robots that move in a step."""
 SETTLING_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE)
 """States of routers that have not settled yet."""

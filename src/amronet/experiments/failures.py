@@ -6,7 +6,8 @@ coverage has levelled off), and the run goes on for ``after`` seconds (600). Alg
 ``self-spreading-office``, 160 routers from four corners at ``r_c`` 4 m, and ``self-spreading-autolab``, 60 routers
 at 2 m; routers still exploring refill holes by the paper's rules) and agent-assisted deployment (3 agents from one
 base station, as in ``reproduce buildings``, frontier explorer; agents repair by their drop rule with the references
-they still hear; ``sim.coverage_target: off`` keeps the agents going after 99 %). ``runs`` seeds per cell.
+they still hear; ``sim.coverage_target: off`` keeps the agents going after 99 %), and agent-assisted deployment with
+``algorithm.params.repair: relocate`` (:mod:`amronet.algorithms.relocate`). ``runs`` seeds per cell.
 
 Per run: connected coverage just before and just after the fault and at the end, the time until every surviving
 agent and deployed router again had a path to a base station, extra routers, the agents' outages. A figure shows
@@ -29,7 +30,8 @@ from amronet.sweeps.stats import mean_ci, mean_ci_columns
 
 __all__ = ["ALGORITHMS", "run_failures"]
 
-ALGORITHMS = ("self-spreading", "agent-assisted")
+ALGORITHMS = ("self-spreading", "agent-assisted", "agent-assisted-relocate")
+"""Self-spreading, and agent-assisted deployment without and with the ``relocate`` repair."""
 SPREADING_PRESETS = {"office-32x32": "self-spreading-office", "autolab": "self-spreading-autolab"}
 
 
@@ -46,6 +48,8 @@ def _scenario(algorithm: str, map_name: str, fraction: float, fault_at: float, a
         return sc
     b = BUILDINGS[map_name]
     sc = agent_scenario(b.map, b.r_c, (b.base,), 3, explorer, limit)
+    if algorithm == "agent-assisted-relocate":
+        sc["algorithm"]["params"]["repair"] = "relocate"
     sc["faults"] = fault
     sc["sim"] = {**sc["sim"], "coverage_target": "off", "record_every": 20}
     return sc

@@ -17,7 +17,7 @@ import numpy as np
 
 from amronet import __version__
 from amronet.engine.network import connected_to
-from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role
+from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role, State
 from amronet.outputs.files import write_files_atomically
 
 if TYPE_CHECKING:
@@ -167,9 +167,12 @@ class RunResult:
 
 
 def _routers_connected(sim: Run) -> float:
-    """Fraction of the routers that have a multi-hop path to a base station through the network."""
+    """Fraction of the routers that have a multi-hop path to a base station through the network.
+
+    Failed routers are left out (``faults`` counts them).
+    """
     sw = sim.swarm
-    routers = sw.role == Role.ROUTER
+    routers = (sw.role == Role.ROUTER) & (sw.state != State.FAILED)
     if not routers.any():
         return 1.0
     linked = connected_to(sim.table, sim.live_bases, sim.relay_mask)
