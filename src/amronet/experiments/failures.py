@@ -107,6 +107,8 @@ def run_failures(
                      "connected_end": round(s["connected_coverage"], 6),
                      "restored_after_s": None if event is None else event["restored_after_s"],
                      "extra_routers": s["faults"].get("extra_routers", 0),
+                     "routers_moved": s["faults"].get("routers_moved", 0),
+                     "repair_distance_m": round(s["faults"].get("repair_distance_m", 0.0), 3),
                      "outages": mission.get("outages"), "wall_time_s": round(s["wall_time_s"], 3)})
         key = (lab["map"], lab["algorithm"], lab["fraction"])
         curves.setdefault(key, []).append((np.asarray(ts["t"]), np.asarray(ts["connected_coverage"])))
@@ -125,7 +127,8 @@ def _table(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     table = []
     for (map_name, algorithm, fraction), sel in cells.items():
         entry: dict[str, Any] = {"map": map_name, "algorithm": algorithm, "fraction": fraction, "runs": len(sel)}
-        for name in ("failed", "connected_before", "connected_after", "connected_end", "extra_routers"):
+        for name in ("failed", "connected_before", "connected_after", "connected_end", "extra_routers", "routers_moved",
+                     "repair_distance_m"):
             values = np.array([np.nan if r[name] is None else r[name] for r in sel], dtype=float)
             entry[f"{name}_mean"], entry[f"{name}_ci95"] = mean_ci(values)
         restored = [r["restored_after_s"] for r in sel if r["restored_after_s"] is not None]
@@ -140,14 +143,16 @@ def _markdown(table: list[dict[str, Any]], runs: int, fault_at: float, after: fl
              f"A fraction of the deployed routers fails at once at t = {fault_at:g} s; {after:g} s follow. "
              f"{runs} runs per cell; connected coverage as mean ± 95 % CI.", "",
              "| map | algorithm | fails | routers failed | connected before | just after | at the end | "
-             "restored (runs, median s) | extra routers |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "restored (runs, median s) | extra routers | routers moved | distance moved (m) |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for e in table:
         med = "" if e["restored_median_s"] is None else f", {e['restored_median_s']:g} s"
         lines.append(f"| {e['map']} | {e['algorithm']} | {100 * e['fraction']:g} % | {e['failed_mean']:.1f} | "
                      f"{100 * e['connected_before_mean']:.1f} ± {100 * e['connected_before_ci95']:.1f} % | "
                      f"{100 * e['connected_after_mean']:.1f} ± {100 * e['connected_after_ci95']:.1f} % | "
                      f"{100 * e['connected_end_mean']:.1f} ± {100 * e['connected_end_ci95']:.1f} % | "
-                     f"{e['restored_runs']}/{e['runs']}{med} | {e['extra_routers_mean']:.1f} |")
+                     f"{e['restored_runs']}/{e['runs']}{med} | {e['extra_routers_mean']:.1f} | "
+                     f"{e['routers_moved_mean']:.1f} | {e['repair_distance_m_mean']:.1f} |")
     return "\n".join(lines) + "\n"
 
 
