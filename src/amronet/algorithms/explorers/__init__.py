@@ -5,12 +5,14 @@ A new one subclasses :class:`Explorer` and registers itself with ``@EXPLORERS.re
 (:mod:`~amronet.algorithms.explorers.base`); scenarios pick it with ``algorithm.params.explorer``.
 
 Modules: :mod:`~amronet.algorithms.explorers.base` (the base class and the registry),
-:mod:`~amronet.algorithms.explorers.random_walk` (``"random"``) and :mod:`~amronet.algorithms.explorers.frontier`
-(``"frontier"``). Importing this package registers them all.
+:mod:`~amronet.algorithms.explorers.random_walk` (``"random"``), :mod:`~amronet.algorithms.explorers.frontier`
+(``"frontier"``) and :mod:`~amronet.algorithms.explorers.wall_follow` (``"wall-follow"``). Importing this package
+registers them all.
 """
 
 from amronet.algorithms.explorers.base import EXPLORERS, Explorer
 from amronet.algorithms.explorers.frontier import FrontierExplorer
 from amronet.algorithms.explorers.random_walk import RandomExplorer
+from amronet.algorithms.explorers.wall_follow import WallFollowExplorer
 
-__all__ = ["EXPLORERS", "Explorer", "FrontierExplorer", "RandomExplorer"]
+__all__ = ["EXPLORERS", "Explorer", "FrontierExplorer", "RandomExplorer", "WallFollowExplorer"]
