@@ -28,8 +28,9 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from amronet.algorithms.drops.base import DROP_RULES, AgentView, DropContext, DropRule
+from amronet.algorithms.link_quality import MarginSmoother
 
-__all__ = ["LinkQuality", "LinkQualityParams", "MarginFilter"]
+__all__ = ["LinkQuality", "LinkQualityParams"]
 
 Decibels = Annotated[float, Field(strict=True, ge=0, le=60, allow_inf_nan=False)]
 
@@ -57,32 +58,6 @@ class LinkQualityParams(BaseModel):
         return self
 
 
-class MarginFilter:
-    """Per-robot exponential moving average of a link margin, restarted when the robot hears nothing.
-
-    Args:
-        n: Number of robots.
-        dt: Step length, seconds.
-        smoothing_s: Time constant, seconds (0: the raw margin).
-    """
-
-    def __init__(self, n: int, dt: float, smoothing_s: float) -> None:
-        self.alpha = 1.0 if smoothing_s == 0 else 1.0 - float(np.exp(-dt / smoothing_s))
-        self.value = np.full(n, np.nan)
-
-    def update(self, margin: np.ndarray) -> np.ndarray:
-        """Feed this step's margins (``-inf``: nothing heard) and return the smoothed ones (``nan``: nothing heard)."""
-        heard = np.isfinite(margin)
-        fresh = heard & np.isnan(self.value)
-        self.value = np.where(fresh, margin, self.value + self.alpha * (margin - self.value))
-        self.value[~heard] = np.nan
-        return self.value
-
-    def restart(self, who: np.ndarray) -> None:
-        """Forget the history of the robots ``who`` (a mask or indices)."""
-        self.value[who] = np.nan
-
-
 @DROP_RULES.register("link-quality")
 class LinkQuality(DropRule):
     """Drop when the smoothed best margin to a reference falls below ``drop_margin_db``."""
@@ -93,14 +68,15 @@ class LinkQuality(DropRule):
 
     def __init__(self, params: LinkQualityParams, context: DropContext) -> None:
         super().__init__(params, context)
-        self.filter = MarginFilter(context.n_agents, context.dt, params.smoothing_s)
+        self.filter = MarginSmoother(context.n_agents, context.dt, params.smoothing_s)
+        self._all = np.arange(context.n_agents)
         self._t = -np.inf
         self._weak = np.zeros(context.n_agents, dtype=bool)
 
     def _weak_links(self, view: AgentView) -> np.ndarray:
         if view.t != self._t:  # once per step, whether decide or losing asks first
             self._t = view.t
-            smoothed = self.filter.update(view.best_margin)
+            smoothed = self.filter.update(self._all, view.best_margin)
             with np.errstate(invalid="ignore"):
                 self._weak = (smoothed < self.params.drop_margin_db) | (view.best_margin < self.params.loss_margin_db)
             self._weak &= np.isfinite(view.best_margin)
