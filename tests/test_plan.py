@@ -130,3 +130,33 @@ def test_plan_help_says_the_picture_needs_out(capsys):
         main(["plan", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "the picture is written only with --out" in text and "--retry-failed" in text
+
+
+def test_plan_with_radio_drop_rule_and_stock_reports_time_connected_and_warns(tmp_path, capsys):
+    """Issue #19: a short stock under walls leaves agents cut off, and the plan says so."""
+    p = plan("office-32x32", [(1.0, 1.0)], r_c=6.0, agents_per_base=2, runs=3,
+             options=RunOptions(workers=1, show_progress=False, time_limit=300.0),
+             radio={"model": "multi-wall"}, drop_rule="link-quality", stock=2)
+    sc = p.scenario
+    assert sc["radio"]["model"] == "multi-wall" and sc["algorithm"]["params"]["drop_rule"] == "link-quality"
+    assert sc["agents"]["routers_carried"] == 2 and sc["agents"]["when_empty"] == "continue"
+    c = p.connected
+    assert c["runs"] == 3 and c["cut_off_runs"] >= 1 and 0.0 <= c["min"] <= c["median"] <= c["max"] <= 1.0
+    assert any("cut off" in w for w in p.warnings) and any("stock ran out" in w for w in p.warnings)
+    assert all(r["relays_used"] <= 2 * 2 for r in p.runs)
+    assert "Time the agents were connected" in p.markdown(picture=None) and "drop rule link-quality" in p.markdown()
+    assert json.loads(json.dumps(p.to_dict()))["connected"]["runs"] == 3
+
+
+@pytest.mark.parametrize(("args", "option"), [
+    (["--radio", "telepathy"], "--radio"),
+    (["--drop-rule", "nearest"], "--drop-rule"),
+    (["--drop-rule", "radius", "--drop", "radius=-1"], "--drop"),
+    (["--stock", "-1"], "--stock"),
+])
+def test_plan_bad_mission_options_are_one_line(tmp_path, capsys, args, option):
+    code = main(["plan", "--map", "office-32x32", "--base", "1,1", "--rc", "6", "--runs", "1", "--out",
+                 str(tmp_path / "p"), *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and option in err
+    assert not (tmp_path / "p").exists()

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from amronet.errors import AmronetError, MapError
+from amronet.errors import AmronetError, MapError, ScenarioError
 from amronet.experiments.common import agent_scenario
 from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 from amronet.outputs.files import write_files_atomically
@@ -87,6 +87,8 @@ class Plan:
     typical_seed: int | None
     warnings: list[str] = field(default_factory=list)
     settings: dict[str, Any] = field(default_factory=dict)
+    connected: dict[str, Any] = field(default_factory=dict)
+    """Time the agents were connected over the finished runs (:func:`_connected_distribution`)."""
     scenario: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -99,6 +101,7 @@ class Plan:
             "patterns": {k: {**v, "routers_to_carry": max(0, v["placed"] - n_b)} for k, v in self.patterns.items()},
             "agent_assisted": {"distribution": self.distribution, "runs": self.runs},
             "confidence": self.confidence, "recommended_routers": self.recommended, "typical_seed": self.typical_seed,
+            "connected": self.connected,
             "warnings": self.warnings, "settings": self.settings, "scenario": self.scenario,
         }  # fmt: skip
 
@@ -111,6 +114,11 @@ class Plan:
         lines = [f"# Deployment plan: {self.map}", "",
                  f"Base stations {bases}; r_c = {self.r_c:g} m; {self.agents_per_base} agent(s) per base station; "
                  f"reachable free area {self.area_m2:.1f} m².", ""]
+        st = self.settings
+        if st.get("radio") is not None:
+            stock = "unlimited" if st.get("stock") is None else f"{st['stock']} per agent ({st.get('when_empty')})"
+            radio = ", ".join(f"{k} {v}" for k, v in st["radio"].items())
+            lines += [f"Radio: {radio}; drop rule {st.get('drop_rule')}; stock {stock}.", ""]
         if self.recommended is not None:
             lines += [f"**Carry {self.recommended} routers** (the {q} of {d['completed']} agent-assisted runs "
                       f"that reached {100 * self.settings['coverage_target']:g} % coverage, rounded up).", ""]
@@ -128,9 +136,20 @@ class Plan:
                 value = d[key]
                 shown = f"{value:.1f}" if isinstance(value, float) and not float(value).is_integer() else f"{value:g}"
                 lines.append(f"| agent-assisted deployment, {label} | {float(value) + n_b:g} | {shown} |")
-        lines += ["", f"Agent-assisted runs: {d['runs']} ({d['completed']} reached the target), "
+        counted = (f"{d.get('reached_target', d['completed'])} reached the target"
+                   + ("; with a stock every finished run counts" if self.settings.get("stock") is not None else ""))
+        lines += ["", f"Agent-assisted runs: {d['runs']} ({counted}), "
                       f"explorer {self.settings['explorer']}, time limit {self.settings['time_limit']:g} s, "
                       f"seeds {self.settings['seeds'][0]}..{self.settings['seeds'][-1]}."]
+        c = self.connected
+        if c.get("runs") and "median" in c:
+            lines += ["", f"Time the agents were connected to a base station over {c['runs']} runs (agents cut off at "
+                          f"least once in {c['cut_off_runs']}):", "", "| min | pessimistic | median | mean | max |",
+                      "|---:|---:|---:|---:|---:|",
+                      f"| {100 * c['min']:.1f} % | {100 * c['quantile']:.1f} % | {100 * c['median']:.1f} % | "
+                      f"{100 * c['mean']:.1f} % | {100 * c['max']:.1f} % |"]
+        if "per_agent" in d:
+            lines += ["", f"Per agent: {d['per_agent']} routers."]
         if self.warnings:
             lines += ["", *(f"- warning: {w}" for w in self.warnings)]
         if picture and self.typical_seed is not None:
@@ -143,10 +162,17 @@ def _check(option: str, ok: bool, message: str) -> None:
         raise AmronetError(f"{option}: {message}")
 
 
-def _scenario(map_ref: str, bases: list[tuple[float, float]], r_c: float, agents: int, explorer: str,
-              time_limit: float, dt: float) -> dict[str, Any]:
+_OPTION_OF_FIELD = (("radio", "--radio"), ("algorithm.params.drop_rule", "--drop-rule"),
+                    ("algorithm.params.drop", "--drop"), ("agents.routers_carried", "--stock"),
+                    ("agents.when_empty", "--when-empty"), ("agents.drop_settle_s", "--settle-s"),
+                    ("agents.reverse_drop", "--reverse-drop"))
+"""Scenario fields the planner's options set → the option, for one-line errors that name what the user typed."""
 
-    sc = agent_scenario(map_ref, r_c, tuple(bases), agents, explorer, time_limit, dt=dt)
+
+def _scenario(map_ref: str, bases: list[tuple[float, float]], r_c: float, agents: int, explorer: str,
+              time_limit: float, dt: float, mission: dict[str, Any] | None = None) -> dict[str, Any]:
+
+    sc = agent_scenario(map_ref, r_c, tuple(bases), agents, explorer, time_limit, dt=dt, **(mission or {}))
     if map_ref not in BUILTIN_MAPS:
         sc["map"] = str(Path(map_ref).resolve())
         sc["name"] = f"agent-assisted-{Path(map_ref).stem}"
@@ -162,6 +188,14 @@ def plan(
     confidence: float = 0.95,
     dt: float = 0.25,
     options: RunOptions | None = None,
+    *,
+    radio: dict[str, Any] | None = None,
+    drop_rule: str | None = None,
+    drop: dict[str, Any] | None = None,
+    stock: int | None = None,
+    when_empty: str | None = None,
+    settle_s: float | None = None,
+    reverse_drop: float | None = None,
 ) -> Plan:
     """Plan a deployment (see the module docstring).
 
@@ -180,6 +214,16 @@ def plan(
             ``executor`` (e.g. Dask); ``show_progress`` (the sweep's progress bar); ``retry_failed``: run again
             the runs that ``store`` holds as failed (otherwise they stay failed, as with ``amronet sweep``, and the
             plan warns about them).
+        radio: Radio fields beyond ``r_c`` (e.g. ``{"model": "multi-wall", "shadowing_db": 4}``); default the unit disk.
+        drop_rule: The agents' drop rule (default the paper's ``last-reference``).
+        drop: The drop rule's parameters.
+        stock: Routers each agent carries (default unlimited). With a stock an agent that runs out goes on and may
+            be cut off (``when_empty`` ``continue``, unless given): a plan must show the outages a short stock
+            causes. The relays distribution is then taken over every finished run, since a stock-limited run may
+            not reach the coverage target.
+        when_empty: ``tether`` or ``continue`` (``agents.when_empty``).
+        settle_s: ``agents.drop_settle_s``.
+        reverse_drop: ``agents.reverse_drop``.
 
     Raises:
         AmronetError: Bad input, with one line naming the option.
@@ -199,11 +243,25 @@ def plan(
     except MapError as exc:
         raise AmronetError(f"--base: {exc.message}") from None
     area = float(mask.sum()) * omap.resolution**2
-    scenario = _scenario(map_ref, bases, r_c, agents_per_base, explorer, time_limit, dt)
+    _check("--stock", stock is None or stock >= 0, f"must be >= 0 routers per agent, got {stock}")
+    agents_fields: dict[str, Any] = {}
+    if stock is not None:
+        agents_fields.update(routers_carried=int(stock), when_empty=when_empty or "continue")
+    elif when_empty is not None:
+        agents_fields["when_empty"] = when_empty
+    if settle_s is not None:
+        agents_fields["drop_settle_s"] = float(settle_s)
+    if reverse_drop is not None:
+        agents_fields["reverse_drop"] = float(reverse_drop)
+    mission = {"radio": radio, "drop_rule": drop_rule, "drop": drop, "agents": agents_fields or None}
+    scenario = _scenario(map_ref, bases, r_c, agents_per_base, explorer, time_limit, dt, mission)
     try:
         Simulation(load_scenario(scenario), seed)  # fail fast, here, on a scenario that cannot start
     except MapError as exc:
         raise AmronetError(f"--base: {exc.message}" if exc.field.startswith("base_stations") else str(exc)) from None
+    except ScenarioError as exc:
+        option = next((o for f, o in _OPTION_OF_FIELD if exc.field == f or exc.field.startswith(f + ".")), None)
+        raise AmronetError(f"{option}: {exc.field}: {exc.message}" if option else str(exc)) from None
     if store is not None:
         check_store_path(Path(store))
     placements = place_all(as_area(omap, mask=mask, r=r_c), r_c)
@@ -221,23 +279,31 @@ def plan(
     rows = []
     for s, out in outcomes.items():
         summ = out["summary"] or {}
+        mission = summ.get("mission") or {}
         rows.append({"seed": s, "status": out["status"], "routers_deployed": summ.get("routers_deployed"),
                      "nodes_total": summ.get("nodes_total"), "coverage": summ.get("coverage"),
                      "stop_reason": summ.get("stop_reason"), "sim_time_s": summ.get("sim_time_s"),
-                     "agents_connected_min": summ.get("agents_connected_min"), "error": out["error"]})
+                     "agents_connected_min": summ.get("agents_connected_min"),
+                     "connected_fraction": mission.get("connected_fraction"), "outages": mission.get("outages"),
+                     "longest_outage_s": mission.get("longest_outage_s"), "relays_used": mission.get("relays_used"),
+                     "error": out["error"]})
     target = float(load_scenario(scenario).sim.coverage_target or 0.99)
-    completed = [r for r in rows if r["status"] == "done" and r["stop_reason"] == "coverage_target"]
+    done = [r for r in rows if r["status"] == "done"]
+    completed = [r for r in done if r["stop_reason"] == "coverage_target"]
+    if stock is not None:  # a stock-limited run may not reach the target: the relays of every finished run count
+        completed = done
     warnings = []
     failed = [r for r in rows if r["status"] == "failed"]
     if failed:
         retry = " (--retry-failed runs them again)" if store is not None else ""
         warnings.append(f"{len(failed)} of {runs} runs failed{retry}: {failed[0]['error']}")
     short = [r for r in rows if r["status"] == "done" and r["stop_reason"] != "coverage_target"]
-    if short:
+    if short and stock is None:
         warnings.append(f"{len(short)} of {runs} runs did not reach {100 * target:g} % coverage within "
                         f"{time_limit:g} s (left out; raise --time-limit)")
     values = np.array([r["routers_deployed"] for r in completed], dtype=float)
-    distribution: dict[str, Any] = {"runs": runs, "completed": len(completed)}
+    distribution: dict[str, Any] = {"runs": runs, "completed": len(completed),
+                                    "reached_target": sum(r["stop_reason"] == "coverage_target" for r in done)}
     recommended = typical = None
     if len(values):
         median = float(np.median(values))
@@ -248,14 +314,44 @@ def plan(
         typical = min(completed, key=lambda r: (abs(r["routers_deployed"] - median), r["seed"]))["seed"]
     else:
         warnings.append("no run reached the coverage target, so there is no recommendation")
+    connected = _connected_distribution(done, confidence)
+    if done and connected["cut_off_runs"] > 0.05 * len(done):
+        worst = max(r["longest_outage_s"] or 0.0 for r in done)
+        warnings.append(f"agents were cut off in {100 * connected['cut_off_runs'] / len(done):.0f} % of runs "
+                        f"({connected['cut_off_runs']} of {len(done)}); longest outage {worst:g} s")
+    n_agents = agents_per_base * len(bases)
+    if stock is not None and any((r["relays_used"] or 0) >= stock * n_agents for r in done):
+        ran_out = sum((r["relays_used"] or 0) >= stock * n_agents for r in done)
+        warnings.append(f"the stock ran out ({stock} per agent, {stock * n_agents} in all) in {ran_out} of "
+                        f"{len(done)} runs")
+    if recommended is not None:
+        distribution["per_agent"] = math.ceil(recommended / n_agents - 1e-9)
+        if stock is not None and distribution["per_agent"] > stock:
+            warnings.append(f"the recommendation, {distribution['per_agent']} per agent, exceeds --stock {stock}")
     return Plan(map=omap.name, bases=[tuple(map(float, b)) for b in bases], r_c=float(r_c),
                 agents_per_base=agents_per_base, area_m2=area,
                 estimate_nodes=math.ceil(PLAN_ESTIMATE_DENSITY * area / r_c**2 - 1e-9), patterns=patterns,
                 runs=rows, confidence=confidence, distribution=distribution, recommended=recommended,
                 typical_seed=typical, warnings=warnings,
+                connected=connected,
                 settings={"explorer": explorer, "time_limit": time_limit, "dt": dt, "coverage_target": target,
+                          "radio": dict(radio or {"model": "unit-disk"}), "drop_rule": drop_rule or "last-reference",
+                          "stock": stock, "when_empty": agents_fields.get("when_empty", "tether"),
                           "seeds": list(sweep.seeds)},
                 scenario=point.scenario)
+
+
+def _connected_distribution(done: list[dict[str, Any]], confidence: float) -> dict[str, Any]:
+    """Time connected over the finished runs, and in how many runs some agent was cut off at least once.
+
+    Min, median, mean, the pessimistic ``1 - confidence`` quantile and max of each run's connected fraction.
+    """
+    values = np.array([r["connected_fraction"] for r in done if r["connected_fraction"] is not None], dtype=float)
+    out: dict[str, Any] = {"runs": len(done), "cut_off_runs": sum(1 for r in done if (r["outages"] or 0) > 0)}
+    if len(values):
+        out.update(min=float(values.min()), median=float(np.median(values)), mean=float(values.mean()),
+                   quantile=float(np.percentile(values, 100 * (1 - confidence))), max=float(values.max()))
+    return out
 
 
 def typical_picture(p: Plan) -> bytes | None:

@@ -1,6 +1,8 @@
 """The ``amronet plan`` subcommand: how many routers to carry (see :mod:`amronet.planning`).
 
 ``amronet plan --map depot --base 1.0,2.0 [--base X,Y ...] --rc 4 --agents 3 [--runs 20] [--confidence 0.95]
+[--radio multi-wall [--shadowing-db 4] [--wall-db 6.9]] [--drop-rule link-quality [--drop KEY=VALUE ...]]
+[--stock 12 [--when-empty tether|continue]] [--settle-s 3] [--reverse-drop 1]
 [--store results.sqlite [--retry-failed]] [--out DIR] [--json]`` prints the paper's estimate, the static patterns
 placed on the map and the distribution of routers used by agent-assisted deployment over ``--runs`` seeded runs,
 with the recommendation. ``--out DIR`` writes ``plan.json``, ``plan.md`` and ``typical.png`` (the picture is
@@ -15,6 +17,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import Any
 
 from amronet.cli.common import add_executor_arguments, make_executor_from_args, parse_base
 from amronet.errors import AmronetError
@@ -41,7 +44,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                              executor=executor, show_progress=not args.quiet and not args.json,
                              retry_failed=args.retry_failed)
         p = plan(args.map, bases, r_c=args.rc, agents_per_base=args.agents, runs=args.runs,
-                 confidence=args.confidence, options=options)
+                 confidence=args.confidence, options=options, **_mission_options(args))
     picture = None
     if args.out:
         write_plan(p, args.out, keep=keep)
@@ -56,6 +59,24 @@ def cmd_plan(args: argparse.Namespace) -> int:
     for line in p.warnings if not args.json else []:
         print(f"amronet: warning: {line}", file=sys.stderr)
     return 0 if p.recommended is not None else 1
+
+
+def _mission_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The radio, drop rule and stock options as :func:`amronet.planning.plan` takes them."""
+    from amronet.scenario import parse_override
+
+    radio: dict[str, Any] = {}
+    if args.radio is not None:
+        radio["model"] = args.radio
+    for option, key in ((args.shadowing_db, "shadowing_db"), (args.wall_db, "wall_db")):
+        if option is not None:
+            radio[key] = float(option)
+    drop: dict[str, Any] = {}
+    for item in args.drop or []:
+        key, value = parse_override(item)
+        drop[key] = value
+    return {"radio": radio or None, "drop_rule": args.drop_rule, "drop": drop or None, "stock": args.stock,
+            "when_empty": args.when_empty, "settle_s": args.settle_s, "reverse_drop": args.reverse_drop}
 
 
 def _store_in(store: str | None, out: str | None) -> tuple[str, ...]:
@@ -79,6 +100,18 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--confidence", type=float, default=0.95,
                    help="recommend this quantile of the routers used (default 0.95: the 95th percentile)")
     p.add_argument("--explorer", default="frontier", help="agents' exploration strategy (default frontier)")
+    p.add_argument("--radio", help="radio model: unit-disk (default), log-distance or multi-wall")
+    p.add_argument("--shadowing-db", type=float, help="shadowing sigma in dB (log-distance, multi-wall)")
+    p.add_argument("--wall-db", type=float, help="loss per wall in dB (multi-wall)")
+    p.add_argument("--drop-rule", help="the agents' drop rule (default last-reference, the paper's)")
+    p.add_argument("--drop", action="append", metavar="KEY=VALUE", help="a drop-rule parameter (repeat)")
+    p.add_argument("--stock", type=int, help="routers each agent carries (default unlimited); an agent that runs "
+                                             "out goes on and may be cut off unless --when-empty tether")
+    p.add_argument("--when-empty", choices=("tether", "continue"),
+                   help="what an agent with no router left does (default: continue with --stock, else tether)")
+    p.add_argument("--settle-s", type=float, help="seconds before a router put down relays (agents.drop_settle_s)")
+    p.add_argument("--reverse-drop", type=float, metavar="S",
+                   help="back up and drop after S seconds out of contact (agents.reverse_drop)")
     p.add_argument("--time-limit", type=float, default=6000.0, help="simulated seconds per run at most")
     p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--store", help="keep the runs in this result store (and reuse them next time)")
