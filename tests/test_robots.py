@@ -27,7 +27,7 @@ from amronet.engine.robots import (
 )
 
 ALL_STATES = (State.BASE, State.EXPLORE, State.REFERENCE, State.TRIANGLE, State.TRIANGLE_SETTLED, State.AGENT,
-              State.DROPPED, State.FAILED, State.RELOCATING)
+              State.DROPPED, State.FAILED, State.RELOCATING, State.STRIP)
 ROW_FIELDS = ("xy", "heading", "role", "state", "status", "radius", "max_speed", "model", "distance")
 CUSTOM = RobotModel("custom", radius=0.1, max_speed=0.3, sensor_beams=4, sensor_range=0.5)
 
@@ -102,6 +102,7 @@ def test_state_codes_index_the_state_names() -> None:
     assert STATE_NAMES[State.DROPPED] == "dropped"
     assert STATE_NAMES[State.FAILED] == "failed"
     assert STATE_NAMES[State.RELOCATING] == "relocating"
+    assert STATE_NAMES[State.STRIP] == "strip"
     assert sorted(ALL_STATES) == list(range(len(STATE_NAMES)))
     assert len(set(STATE_NAMES)) == len(STATE_NAMES)
 
@@ -114,7 +115,7 @@ def test_codes_are_plain_ints_that_fit_int8() -> None:
 
 def test_every_state_is_deployed_mobile_or_silent() -> None:
     assert set(DEPLOYED_STATES) == {State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED}
-    assert set(MOBILE_STATES) == {State.EXPLORE, State.TRIANGLE, State.AGENT, State.RELOCATING}
+    assert set(MOBILE_STATES) == {State.EXPLORE, State.TRIANGLE, State.AGENT, State.RELOCATING, State.STRIP}
     assert not set(DEPLOYED_STATES) & set(MOBILE_STATES)
     silent = {State.DROPPED, State.FAILED}  # still, and relaying nothing
     assert set(DEPLOYED_STATES) | set(MOBILE_STATES) | silent == set(ALL_STATES)

@@ -69,15 +69,18 @@ class State:
     RELOCATING = 8
     """Deployed router cut off by a failure, moving to bridge the cut (agent-assisted ``repair: relocate``); it
     relays but serves as no reference until it has settled again."""
+    STRIP = 9
+    """Router an agent has put down that drives to a goal point of an r-strip lattice (drop rule ``strip-goals``);
+    it relays, and serves as a reference while it hears a deployed node."""
 
 
 STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped",
-                                 "failed", "relocating")
+                                 "failed", "relocating", "strip")
 ROLE_NAMES: tuple[str, ...] = ("base", "router", "agent")
 
 DEPLOYED_STATES: tuple[int, ...] = (State.BASE, State.REFERENCE, State.TRIANGLE_SETTLED)
 """States of nodes that stay put and act as references for routers and agents."""
-MOBILE_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE, State.AGENT, State.RELOCATING)
+MOBILE_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE, State.AGENT, State.RELOCATING, State.STRIP)
 """States of robots that move in a step."""
 SETTLING_STATES: tuple[int, ...] = (State.EXPLORE, State.TRIANGLE)
 """States of routers that have not settled yet."""

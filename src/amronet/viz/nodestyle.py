@@ -28,6 +28,7 @@ STYLE: dict[str, tuple[str, float, bool, float, str]] = {
     "dropped": ("o", 30.0, False, 3.5, "dropped (not relaying yet)"),
     "failed": ("x", 40.0, True, 3.6, "failed"),
     "relocating": ("D", 26.0, False, 4.5, "relocating (repair)"),
+    "strip": ("p", 34.0, False, 4.5, "driving to its strip goal"),
     "reference": ("o", 30.0, True, 4.0, "reference"),
     "triangle-settled": ("^", 42.0, True, 4.0, "triangle (settled)"),
     "triangle": ("^", 42.0, False, 5.0, "triangle (moving)"),

@@ -12,7 +12,7 @@ KINDS: tuple[str, ...] = ("base", "router", "agent")
 """Allowed values of the ``kind`` array."""
 
 STATES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped",
-                             "failed", "relocating")
+                             "failed", "relocating", "strip")
 """Allowed values of the ``state`` array."""
 
 

@@ -6,12 +6,20 @@ where. Modules, one rule each:
 * :mod:`~amronet.algorithms.drops.last_reference` — ``last-reference``, the paper's greedy rule (the default);
 * :mod:`~amronet.algorithms.drops.link_quality` — ``link-quality``, location-free (paper section 6; SPAWAR, NIST);
 * :mod:`~amronet.algorithms.drops.radius` — ``radius``, Robotika's breadcrumb radius (DARPA SubT);
-* :mod:`~amronet.algorithms.drops.junction` — ``distance-junction``, MARBLE's distance, junction and turn rules.
+* :mod:`~amronet.algorithms.drops.junction` — ``distance-junction``, MARBLE's distance, junction and turn rules;
+* :mod:`~amronet.algorithms.drops.strip_goals` — ``strip-goals``, greedy drops, then each router drives to an
+  r-strip goal point (the paper's section 6).
 
 Importing this package registers them all.
 """
 
-from amronet.algorithms.drops import junction, last_reference, link_quality, radius  # noqa: F401 (register)
+from amronet.algorithms.drops import (  # noqa: F401 (register)
+    junction,
+    last_reference,
+    link_quality,
+    radius,
+    strip_goals,
+)
 from amronet.algorithms.drops.base import (
     DROP_RULES,
     AgentView,

@@ -110,6 +110,8 @@ class DropRule(ABC):
     """Whether decisions read :attr:`AgentView.scans`."""
     near_reference: ClassVar[bool] = True
     """Whether a router must be put down within ``r_c`` of the agent's current reference (the paper's placement)."""
+    drives_to_goal: ClassVar[bool] = False
+    """Whether a router put down drives on to a goal point the rule picks (:meth:`goal`)."""
 
     def __init__(self, params: BaseModel, context: DropContext) -> None:
         self.params = params
@@ -128,6 +130,26 @@ class DropRule(ABC):
 
     def dropped(self, who: np.ndarray, view: AgentView) -> None:  # noqa: B027 - optional hook
         """Learn that the agents ``who`` (a mask ``(A,)``) released a router this step (default: ignore)."""
+
+    def goal(self, spot: np.ndarray, reference_xy: np.ndarray, origin_xy: np.ndarray,
+             taken_xy: np.ndarray) -> np.ndarray | None:
+        """Where a router just put down at ``spot`` drives to, or ``None`` to stay (rules with :attr:`drives_to_goal`).
+
+        Args:
+            spot: Where it was put down ``(2,)``.
+            reference_xy: The reference it was put down next to ``(2,)`` (it must stay linked to it).
+            origin_xy: The base station whose status it takes ``(2,)``.
+            taken_xy: Positions of the nodes already there and the goals other routers drive to ``(K, 2)``.
+        """
+        return None
+
+    def keep_radius(self) -> float:
+        """How far a router driving to its goal may get from the reference it was put down next to (metres)."""
+        return self.context.r_eff
+
+    def retries(self) -> int:
+        """How many more goals a router blocked on its way to one tries before it stays where it is."""
+        return 0
 
     def report(self) -> dict[str, object]:
         """Rule-specific numbers for the run's summary (default: none)."""
