@@ -187,6 +187,15 @@ class AgentsSpec(_Strict):
     reverse_drop: PositiveFloat | None = None
     """Seconds out of contact after which an agent backs up along its own path until contact returns and drops a
     router there (MARBLE's reverse drop); ``null``: off."""
+    trajectories: Annotated[str, Field(min_length=1)] | None = None
+    """A CSV of timed waypoints the agents follow instead of exploring (agent-assisted deployment only): columns
+    ``t, agent, x, y`` (seconds from the start of the run, the agent's index, metres in the map's frame). Agent
+    ``k`` is the ``k``-th agent created: base station ``b``'s agents are ``b * per_base .. (b + 1) * per_base - 1``,
+    in the order of ``base_stations``; agents without rows explore with ``algorithm.params.explorer``. A relative
+    path is taken from the scenario file's folder (the working folder for a preset or a mapping) and recorded as an
+    absolute one (:meth:`Scenario.to_dict`). The file must exist when the scenario is loaded; it is read and
+    checked against the map when the run is set up (:mod:`amronet.world.trajectories`), following in
+    :mod:`amronet.algorithms.explorers.trajectory`. ``null``: the agents explore."""
 
 
 class SimSpec(_Strict):
@@ -247,7 +256,8 @@ class Scenario(_Strict):
     """A whole run, validated.
 
     Attributes:
-        base_dir: Folder that relative paths (the map) are resolved against; not part of the YAML.
+        base_dir: Folder that relative paths (the map, ``agents.trajectories``) are resolved against; not part of
+            the YAML.
     """
 
     name: str = "unnamed"
@@ -283,10 +293,38 @@ class Scenario(_Strict):
             if fault.base_station is not None and fault.base_station >= len(self.base_stations):
                 raise ValueError(f"@faults[{k}].base_station@no base station {fault.base_station}; the scenario has "
                                  f"{len(self.base_stations)} (numbered from 0)")
+        self._check_trajectories()
         if self.radio.model != "unit-disk" and self.sim.coverage_method != "raster":
             raise ValueError(f"@sim.coverage_method@{self.sim.coverage_method!r} is defined for the unit disk only; "
                              f"coverage under {self.radio.model} is decided cell by cell: use raster")
         return self
+
+    def _check_trajectories(self) -> None:
+        path = self.trajectories_path()
+        if path is None:
+            return
+        given = self.agents.trajectories
+        if not ALGORITHMS[self.algorithm.name].follows_paths:
+            takers = ", ".join(sorted(name for name, cls in ALGORITHMS.items() if cls.follows_paths))
+            raise ValueError(f"@agents.trajectories@{self.algorithm.name} does not move agents along paths; use "
+                             f"algorithm.name {takers} or leave agents.trajectories out")
+        if self.agents.per_base < 1:
+            raise ValueError("@agents.trajectories@the scenario has no agents to follow the paths; set "
+                             "agents.per_base >= 1")
+        if not path.is_file():
+            where = f" (taken from {self.base_dir})" if self.base_dir and not Path(str(given)).is_absolute() else ""
+            raise ValueError(f"@agents.trajectories@no file {given!r}{where}; give the path of a CSV with columns "
+                             "t, agent, x, y (a relative path is taken from the scenario file's folder)")
+
+    def trajectories_path(self) -> Path | None:
+        """The agents' trajectory file (``agents.trajectories``) with a relative path resolved; ``None``: none."""
+        given = self.agents.trajectories
+        if given is None:
+            return None
+        path = Path(given).expanduser()
+        if self.base_dir and not path.is_absolute():
+            path = Path(self.base_dir) / path
+        return path
 
     def algorithm_params(self) -> BaseModel:
         """The algorithm's parameters, validated by the algorithm's own parameter model."""
@@ -297,8 +335,16 @@ class Scenario(_Strict):
             raise to_scenario_error(exc, prefix="algorithm.params", model=model) from None
 
     def to_dict(self) -> dict[str, Any]:
-        """The scenario as plain data (what a YAML file would hold)."""
-        return self.model_dump(mode="json", exclude={"base_dir"})
+        """The scenario as plain data (what a YAML file would hold).
+
+        A trajectory file (``agents.trajectories``) is given by its absolute path, so the data means the same file
+        wherever it is loaded from (a run's ``summary.json``, a copy with overrides).
+        """
+        data = self.model_dump(mode="json", exclude={"base_dir"})
+        path = self.trajectories_path()
+        if path is not None:
+            data["agents"]["trajectories"] = str(path.resolve())
+        return data
 
     def with_overrides(self, overrides: dict[str, Any]) -> Scenario:
         """A copy with dotted-path fields replaced, e.g. ``{"radio.r_c": 1.5, "routers.count": 60}``."""

@@ -1,8 +1,9 @@
 """Agent-assisted router deployment (paper section 4.1, with the triangular deployment and optimizations of 4.3).
 
 Agents explore from their base stations (a pluggable explorer; the paper's is random exploration with sonar
-obstacle avoidance). Each agent keeps a current reference — a base node or deployed router within ``r_c`` —
-and takes its status. **Greedy deployment**: when every reference the agent hears is at least
+obstacle avoidance), or follow the paths a scenario gives them (``agents.trajectories``:
+:mod:`amronet.algorithms.explorers.trajectory`). Each agent keeps a current reference — a base node or deployed
+router within ``r_c`` — and takes its status. **Greedy deployment**: when every reference the agent hears is at least
 ``(1 - loss_margin) r_c`` away (it is about to lose the last one), it releases a router right next to itself,
 on the side of its current reference (so the router is linked to it); the router takes the agent's status and
 becomes a reference for every agent in its range. **Triangular deployment**: an agent whose current reference
@@ -41,7 +42,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.drops import DROP_RULES, AgentView, DropContext, validate_drop_params
 from amronet.algorithms.drops.trail import Trails
-from amronet.algorithms.explorers import EXPLORERS
+from amronet.algorithms.explorers import EXPLORERS, PathFollower
 from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.references import best_reference_margin, check_loss_band, track_row
 from amronet.algorithms.relocate import Relocator
@@ -153,6 +154,7 @@ class AgentAssisted(Controller):
     Params = AgentAssistedParams
     params: AgentAssistedParams
     default_coverage_target = DEFAULT_COVERAGE_TARGET
+    follows_paths = True
 
     def __init__(self, params: AgentAssistedParams, setup: Setup) -> None:
         super().__init__(params, setup)
@@ -184,6 +186,8 @@ class AgentAssisted(Controller):
         self.several_statuses = len(np.unique(sw.status[sw.role == Role.BASE])) > 1
         self.released = 0
         self.agent_speed = sw.max_speed[self.agents]
+        if setup.paths is not None:  # agents.trajectories: agents with a path follow it, the others explore
+            self.explorer = PathFollower(setup.paths, self.explorer, self.dt, self.agent_speed, sw.radius[self.agents])
         self.moving_triangles = 0
         """Released triangle routers that have not reached their goal yet."""
         self._nearest_d = np.empty(len(self.agents))
@@ -237,8 +241,13 @@ class AgentAssisted(Controller):
         return (1.0 - params.loss_margin) * r_c
 
     def unsettled(self) -> np.ndarray:
-        """Agents never settle (the coverage target ends the run); released routers are not driven after settling."""
-        return self.swarm.role == Role.AGENT
+        """Agents that keep the run going, and routers on their way to a goal or settling.
+
+        Exploring agents never settle (the coverage target ends the run); agents on a given path settle at its end.
+        """
+        out = self.swarm.in_states((State.TRIANGLE, State.RELOCATING, State.STRIP, State.DROPPED))
+        out[self.agents] = self.explorer.active(len(self.agents))
+        return out
 
     # -- growing per-robot state when routers are released --------------------------------------------------
     def _grow(self, n_new: int) -> None:
@@ -363,7 +372,7 @@ class AgentAssisted(Controller):
                     sw.heading[agents[m]] = np.arctan2(back[1], back[0])
         if self.trails is not None:
             self._back_up(view)
-        speed = self.agent_speed.copy()
+        speed = self.explorer.speed(self.agent_speed)
         movers, speeds = [agents], [speed]
 
         # triangle routers released before this step drive to their goals
@@ -551,6 +560,7 @@ class AgentAssisted(Controller):
         if self.drop_rule.drives_to_goal:
             out["strip_goals"] = dict(self.strip_counts)
         out.update(self.drop_rule.report())
+        out.update(self.explorer.report())
         return out
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102

@@ -1,15 +1,15 @@
 """What a deployment algorithm is: a controller that turns one step's local information into motion.
 
-A controller is given, once, a :class:`Setup`: the state arrays of the robots it drives (each robot's own
-position, heading, state and status, and what it announces on the air), the radio range, the step length, the
-run's random generator, what the algorithm may know of the area beforehand (:class:`AreaKnowledge`: its bounding
-box and free floor area, never the map) and, for agents that carry routers, their :class:`RouterStock`. Each
-step it is given a :class:`StepInput`: the range readings of its robots and the radio medium's neighbour table
-(who hears whom, how far). A robot's decision reads its own rows and the rows of the nodes it hears; nothing
-else of the world reaches a controller: not the map, not the scenario, not the loop. Metrics and stop conditions
-live in :mod:`amronet.sim`, not here. What the loop needs to know of an algorithm it asks through the
-declared interface below (:meth:`Controller.start_range`, :attr:`Controller.default_coverage_target`,
-:meth:`Controller.unsettled`).
+A controller is given, once, a :class:`Setup`: the state arrays of the robots it drives (each robot's own position,
+heading, state and status, and what it announces on the air), the radio range, the step length, the run's random
+generator, what the algorithm may know of the area beforehand (:class:`AreaKnowledge`: its bounding box and free
+floor area, never the map) and, for agents that carry routers, their :class:`RouterStock` and the paths the scenario
+gives them, if any. Each step it is given a :class:`StepInput`: the range readings of its robots and the radio
+medium's neighbour table (who hears whom, how far). A robot's decision reads its own rows and the rows of the nodes
+it hears; nothing else of the world reaches a controller: not the map, not the scenario, not the loop. Metrics and
+stop conditions live in :mod:`amronet.sim`, not here. What the loop needs to know of an algorithm it asks through
+the declared interface below (:meth:`Controller.start_range`, :attr:`Controller.default_coverage_target`,
+:meth:`Controller.unsettled`, :attr:`Controller.follows_paths`).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from amronet.registry import Registry
 
 if TYPE_CHECKING:
     from amronet.engine.streams import RunStreams
+    from amronet.world.trajectories import AgentPaths
 
 __all__ = ["ALGORITHMS", "AreaKnowledge", "Command", "Controller", "Readings", "RouterStock", "Setup", "StepInput"]
 
@@ -127,6 +128,8 @@ class Setup:
         rng: The run's random generator; for a batch of runs, their :class:`~amronet.engine.streams.RunStreams`.
         area: What the algorithm may know of the area beforehand.
         stock: The routers agents carry (``None`` without agents).
+        paths: The agents' given paths (``agents.trajectories``; agent ``a`` is the ``a``-th agent of ``robots``),
+            or ``None``: the agents explore. Only a controller with :attr:`Controller.follows_paths` is given any.
     """
 
     robots: Swarm
@@ -135,6 +138,7 @@ class Setup:
     rng: np.random.Generator | RunStreams
     area: AreaKnowledge
     stock: RouterStock | None = None
+    paths: AgentPaths | None = None
 
 
 class Controller(ABC):
@@ -157,6 +161,8 @@ class Controller(ABC):
     """Whether the controller can step several runs in one swarm (see the class docstring)."""
     default_coverage_target: ClassVar[float | None] = None
     """The coverage at which a run of this algorithm ends when the scenario sets none (``None``: no target)."""
+    follows_paths: ClassVar[bool] = False
+    """Whether the controller drives agents along given paths (:attr:`Setup.paths`, ``agents.trajectories``)."""
 
     def __init__(self, params: BaseModel, setup: Setup) -> None:
         self.params = params

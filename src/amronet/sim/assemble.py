@@ -16,8 +16,10 @@ from amronet.scenario import RobotRef, RobotSpec, Scenario
 from amronet.world.builtin import resolve_map
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance, reachable_free, wall_distance
+from amronet.world.trajectories import AgentPaths, load_trajectories
 
-__all__ = ["World", "build_medium", "build_swarm", "build_world", "medium_needs_rng", "robot_model"]
+__all__ = ["World", "build_medium", "build_swarm", "build_world", "load_scenario_paths", "medium_needs_rng",
+           "robot_model"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +83,16 @@ def load_scenario_map(scenario: Scenario) -> OccupancyMap:
         if exc.field.startswith("map"):
             raise
         raise MapError("map", exc.message) from None
+
+
+def load_scenario_paths(scenario: Scenario, world: World) -> AgentPaths | None:
+    """Read and check the agents' trajectory file against the world (``None`` when the scenario gives none)."""
+    path = scenario.trajectories_path()
+    if path is None:
+        return None
+    n_agents = scenario.agents.per_base * len(scenario.base_stations)
+    return load_trajectories(path, world.omap, n_agents, reachable=world.reachable,
+                             time_limit=scenario.sim.time_limit, shown=str(scenario.agents.trajectories))
 
 
 def build_world(scenario: Scenario, omap: OccupancyMap | None = None) -> World:

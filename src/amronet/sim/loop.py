@@ -47,6 +47,7 @@ from amronet.sim.assemble import (
     build_swarm,
     build_world,
     load_scenario_map,
+    load_scenario_paths,
     medium_needs_rng,
     robot_model,
 )
@@ -54,6 +55,7 @@ from amronet.sim.guard import check_scenario, check_world
 from amronet.sim.results import RunResult
 from amronet.sim.run import Metrics, Run
 from amronet.world.occupancy import OccupancyMap
+from amronet.world.trajectories import AgentPaths
 
 if TYPE_CHECKING:
     from amronet.outputs.recording import Recorder
@@ -122,6 +124,7 @@ class Loop:
         omap = omap if omap is not None else load_scenario_map(sc)
         check_world(sc, omap, runs=len(seeds), r_start=r_start)
         self.world: World = build_world(sc, omap)
+        self.paths: AgentPaths | None = load_scenario_paths(sc, self.world)
         rngs = [np.random.default_rng(seed) for seed in seeds]
         if len(seeds) > 1 and medium_needs_rng(sc):
             raise ScenarioError("radio", "runs whose radio draws random numbers (shadowing, packet loss) cannot share "
@@ -146,8 +149,8 @@ class Loop:
         """Whether the controller may put robots down in the decide phase (agents releasing routers; never batched)."""
         self.phase_seconds = {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0}
         target = sc.sim.coverage_target
-        if target is None:
-            target = controller_cls.default_coverage_target
+        if target is None:  # a replayed mission (agents.trajectories) runs to the end of its paths
+            target = None if self.paths is not None else controller_cls.default_coverage_target
         elif target == "off":
             target = None
         self.runs = [Run(self, g, seed, rngs[g], blocks[g], target) for g, seed in enumerate(seeds)]
@@ -170,7 +173,8 @@ class Loop:
                                 reverse_after_s=sc.agents.reverse_drop)
         area = AreaKnowledge(extent=omap.extent,
                              free_area_m2=float(np.count_nonzero(omap.free)) * (omap.resolution**2))
-        return Setup(robots=self.swarm, r_c=sc.radio.r_c, dt=self.dt, rng=rng, area=area, stock=stock)
+        return Setup(robots=self.swarm, r_c=sc.radio.r_c, dt=self.dt, rng=rng, area=area, stock=stock,
+                     paths=self.paths)
 
     @property
     def t(self) -> float:

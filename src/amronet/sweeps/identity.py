@@ -3,8 +3,9 @@
 Two runs are the same run when their resolved scenarios and seeds are equal. *Resolved* means: the validated
 :class:`~amronet.scenario.Scenario` dumped to plain data, with the algorithm's parameters replaced by the
 algorithm's own validated parameter model (so defaults are spelt out: ``{}`` and ``{triangular: local}`` are
-the same run for self-spreading), and a map given as a file path made absolute (so the same relative path seen
-from two folders is not taken for one map, and a worker on another machine of a shared file system finds it).
+the same run for self-spreading), and a map (and an agents' trajectory file) given as a file path made absolute (so
+the same relative path seen from two folders is not taken for one map, and a worker on another machine of a shared
+file system finds it).
 *Canonical JSON* sorts keys and drops whitespace; the hash is the SHA-256 of it together with a digest of the
 map's *content* (:func:`map_digest`: the map YAML's bytes and the bytes of the image it names, for built-in maps
 the files shipped in ``amronet/data/maps``), so editing a map file in place makes its runs new runs instead of
@@ -76,6 +77,10 @@ def resolve_scenario(scenario: Scenario) -> dict[str, Any]:
     data = scenario.to_dict()
     data["algorithm"]["params"] = scenario.algorithm_params().model_dump(mode="json")
     data["map"] = _resolved_map(scenario)
+    # a trajectory file's path is absolute already (Scenario.to_dict); without one the field is left out, so the
+    # runs of the stores written before it existed keep their hashes
+    if data["agents"].get("trajectories") is None:
+        del data["agents"]["trajectories"]
     return data
 
 
@@ -142,7 +147,15 @@ def map_digest(ref: str) -> str:
 
 
 def scenario_hash(resolved: dict[str, Any]) -> str:
-    """SHA-256 (hex) of a resolved scenario's canonical JSON and of its map's content (:func:`map_digest`)."""
+    """SHA-256 (hex) of a resolved scenario's canonical JSON and of its map's content (:func:`map_digest`).
+
+    A scenario with an agents' trajectory file (``agents.trajectories``) hashes the file's bytes too, so editing
+    it makes new runs.
+    """
     h = hashlib.sha256(canonical_json(resolved).encode())
     h.update(b"\nmap-content:" + map_digest(str(resolved.get("map", ""))).encode())
+    paths = (resolved.get("agents") or {}).get("trajectories")
+    if paths:  # only scenarios with a trajectory file: every other hash stays what it was
+        stamp = _stamp(Path(paths))
+        h.update(b"\ntrajectories-content:" + (_file_sha(*stamp) if stamp is not None else _MISSING).encode())
     return h.hexdigest()

@@ -7,12 +7,14 @@ A new one subclasses :class:`Explorer` and registers itself with ``@EXPLORERS.re
 Modules: :mod:`~amronet.algorithms.explorers.base` (the base class and the registry),
 :mod:`~amronet.algorithms.explorers.random_walk` (``"random"``), :mod:`~amronet.algorithms.explorers.frontier`
 (``"frontier"``) and :mod:`~amronet.algorithms.explorers.wall_follow` (``"wall-follow"``). Importing this package
-registers them all.
+registers them all. :mod:`~amronet.algorithms.explorers.trajectory` (:class:`PathFollower`) is not registered: it
+steers agents along the paths a scenario gives (``agents.trajectories``) and falls back to the chosen explorer.
 """
 
 from amronet.algorithms.explorers.base import EXPLORERS, Explorer
 from amronet.algorithms.explorers.frontier import FrontierExplorer
 from amronet.algorithms.explorers.random_walk import RandomExplorer
+from amronet.algorithms.explorers.trajectory import PathFollower
 from amronet.algorithms.explorers.wall_follow import WallFollowExplorer
 
-__all__ = ["EXPLORERS", "Explorer", "FrontierExplorer", "RandomExplorer", "WallFollowExplorer"]
+__all__ = ["EXPLORERS", "Explorer", "FrontierExplorer", "PathFollower", "RandomExplorer", "WallFollowExplorer"]

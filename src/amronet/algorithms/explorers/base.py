@@ -48,6 +48,22 @@ class Explorer:
         """
         raise NotImplementedError
 
+    def speed(self, max_speed: np.ndarray) -> np.ndarray:
+        """Speeds of the agents steered last, in the order given to :meth:`steer` (default: their top speeds).
+
+        Args:
+            max_speed: The agents' top speeds ``(A,)``.
+        """
+        return max_speed.copy()
+
+    def active(self, m: int) -> np.ndarray:
+        """Which of the ``m`` agents given to :meth:`steer` keep the run going (default: all; exploring never ends)."""
+        return np.ones(m, dtype=bool)
+
+    def report(self) -> dict[str, object]:
+        """Numbers for the summary's ``mission`` section (default: none)."""
+        return {}
+
 
 EXPLORERS: Registry[type[Explorer]] = Registry("explorer")
 """Exploration strategies by name; register one with ``@EXPLORERS.register("name")``."""
