@@ -40,5 +40,11 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run_all.py
 
+# amronet against Mesa at N = 30, 300, 3000 (issue #17); installs the optional `bench` extra (Mesa) first.
+.PHONY: bench-peers
+bench-peers: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[bench]'
+	$(BIN)/python benchmarks/bench_peers.py
+
 clean:
 	rm -rf $(VENV) runs build *.egg-info src/*.egg-info

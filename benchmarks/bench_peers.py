@@ -1,0 +1,153 @@
+"""Peer benchmark: robot-steps per second of amronet's self-spreading step against Mesa at the same N (issue #17).
+
+Mesa side: N ``ContinuousSpaceAgent`` in Mesa's ``mesa.experimental.continuous_space.ContinuousSpace`` (what Mesa
+3.x's own boid example uses), a square of the same area as the free space ``amronet bench`` gives the N robots
+(N x 0.25 m², or the map's free area if larger). Each agent, activated in random order (``shuffle_do``), does what a
+self-spreading router does at least every step: a random-walk move (Gaussian heading noise of the same sigma, the
+Bebot's 0.2 m/s x 0.1 s step, reflected at the walls of the square) and a radius query
+``get_neighbors_in_radius(r_c)``. No obstacles, no sensing, no state machine, no radio model: a lower bound on the
+work of amronet's step, written as a Mesa user would write it.
+
+amronet side: :func:`amronet.sim.bench.run_bench` (``amronet bench --algorithm self-spreading``), the full step on
+the scaled ``hospital_section`` floor plan. Both sides run a warm-up (numba kernels compiled or loaded from the
+cache first) and a short probe that sets the number of timed steps so each measurement lasts about ``--seconds``.
+
+Run: ``.venv/bin/pip install -e .[bench]`` then ``.venv/bin/python benchmarks/bench_peers.py`` (or
+``make bench-peers``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from typing import Any
+
+try:
+    import mesa
+    from mesa.experimental.continuous_space import ContinuousSpace, ContinuousSpaceAgent
+except ImportError:
+    print("bench_peers: Mesa is not installed; run `pip install -e .[bench]` (or `make bench-peers`)", file=sys.stderr)
+    sys.exit(2)
+
+import numpy as np
+from scipy import ndimage
+
+from amronet.sim.bench import run_bench
+from amronet.world.builtin import resolve_map
+
+SPEED = 0.2  # m/s, the Bebot default (amronet's self-spreading preset)
+DT = 0.1  # s, amronet's default step
+TURN_NOISE = 1.0  # rad per sqrt(s), SelfSpreadingParams.turn_noise default
+AREA_PER_ROBOT = 0.25  # m², run_bench's default
+
+
+class Walker(ContinuousSpaceAgent):
+    """A random walker that looks up its neighbours within ``r_c`` every step."""
+
+    def __init__(self, space: ContinuousSpace, model: PeerModel, position: np.ndarray, heading: float) -> None:
+        super().__init__(space, model)
+        self.position = position
+        self.heading = heading
+        self.neighbours: list[Walker] = []
+
+    def step(self) -> None:
+        """Turn by Gaussian noise, move one step (reflected at the bounds), query the neighbours in radius."""
+        m = self.model
+        self.heading += self.random.gauss(0.0, m.sigma)
+        x, y = self.position
+        x += m.step_len * math.cos(self.heading)
+        y += m.step_len * math.sin(self.heading)
+        if not 0.0 <= x <= m.side:
+            x = -x if x < 0.0 else 2.0 * m.side - x
+            self.heading = math.pi - self.heading
+        if not 0.0 <= y <= m.side:
+            y = -y if y < 0.0 else 2.0 * m.side - y
+            self.heading = -self.heading
+        self.position = (x, y)
+        self.neighbours, _ = self.get_neighbors_in_radius(radius=m.r_c)
+
+
+class PeerModel(mesa.Model):
+    """N walkers in a ``side`` x ``side`` continuous space (no torus)."""
+
+    def __init__(self, n: int, side: float, r_c: float, seed: int = 0) -> None:
+        super().__init__(seed=seed)
+        self.side, self.r_c = side, r_c
+        self.step_len, self.sigma = SPEED * DT, TURN_NOISE * math.sqrt(DT)
+        self.space = ContinuousSpace([[0.0, side], [0.0, side]], torus=False, random=self.random, n_agents=n)
+        for xy, heading in zip(self.rng.random((n, 2)) * side, self.rng.uniform(-math.pi, math.pi, n), strict=True):
+            Walker(self.space, self, xy, float(heading))
+
+    def step(self) -> None:
+        """Activate every walker once, in random order."""
+        self.agents.shuffle_do("step")
+
+
+def free_area(map_name: str, n: int) -> float:
+    """Square metres of free space ``run_bench`` gives ``n`` robots on ``map_name`` (largest free region, scaled)."""
+    omap = resolve_map(map_name)
+    labels, count = ndimage.label(omap.free)
+    largest = int(np.bincount(labels.ravel())[1:].max()) if count else 0
+    return max(largest * omap.resolution**2, n * AREA_PER_ROBOT)
+
+
+def time_steps(step: Any, steps: int) -> float:
+    """Seconds that ``steps`` calls of ``step`` take."""
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        step()
+    return time.perf_counter() - t0
+
+
+def bench_mesa(n: int, side: float, r_c: float, seconds: float) -> dict[str, Any]:
+    """Time the Mesa model at ``n`` agents for about ``seconds`` (after 2 warm-up steps and a 3-step probe)."""
+    model = PeerModel(n, side, r_c)
+    time_steps(model.step, 2)
+    steps = max(3, round(seconds * 3 / time_steps(model.step, 3)))
+    wall = time_steps(model.step, steps)
+    degree = float(np.mean([len(a.neighbours) for a in model.agents]))
+    return {"steps": steps, "wall_s": round(wall, 3), "robot_steps_per_s": round(n * steps / wall),
+            "mean_degree": round(degree, 2), "mesa": mesa.__version__}
+
+
+def bench_amronet(n: int, map_name: str, r_c: float, seconds: float) -> dict[str, Any]:
+    """Time amronet's self-spreading step at ``n`` robots for about ``seconds`` (after a warm-up and a probe)."""
+    probe = run_bench(robots=n, steps=10, map_name=map_name, r_c=r_c)  # warm-up step inside, compiles kernels
+    steps = max(3, round(seconds * 10 / max(probe["wall_s"], 1e-3)))
+    return run_bench(robots=n, steps=steps, map_name=map_name, r_c=r_c)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sizes", default="30,300,3000", help="comma-separated N (default 30,300,3000)")
+    parser.add_argument("--map", default="hospital_section", help="amronet's floor plan (sets the area)")
+    parser.add_argument("--rc", type=float, default=1.0, help="communication radius = query radius (m)")
+    parser.add_argument("--seconds", type=float, default=2.0, help="target length of each measurement (s)")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",") if s.strip()]
+    rows = []
+    for n in sizes:
+        side = math.sqrt(free_area(args.map, n))
+        m = bench_mesa(n, side, args.rc, args.seconds)
+        a = bench_amronet(n, args.map, args.rc, args.seconds)
+        rows.append({"robots": n, "area_m2": round(side**2, 1), "r_c": args.rc, "mesa": m, "amronet": a,
+                     "ratio": round(a["robot_steps_per_s"] / m["robot_steps_per_s"], 1)})
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return
+    print(f"Mesa {mesa.__version__} (random walk + radius query) vs amronet (full self-spreading step), "
+          f"r_c = {args.rc} m, map {args.map}")
+    print("| N | area m² | Mesa robot-steps/s | amronet robot-steps/s | ratio amronet/Mesa | degree Mesa/amronet |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        m, a = r["mesa"], r["amronet"]
+        print(f"| {r['robots']:,} | {r['area_m2']:,.0f} | {m['robot_steps_per_s']:,} | {a['robot_steps_per_s']:,} | "
+              f"{r['ratio']:,.1f}x | {m['mean_degree']:.1f}/{a['mean_degree']:.1f} |")
+
+
+if __name__ == "__main__":
+    main()
