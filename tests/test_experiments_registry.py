@@ -43,7 +43,7 @@ def _fakes(monkeypatch, **without):
 
 def test_figures_are_a_registry_in_the_order_reproduce_all_runs_them():
     assert isinstance(FIGURES, Registry) and FIGURES.what == "figure"
-    assert list(FIGURES) == ["fig5", "fig7", "fig10", "fig11", "buildings", "failures"]
+    assert list(FIGURES) == ["fig5", "fig7", "fig10", "fig11", "buildings", "walks", "failures"]
     assert all(FIGURES[name].name == name for name in FIGURES)
     assert FIGURES["fig10"].without == FIGURES["fig11"].without == {"explorer": "it runs no agents"}
     assert not FIGURES["fig5"].without and not FIGURES["fig7"].without
@@ -110,7 +110,7 @@ def test_reproduce_all_explorer_is_refused_before_any_figure_runs(tmp_path, caps
     assert main(["reproduce", "all", "--quick", "--explorer", "random", "--out", str(tmp_path / "all")]) == 2
     err = capsys.readouterr().err
     assert err == ("amronet: error: --explorer: fig10 does not take this option (it runs no agents), nor does "
-                   "fig11; reproduce all gives every option to every figure, so leave it out or reproduce fig5, "
+                   "fig11, walks; reproduce all gives every option to every figure, so leave it out or reproduce fig5, "
                    "fig7, buildings, failures one by one\n")
     assert not (tmp_path / "all").exists()
 

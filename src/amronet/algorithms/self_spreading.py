@@ -6,6 +6,10 @@ reference** stops, becomes a *reference* and takes the status of its current ref
 reference has status ``i`` that hears a reference of status ``p != i`` goes into *triangle* state with status ``i``
 and moves to a point that keeps both references linked (:mod:`amronet.algorithms.triangular`).
 
+**Walks** (``walk``): how exploring routers move — ``random`` (the paper's, the default), ``straight`` (a persistent
+walk) or ``growth`` (toward where the network grows, along the routing's growth field); see
+:mod:`amronet.algorithms.walks`.
+
 **Stop rules** (``stop_rule``). ``distance`` (the paper's, the default): the current reference is kept while it is
 within ``r_c`` and otherwise the nearest reference is taken; a router stops when every reference it hears is at
 least ``(1 - loss_margin) r_c`` away. ``link-quality`` (location-free, paper sections 6-7): a router reads only the
@@ -75,6 +79,7 @@ from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.link_quality import MarginSearch, MarginSmoother, anchor_margins, strongest_references
 from amronet.algorithms.references import check_loss_band, track_references
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
+from amronet.algorithms.walks import Walker
 from amronet.engine.motion import random_walk
 from amronet.engine.robots import SETTLING_STATES, Role, State
 
@@ -105,6 +110,10 @@ class SelfSpreadingParams(BaseModel):
         triangle_tolerance_db: ``link-quality`` triangles: settle when both margins are within this of
             ``stop_margin_db`` (dB).
         triangle_max_s: ``link-quality`` triangles: settle after searching this long, seconds.
+        walk: How exploring routers walk (:mod:`amronet.algorithms.walks`): ``random`` (the paper's), ``straight``
+            or ``growth``.
+        growth_s: ``growth`` walk: how long a deployed node counts as new (where the network grows), seconds.
+        follow_steps: ``growth`` walk: at most this many steps following an obstacle's edge.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -120,6 +129,9 @@ class SelfSpreadingParams(BaseModel):
     triangle_rule: Literal["geometric", "link-quality"] = "geometric"
     triangle_tolerance_db: Annotated[float, Field(strict=True, gt=0, le=60, allow_inf_nan=False)] = 1.0
     triangle_max_s: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 60.0
+    walk: Literal["random", "straight", "growth"] = "random"
+    growth_s: Annotated[float, Field(strict=True, gt=0, le=3600, allow_inf_nan=False)] = 10.0
+    follow_steps: Annotated[StrictInt, Field(ge=1, le=100_000)] = 200
 
     @model_validator(mode="after")
     def _hysteresis(self) -> SelfSpreadingParams:
@@ -149,6 +161,7 @@ class SelfSpreading(Controller):
         self.steering = GoalSteering(n, n_anchors=2, give_up_steps=p.give_up_steps)
         self.disabled = np.zeros(n, dtype=bool)
         self.refused = np.zeros(n, dtype=bool)
+        self.walker = Walker(p.walk, n, self.r_c, p.turn_noise * np.sqrt(self.dt), p.growth_s, p.follow_steps)
         self.router_model = int(sw.model[routers][0]) if routers.any() else 0
         self.several_statuses = len(np.unique(sw.status[sw.role == Role.BASE])) > 1
         self.by_signal = p.stop_rule == "link-quality"
@@ -178,10 +191,9 @@ class SelfSpreading(Controller):
         sensor_range = sw.models[model].sensor_range
         walking = sw.state[movers] == State.EXPLORE
         w = movers[walking]
-        sigma = self.params.turn_noise * np.sqrt(self.dt)
         everyone = len(w) == len(movers)
-        random_walk(sw.heading, w, scans if everyone else scans[walking], sensor_range, self.refused[w], self.rng,
-                    sigma)
+        self.walker.steer(sw.heading, w, scans if everyone else scans[walking], sensor_range, self.refused[w],
+                          self.rng, step.table, sw.xy, sw.deployed, step.t)
         tri = movers[~walking]
         if len(tri):
             if self.searching:

@@ -117,5 +117,7 @@ _add(Figure("fig11", "amronet.experiments.fig10:run_coverage_over_time", kwargs=
 _add(Figure("buildings", "amronet.experiments.buildings:run_buildings",
             quick={"buildings": ("office-32x32", "cave"), "rules": ("last-reference", "link-quality"),
                    "stocks": (None, 6), "runs": 2, "time_limit": 120.0}))
+_add(Figure("walks", "amronet.experiments.walks:run_walks",
+            quick={"maps": ("autolab",), "runs": 2, "time_limit": 60.0}, without={"explorer": "it runs no agents"}))
 _add(Figure("failures", "amronet.experiments.failures:run_failures",
             quick={"maps": ("autolab",), "fractions": (0.2,), "runs": 2, "fault_at": 60.0, "after": 60.0}))
