@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/amronet run --preset self-spreading-autolab --seed 1 --out runs/demo
+	$(BIN)/amronet run --preset demo-autolab --seed 1 --out runs/demo
 	@echo "picture: runs/demo/snapshot.png"
 
 # The replay viewer's test drives a real headless Chromium (Debian's package; Playwright from PyPI drives it).

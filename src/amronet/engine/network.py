@@ -24,14 +24,38 @@ class CSRGraph(Protocol):
 
 @njit(cache=True)
 def _bfs_labels(indptr, indices, allowed, sources, labels, hops):  # pragma: no cover - numba
-    """Label the allowed nodes by component (BFS); with ``sources``, search from those only and count hops."""
+    """Label the allowed nodes by component (BFS); with ``sources``, search from all of them at once and count hops.
+
+    With sources the search is one breadth-first search seeded with every allowed source (hop 0), so each node
+    gets the fewest hops from *any* source, and label 0.
+    """
     queue = np.empty(labels.shape[0], dtype=np.int64)
+    if sources.shape[0] > 0:
+        tail = 0
+        for s in sources:
+            if allowed[s] and labels[s] < 0:
+                labels[s] = 0
+                hops[s] = 0
+                queue[tail] = s
+                tail += 1
+        head = 0
+        while head < tail:
+            u = queue[head]
+            head += 1
+            for e in range(indptr[u], indptr[u + 1]):
+                v = indices[e]
+                if allowed[v] and labels[v] < 0:
+                    labels[v] = 0
+                    hops[v] = hops[u] + 1
+                    queue[tail] = v
+                    tail += 1
+        return 1 if tail > 0 else 0
     count = 0
-    starts = sources if sources.shape[0] > 0 else np.arange(labels.shape[0])
+    starts = np.arange(labels.shape[0])
     for s in starts:
         if not allowed[s] or labels[s] >= 0:
             continue
-        label = 0 if sources.shape[0] > 0 else count
+        label = count
         head = 0
         tail = 0
         queue[tail] = s
