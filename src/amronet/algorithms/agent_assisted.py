@@ -403,15 +403,20 @@ class AgentAssisted(Controller):
             return Command(agents, speed)
         return Command(np.concatenate(movers), np.concatenate(speeds))
 
+    def _sensed_in(self, step: StepInput, n_before: int, state: int) -> tuple[np.ndarray, int]:
+        """Routers in ``state`` sensed this step (those that entered it this step move from the next); their model."""
+        sw = self.swarm
+        moving = np.flatnonzero(sw.state[:n_before] == state)
+        if not len(moving):
+            return moving, 0
+        model = int(sw.model[moving[0]])
+        sensed = step.readings.groups.get(model, (np.zeros(0, dtype=np.int64), None))[0]
+        return moving[np.isin(moving, sensed)], model
+
     def _drive_strips(self, step: StepInput, n_before: int) -> tuple[np.ndarray, np.ndarray]:
         """Steer the routers driving to their strip goals (sensed this step); those that arrive or stop settle."""
         sw = self.swarm
-        moving = np.flatnonzero(sw.state[:n_before] == State.STRIP)
-        if not len(moving):
-            return moving, np.zeros(0)
-        model = int(sw.model[moving[0]])
-        sensed = step.readings.groups.get(model, (np.zeros(0, dtype=np.int64), None))[0]
-        moving = moving[np.isin(moving, sensed)]  # those that started this step move from the next one
+        moving, model = self._sensed_in(step, n_before, State.STRIP)
         if not len(moving):
             return moving, np.zeros(0)
         length, done = self.steering.steer(moving, sw.xy, sw.heading, step.readings.of(moving, model),
@@ -466,12 +471,7 @@ class AgentAssisted(Controller):
             sw.state[started] = State.RELOCATING
             sw.state[stopped] = State.REFERENCE
             self._nodes_changed()
-        moving = np.flatnonzero(sw.state[:n_before] == State.RELOCATING)
-        if not len(moving):
-            return moving, np.zeros(0)
-        model = int(sw.model[moving[0]])
-        sensed = step.readings.groups.get(model, (np.zeros(0, dtype=np.int64), None))[0]
-        moving = moving[np.isin(moving, sensed)]  # those that started this step move from the next one
+        moving, model = self._sensed_in(step, n_before, State.RELOCATING)
         if not len(moving):
             return moving, np.zeros(0)
         length, done = self.relocator.steering.steer(moving, sw.xy, sw.heading, step.readings.of(moving, model),

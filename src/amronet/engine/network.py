@@ -23,6 +23,23 @@ class CSRGraph(Protocol):
 
 
 @njit(cache=True)
+def _spread(indptr, indices, allowed, queue, tail, label, labels, hops):  # pragma: no cover - numba
+    """Breadth-first search from the ``tail`` nodes queued (labelled, hop 0); labels and hops of what they reach."""
+    head = 0
+    while head < tail:
+        u = queue[head]
+        head += 1
+        for e in range(indptr[u], indptr[u + 1]):
+            v = indices[e]
+            if allowed[v] and labels[v] < 0:
+                labels[v] = label
+                hops[v] = hops[u] + 1
+                queue[tail] = v
+                tail += 1
+    return tail
+
+
+@njit(cache=True)
 def _bfs_labels(indptr, indices, allowed, sources, labels, hops):  # pragma: no cover - numba
     """Label the allowed nodes by component (BFS); with ``sources``, search from all of them at once and count hops.
 
@@ -38,40 +55,15 @@ def _bfs_labels(indptr, indices, allowed, sources, labels, hops):  # pragma: no 
                 hops[s] = 0
                 queue[tail] = s
                 tail += 1
-        head = 0
-        while head < tail:
-            u = queue[head]
-            head += 1
-            for e in range(indptr[u], indptr[u + 1]):
-                v = indices[e]
-                if allowed[v] and labels[v] < 0:
-                    labels[v] = 0
-                    hops[v] = hops[u] + 1
-                    queue[tail] = v
-                    tail += 1
-        return 1 if tail > 0 else 0
+        return 1 if _spread(indptr, indices, allowed, queue, tail, 0, labels, hops) > 0 else 0
     count = 0
-    starts = np.arange(labels.shape[0])
-    for s in starts:
+    for s in range(labels.shape[0]):
         if not allowed[s] or labels[s] >= 0:
             continue
-        label = count
-        head = 0
-        tail = 0
-        queue[tail] = s
-        tail += 1
-        labels[s] = label
+        labels[s] = count
         hops[s] = 0
-        while head < tail:
-            u = queue[head]
-            head += 1
-            for e in range(indptr[u], indptr[u + 1]):
-                v = indices[e]
-                if allowed[v] and labels[v] < 0:
-                    labels[v] = label
-                    hops[v] = hops[u] + 1
-                    queue[tail] = v
-                    tail += 1
+        queue[0] = s
+        _spread(indptr, indices, allowed, queue, 1, count, labels, hops)
         count += 1
     return count
 
