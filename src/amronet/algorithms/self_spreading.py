@@ -193,7 +193,7 @@ class SelfSpreading(Controller):
         w = movers[walking]
         everyone = len(w) == len(movers)
         self.walker.steer(sw.heading, w, scans if everyone else scans[walking], sensor_range, self.refused[w],
-                          self.rng, step.table, sw.xy, sw.deployed, step.t)
+                          self.rng, step.table, sw.xy, sw.deployed if self.walker.reads_network else None, step.t)
         tri = movers[~walking]
         if len(tri):
             if self.searching:

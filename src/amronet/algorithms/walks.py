@@ -170,6 +170,8 @@ class Walker:
         if rule not in WALKS:
             raise ValueError(f"unknown walk rule {rule!r}; choose one of {', '.join(WALKS)}")
         self.rule = rule
+        self.reads_network = rule == "growth"
+        """Whether the rule reads which nodes are deployed (``growth``)."""
         self.r_c = r_c
         self.turn_sigma = turn_sigma
         self.growth_s = growth_s
@@ -192,7 +194,7 @@ class Walker:
 
     def steer(self, heading: np.ndarray, who: np.ndarray, scans: np.ndarray, sensor_range: float,
               refused: np.ndarray, rng: np.random.Generator | RunStreams, table: NeighbourTable, xy: np.ndarray,
-              deployed: np.ndarray, t: float) -> None:
+              deployed: np.ndarray | None, t: float) -> None:
         """Update the headings of the walking routers ``who`` in place.
 
         Args:
@@ -204,13 +206,16 @@ class Walker:
             rng: The run's generator (or a batch's streams).
             table: The step's neighbour table.
             xy: Positions of all robots (as the nodes announce them).
-            deployed: Which nodes are deployed (base nodes and references).
+            deployed: Which nodes are deployed (base nodes and references); needed when :attr:`reads_network`.
             t: Simulated time, seconds.
         """
         if self.rule == "random":
             random_walk(heading, who, scans, sensor_range, refused, rng, self.turn_sigma)
             return
-        field = self.growth_field(table, deployed, t) if self.rule == "growth" else None
+        field = None
+        if self.reads_network:
+            assert deployed is not None
+            field = self.growth_field(table, deployed, t)
         normal, uniform = draw_per_run(rng, who, _draws)
         if not len(who):
             return
