@@ -5,7 +5,8 @@ A new one subclasses :class:`Explorer` and registers itself with ``@EXPLORERS.re
 (:mod:`~amronet.algorithms.explorers.base`); scenarios pick it with ``algorithm.params.explorer``.
 
 Modules: :mod:`~amronet.algorithms.explorers.base` (the base class and the registry),
-:mod:`~amronet.algorithms.explorers.random_walk` (``"random"``), :mod:`~amronet.algorithms.explorers.frontier`
+:mod:`~amronet.algorithms.explorers.random_walk` (``"random"``, the paper's, and ``"random-escape"``, a random walk
+that leaves rooms), :mod:`~amronet.algorithms.explorers.frontier`
 (``"frontier"``) and :mod:`~amronet.algorithms.explorers.wall_follow` (``"wall-follow"``). Importing this package
 registers them all. :mod:`~amronet.algorithms.explorers.trajectory` (:class:`PathFollower`) is not registered: it
 steers agents along the paths a scenario gives (``agents.trajectories``) and falls back to the chosen explorer.
