@@ -234,7 +234,6 @@ class AgentAssisted(Controller):
         self.strip_counts = {"reached": 0, "stopped_short": 0, "no_goal": 0}
         self.strip_tries: dict[int, int] = {}
         """Goals each router gave up on."""
-        self._table = None
 
     @classmethod
     def start_range(cls, params: AgentAssistedParams, r_c: float) -> float:  # noqa: D102
@@ -274,8 +273,6 @@ class AgentAssisted(Controller):
         if self._deployed is None:
             sw = self.swarm
             self._deployed = sw.deployed
-            if self.moving_strips:
-                self._deployed = self._deployed | self._linked_strips(self._deployed)
             self._deployed_xy = sw.xy[self._deployed]
         assert self._deployed_xy is not None
         return self._deployed, self._deployed_xy
@@ -283,25 +280,10 @@ class AgentAssisted(Controller):
     def _nodes_changed(self) -> None:
         self._deployed = self._deployed_xy = None
 
-    def _linked_strips(self, deployed: np.ndarray) -> np.ndarray:
-        """Routers driving to a strip goal that hear a deployed node this step (they serve as references)."""
-        sw, table = self.swarm, self._table
-        linked = np.zeros(len(sw), dtype=bool)
-        if table is None:
-            return linked
-        n_rows = len(table.indptr) - 1
-        for i in np.flatnonzero(sw.state == State.STRIP):  # a handful of routers on their way
-            if i < n_rows:  # released this step: no links yet
-                linked[i] = deployed[table.indices[table.indptr[i]:table.indptr[i + 1]]].any()
-        return linked
-
     # -- the step -------------------------------------------------------------------------------------------
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm
         agents = self.agents
-        self._table = step.table
-        if self.moving_strips:  # routers on their way change position, and whether they are references
-            self._nodes_changed()
         if self.settle_at:
             self._settle_dropped(step.t)
         n_before = len(sw)
@@ -343,6 +325,10 @@ class AgentAssisted(Controller):
                 toward = self._toward(m, view)
                 if toward >= 0 and self._release_reference(int(agents[m]), toward, step.t):
                     dropped[m] = True
+                    if losing[m] and sw.state[-1] == State.STRIP:  # it drives off (strip-goals): wait for one to stay
+                        if held is None:
+                            held = np.zeros(len(agents), dtype=bool)
+                        held[m] = True
                 elif losing[m]:
                     if held is None:
                         held = np.zeros(len(agents), dtype=bool)

@@ -71,7 +71,7 @@ class State:
     relays but serves as no reference until it has settled again."""
     STRIP = 9
     """Router an agent has put down that drives to a goal point of an r-strip lattice (drop rule ``strip-goals``);
-    it relays, and serves as a reference while it hears a deployed node."""
+    it relays but serves as no reference until it has settled."""
 
 
 STATE_NAMES: tuple[str, ...] = ("base", "explore", "reference", "triangle", "triangle-settled", "agent", "dropped",
