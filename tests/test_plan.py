@@ -160,3 +160,34 @@ def test_plan_bad_mission_options_are_one_line(tmp_path, capsys, args, option):
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and option in err
     assert not (tmp_path / "p").exists()
+
+
+PATHS_CSV = "t,agent,x,y\n0,0,1.5,1.5\n40,0,1,20\n0,1,1.5,1.5\n60,1,25,3\n"
+
+
+def test_plan_of_a_replayed_mission_counts_every_run_that_followed_the_paths(tmp_path):
+    """Issue #15: a team replays its paths and asks how many routers they need."""
+    paths = tmp_path / "paths.csv"
+    paths.write_text(PATHS_CSV)
+    p = plan("office-32x32", [(1.0, 1.0)], r_c=6.0, agents_per_base=2, runs=2,
+             options=RunOptions(workers=1, show_progress=False), trajectories=paths)
+    assert p.scenario["agents"]["trajectories"] == str(paths.resolve())
+    assert all(r["stop_reason"] == "settled" for r in p.runs)  # a replay ends where its paths end
+    assert p.distribution["completed"] == 2 and p.recommended is not None and p.recommended >= 1
+    assert not any("did not reach" in w for w in p.warnings)
+    assert "that followed the paths of" in p.markdown(picture=None)
+
+
+@pytest.mark.parametrize(("content", "what"), [
+    ("t,agent,x,y\n0,7,1.5,1.5\n", "unknown agent 7"),
+    (None, "no file"),
+])
+def test_plan_bad_trajectories_are_one_line_naming_the_option(tmp_path, capsys, content, what):
+    paths = tmp_path / "paths.csv"
+    if content is not None:
+        paths.write_text(content)
+    code = main(["plan", "--map", "office-32x32", "--base", "1,1", "--rc", "6", "--runs", "1", "--out",
+                 str(tmp_path / "p"), "--trajectories", str(paths)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "--trajectories" in err and what in err
+    assert not (tmp_path / "p").exists()

@@ -120,8 +120,14 @@ class Plan:
             radio = ", ".join(f"{k} {v}" for k, v in st["radio"].items())
             lines += [f"Radio: {radio}; drop rule {st.get('drop_rule')}; stock {stock}.", ""]
         if self.recommended is not None:
+            if st.get("trajectories") is not None:
+                which = f"that followed the paths of {st['trajectories']}"
+            elif st.get("stock") is not None:
+                which = "that finished (with a stock every finished run counts)"
+            else:
+                which = f"that reached {100 * st['coverage_target']:g} % coverage"
             lines += [f"**Carry {self.recommended} routers** (the {q} of {d['completed']} agent-assisted runs "
-                      f"that reached {100 * self.settings['coverage_target']:g} % coverage, rounded up).", ""]
+                      f"{which}, rounded up).", ""]
         else:
             lines += ["**No recommendation**: no agent-assisted run reached the coverage target.", ""]
         lines += ["| method | nodes (incl. base nodes) | routers to carry |", "|---|---:|---:|",
@@ -137,7 +143,8 @@ class Plan:
                 shown = f"{value:.1f}" if isinstance(value, float) and not float(value).is_integer() else f"{value:g}"
                 lines.append(f"| agent-assisted deployment, {label} | {float(value) + n_b:g} | {shown} |")
         counted = (f"{d.get('reached_target', d['completed'])} reached the target"
-                   + ("; with a stock every finished run counts" if self.settings.get("stock") is not None else ""))
+                   + ("; with a stock every finished run counts" if self.settings.get("stock") is not None else "")
+                   + ("; on given paths every finished run counts" if st.get("trajectories") is not None else ""))
         lines += ["", f"Agent-assisted runs: {d['runs']} ({counted}), "
                       f"explorer {self.settings['explorer']}, time limit {self.settings['time_limit']:g} s, "
                       f"seeds {self.settings['seeds'][0]}..{self.settings['seeds'][-1]}."]
@@ -165,7 +172,7 @@ def _check(option: str, ok: bool, message: str) -> None:
 _OPTION_OF_FIELD = (("radio", "--radio"), ("algorithm.params.drop_rule", "--drop-rule"),
                     ("algorithm.params.drop", "--drop"), ("agents.routers_carried", "--stock"),
                     ("agents.when_empty", "--when-empty"), ("agents.drop_settle_s", "--settle-s"),
-                    ("agents.reverse_drop", "--reverse-drop"))
+                    ("agents.reverse_drop", "--reverse-drop"), ("agents.trajectories", "--trajectories"))
 """Scenario fields the planner's options set → the option, for one-line errors that name what the user typed."""
 
 
@@ -196,6 +203,7 @@ def plan(
     when_empty: str | None = None,
     settle_s: float | None = None,
     reverse_drop: float | None = None,
+    trajectories: str | Path | None = None,
 ) -> Plan:
     """Plan a deployment (see the module docstring).
 
@@ -224,6 +232,9 @@ def plan(
         when_empty: ``tether`` or ``continue`` (``agents.when_empty``).
         settle_s: ``agents.drop_settle_s``.
         reverse_drop: ``agents.reverse_drop``.
+        trajectories: A CSV of the agents' paths (``agents.trajectories``): the plan of a replayed or planned
+            mission. Its runs end where the paths end, not at a coverage target, so the relays distribution is
+            taken over every finished run.
 
     Raises:
         AmronetError: Bad input, with one line naming the option.
@@ -253,6 +264,8 @@ def plan(
         agents_fields["drop_settle_s"] = float(settle_s)
     if reverse_drop is not None:
         agents_fields["reverse_drop"] = float(reverse_drop)
+    if trajectories is not None:
+        agents_fields["trajectories"] = str(Path(trajectories).resolve())
     mission = {"radio": radio, "drop_rule": drop_rule, "drop": drop, "agents": agents_fields or None}
     scenario = _scenario(map_ref, bases, r_c, agents_per_base, explorer, time_limit, dt, mission)
     try:
@@ -290,7 +303,7 @@ def plan(
     target = float(load_scenario(scenario).sim.coverage_target or 0.99)
     done = [r for r in rows if r["status"] == "done"]
     completed = [r for r in done if r["stop_reason"] == "coverage_target"]
-    if stock is not None:  # a stock-limited run may not reach the target: the relays of every finished run count
+    if stock is not None or trajectories is not None:  # runs that may not reach the target: every finished run counts
         completed = done
     warnings = []
     failed = [r for r in rows if r["status"] == "failed"]
@@ -298,7 +311,7 @@ def plan(
         retry = " (--retry-failed runs them again)" if store is not None else ""
         warnings.append(f"{len(failed)} of {runs} runs failed{retry}: {failed[0]['error']}")
     short = [r for r in rows if r["status"] == "done" and r["stop_reason"] != "coverage_target"]
-    if short and stock is None:
+    if short and stock is None and trajectories is None:
         warnings.append(f"{len(short)} of {runs} runs did not reach {100 * target:g} % coverage within "
                         f"{time_limit:g} s (left out; raise --time-limit)")
     values = np.array([r["routers_deployed"] for r in completed], dtype=float)
@@ -337,7 +350,7 @@ def plan(
                 settings={"explorer": explorer, "time_limit": time_limit, "dt": dt, "coverage_target": target,
                           "radio": dict(radio or {"model": "unit-disk"}), "drop_rule": drop_rule or "last-reference",
                           "stock": stock, "when_empty": agents_fields.get("when_empty", "tether"),
-                          "seeds": list(sweep.seeds)},
+                          "trajectories": agents_fields.get("trajectories"), "seeds": list(sweep.seeds)},
                 scenario=point.scenario)
 
 

@@ -2,7 +2,7 @@
 
 ``amronet plan --map depot --base 1.0,2.0 [--base X,Y ...] --rc 4 --agents 3 [--runs 20] [--confidence 0.95]
 [--radio multi-wall [--shadowing-db 4] [--wall-db 6.9]] [--drop-rule link-quality [--drop KEY=VALUE ...]]
-[--stock 12 [--when-empty tether|continue]] [--settle-s 3] [--reverse-drop 1]
+[--stock 12 [--when-empty tether|continue]] [--settle-s 3] [--reverse-drop 1] [--trajectories paths.csv]
 [--store results.sqlite [--retry-failed]] [--out DIR] [--json]`` prints the paper's estimate, the static patterns
 placed on the map and the distribution of routers used by agent-assisted deployment over ``--runs`` seeded runs,
 with the recommendation. ``--out DIR`` writes ``plan.json``, ``plan.md`` and ``typical.png`` (the picture is
@@ -76,7 +76,8 @@ def _mission_options(args: argparse.Namespace) -> dict[str, Any]:
         key, value = parse_override(item)
         drop[key] = value
     return {"radio": radio or None, "drop_rule": args.drop_rule, "drop": drop or None, "stock": args.stock,
-            "when_empty": args.when_empty, "settle_s": args.settle_s, "reverse_drop": args.reverse_drop}
+            "when_empty": args.when_empty, "settle_s": args.settle_s, "reverse_drop": args.reverse_drop,
+            "trajectories": args.trajectories}
 
 
 def _store_in(store: str | None, out: str | None) -> tuple[str, ...]:
@@ -112,6 +113,8 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--settle-s", type=float, help="seconds before a router put down relays (agents.drop_settle_s)")
     p.add_argument("--reverse-drop", type=float, metavar="S",
                    help="back up and drop after S seconds out of contact (agents.reverse_drop)")
+    p.add_argument("--trajectories", metavar="CSV",
+                   help="the agents' paths (columns t, agent, x, y): plan a replayed or planned mission")
     p.add_argument("--time-limit", type=float, default=6000.0, help="simulated seconds per run at most")
     p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--store", help="keep the runs in this result store (and reuse them next time)")
