@@ -4,6 +4,7 @@ import dataclasses
 import subprocess
 import sys
 import types
+from pathlib import Path
 
 import pytest
 
@@ -150,3 +151,19 @@ def test_run_jobs_takes_run_options_and_refuses_what_shapes_jobs():
     with pytest.raises(TypeError, match="explorer"):
         run_jobs([], explorer="random")
     assert run_jobs([], RunOptions(workers=1, show_progress=False)) == []
+
+
+def test_reproduce_paper_runs_the_papers_four_figures_into_out_figure(tmp_path, monkeypatch):
+    from amronet.experiments.registry import PAPER, group
+
+    assert group("paper") == ["fig5", "fig7", "fig10", "fig11"] == list(PAPER)
+    assert group("all") == list(FIGURES) and group("fig5") is None
+    ran = []
+
+    def fake_run(self, out_dir, quick=False, **options):
+        ran.append((self.name, Path(out_dir)))
+        return {"markdown": f"# {self.name}"}
+
+    monkeypatch.setattr(Figure, "run", fake_run)
+    assert main(["reproduce", "paper", "--out", str(tmp_path), "-q"]) == 0
+    assert ran == [(name, tmp_path / name) for name in PAPER]

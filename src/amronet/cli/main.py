@@ -115,18 +115,19 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from amronet.experiments.common import STORE_FILES
-    from amronet.experiments.registry import FIGURES, check_options
+    from amronet.experiments.registry import FIGURES, check_options, group
     from amronet.outputs.files import check_output_folder
 
     if args.workers is not None and args.workers < 1:
         raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
-    names = list(FIGURES) if args.figure == "all" else [args.figure]
+    names = group(args.figure) or [args.figure]
+    several = group(args.figure) is not None
     # the run options given on the command line (None: not given, the figure's own default applies); each
     # figure must take each of them: checked before anything runs
     given = {"explorer": args.explorer, "time_limit": args.time_limit, "workers": args.workers,
              "retry_failed": args.retry_failed or None}
-    check_options([FIGURES[name] for name in names], given)
-    outs = {name: Path(args.out or "runs") / name if args.figure == "all" else Path(args.out or f"runs/{name}")
+    check_options([FIGURES[name] for name in names], given, args.figure if several else "all")
+    outs = {name: Path(args.out or "runs") / name if several else Path(args.out or f"runs/{name}")
             for name in names}
     for out in outs.values():  # before any run: a folder that holds a user's files is refused, untouched
         check_output_folder(out, keep=STORE_FILES)
@@ -199,9 +200,10 @@ def _parser() -> argparse.ArgumentParser:
                     "all, every option given goes to every figure, so it must be one that every figure takes "
                     "(all --explorer is refused, before anything runs: reproduce the figures with agents one by "
                     "one instead).")
-    from amronet.experiments.registry import FIGURES
+    from amronet.experiments.registry import FIGURES, GROUPS
 
-    rp.add_argument("figure", choices=[*FIGURES, "all"], help="which figure (all: every one, into OUT/FIGURE)")
+    rp.add_argument("figure", choices=[*FIGURES, *GROUPS],
+                    help="which figure (all: every one, into OUT/FIGURE; paper: the paper's four, fig5 to fig11)")
     rp.add_argument("--out", help="output folder (default runs/FIGURE)")
     rp.add_argument("--store", help="result store: finished runs are kept and reused (default OUT/results.sqlite)")
     rp.add_argument("--explorer", help="agents' exploration strategy (default frontier; only the figures with "

@@ -26,7 +26,7 @@ from amronet.errors import AmronetError
 from amronet.experiments.options import RUN_OPTIONS, RunOptions
 from amronet.registry import Registry
 
-__all__ = ["FIGURES", "Figure", "check_options"]
+__all__ = ["FIGURES", "GROUPS", "PAPER", "Figure", "check_options", "group"]
 
 
 @dataclass(frozen=True)
@@ -71,12 +71,12 @@ class Figure:
         return self.function()(**figure_kwargs, out_dir=Path(out_dir), options=run_options)
 
 
-def check_options(figures: Iterable[Figure], options: Mapping[str, Any]) -> None:
+def check_options(figures: Iterable[Figure], options: Mapping[str, Any], group_name: str = "all") -> None:
     """Check, before any of ``figures`` runs, that each takes every given option (those that are not ``None``).
 
     Raises:
         AmronetError: One line naming the first option that a figure does not take, the figure and why; with
-            several figures (``reproduce all``), also the figures that do take it.
+            several figures (``reproduce all`` or another group, ``group_name``), also the figures that do take it.
         TypeError: An option is not a field of :class:`RunOptions`.
     """
     figures = list(figures)
@@ -95,7 +95,7 @@ def check_options(figures: Iterable[Figure], options: Mapping[str, Any]) -> None
             takers = [f.name for f in figures if name not in f.without]
             others = ", ".join(f.name for f in refusing[1:])
             message += (f", nor does {others}" if others else "") + (
-                "; reproduce all gives every option to every figure, so leave it out"
+                f"; reproduce {group_name} gives every option to every figure, so leave it out"
                 + (f" or reproduce {', '.join(takers)} one by one" if takers else ""))
         raise AmronetError(message)
 
@@ -121,3 +121,18 @@ _add(Figure("walks", "amronet.experiments.walks:run_walks",
             quick={"maps": ("autolab",), "runs": 2, "time_limit": 60.0}, without={"explorer": "it runs no agents"}))
 _add(Figure("failures", "amronet.experiments.failures:run_failures",
             quick={"maps": ("autolab",), "fractions": (0.2,), "runs": 2, "fault_at": 60.0, "after": 60.0}))
+
+
+PAPER: tuple[str, ...] = ("fig5", "fig7", "fig10", "fig11")
+"""The paper's four experiments (``amronet reproduce paper``); ``all`` adds the experiments beyond the paper."""
+GROUPS: tuple[str, ...] = ("all", "paper")
+"""Names ``amronet reproduce`` takes for several figures at once (each into ``OUT/FIGURE``)."""
+
+
+def group(name: str) -> list[str] | None:
+    """The figures of a group name (:data:`GROUPS`) in the order they run, or ``None`` when it names no group."""
+    if name == "all":
+        return list(FIGURES)
+    if name == "paper":
+        return [n for n in PAPER if n in FIGURES]
+    return None
