@@ -323,9 +323,10 @@ class AgentAssisted(Controller):
             dropped = np.zeros(len(agents), dtype=bool)
             for m in np.flatnonzero(drop):
                 toward = self._toward(m, view)
-                if toward >= 0 and self._release_reference(int(agents[m]), toward, step.t):
+                new = self._release_reference(int(agents[m]), toward, step.t) if toward >= 0 else None
+                if new is not None:
                     dropped[m] = True
-                    if losing[m] and sw.state[-1] == State.STRIP:  # it drives off (strip-goals): wait for one to stay
+                    if losing[m] and sw.state[new] == State.STRIP:  # it drives off (strip-goals): wait for one to stay
                         if held is None:
                             held = np.zeros(len(agents), dtype=bool)
                         held[m] = True
@@ -607,23 +608,21 @@ class AgentAssisted(Controller):
         self.released_by[np.searchsorted(self.agents, agent)] += 1
         return int(new[0])
 
-    def _release_reference(self, agent: int, current: int, t: float) -> bool:
-        """Put a reference router down (one that first settles for ``settle_s`` when that is set).
+    def _release_reference(self, agent: int, current: int, t: float) -> int | None:
+        """Put a reference router down (settling first for ``settle_s`` when set); its index, ``None``: no free spot.
 
         Under a rule whose routers drive on to a goal (``strip-goals``) it starts for its goal, once settled.
         """
-        if self.settle_s <= 0:
-            new = self._add_router(agent, current, State.REFERENCE)
-            if new is not None and self.drop_rule.drives_to_goal:
-                self._start_strip(new, current)
-            return new is not None
-        new = self._add_router(agent, current, State.DROPPED)
+        new = self._add_router(agent, current, State.REFERENCE if self.settle_s <= 0 else State.DROPPED)
         if new is None:
-            return False
-        self.settle_at[new] = t + self.settle_s
-        if self.drop_rule.drives_to_goal:
-            self.strip_waiting[new] = current
-        return True
+            return None
+        if self.settle_s > 0:
+            self.settle_at[new] = t + self.settle_s
+            if self.drop_rule.drives_to_goal:
+                self.strip_waiting[new] = current
+        elif self.drop_rule.drives_to_goal:
+            self._start_strip(new, current)
+        return new
 
     def _release_triangle(self, agent: int, ref_i: int, ref_j: int) -> None:
         sw = self.swarm
