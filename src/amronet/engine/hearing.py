@@ -26,6 +26,19 @@ from amronet.world.occupancy import OccupancyMap
 __all__ = ["BLOCK", "Hearing", "best_margin_grid", "cell_field", "heard_box", "heard_cells", "link_margin"]
 
 
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+# The stand-ins of a radio without walls or shadowing have the dtypes and the read-only flag of the real grids
+# (:func:`~amronet.engine.walls.wall_grid`, :class:`~amronet.engine.shadowing.ShadowingField`): numba compiles one
+# version of each kernel per argument type, so every radio model then shares one compiled kernel.
+_NO_WALLS = _frozen(np.zeros((0, 0), np.uint8))
+_NO_JUMP = _frozen(np.zeros((0, 0), np.float32))
+_NO_SHADOW = _frozen(np.zeros((1, 1)))
+
+
 @dataclass(frozen=True)
 class Hearing:
     """A radio's rule, as plain numbers and arrays for the compiled kernels.
@@ -54,11 +67,11 @@ class Hearing:
     def from_budget(cls, budget: LinkBudget, omap: OccupancyMap | None, field: ShadowingField | None) -> Hearing:
         """The rule of ``budget``; walls come from ``omap`` when ``budget.wall_db > 0``."""
         use_walls = budget.wall_db > 0 and omap is not None
-        walls, jump = wall_grid(omap) if use_walls else (np.zeros((0, 0), np.uint8), np.zeros((0, 0)))
+        walls, jump = wall_grid(omap) if use_walls else (_NO_WALLS, _NO_JUMP)
         ox, oy = (float(omap.origin[0]), float(omap.origin[1])) if omap is not None else (0.0, 0.0)
         res = float(omap.resolution) if omap is not None else 1.0
         if field is None:
-            shadow, sx0, sy0, sh = np.zeros((1, 1)), 0.0, 0.0, 1.0
+            shadow, sx0, sy0, sh = _NO_SHADOW, 0.0, 0.0, 1.0
         else:
             shadow, sx0, sy0, sh = field.grid, field.x0, field.y0, field.h
         wall_db = float(budget.wall_db) if use_walls else 0.0
@@ -200,7 +213,7 @@ def heard_cells(xy, mask, gox, goy, gres, reach, covered, cell_s, block_s, r_c, 
     """
     total = 0
     for k in range(xy.shape[0]):
-        total += _mark_node(xy[k, 0], xy[k, 1], mask, gox, goy, gres, reach, covered, 0, 0, cell_s, block_s, r_c,
+        total += _mark_node(xy[k, 0], xy[k, 1], mask, gox, goy, gres, reach, covered, np.intp(0), np.intp(0), cell_s, block_s, r_c,
                             n10, wall_db, walls, jump, ox, oy, res, shadow, sx0, sy0, sh, corr, clip)
     return total
 
