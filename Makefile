@@ -10,6 +10,8 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev,cluster]'
+	@# compile the numba kernels into their on-disk cache now (about a minute), not in the first run
+	$(BIN)/amronet compile --quiet
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -9,10 +9,14 @@ Example:
 
 __version__ = "0.1.0"
 
-from amronet.errors import AmronetError, MapError, ScenarioError
-from amronet.scenario import Scenario, list_presets, load_scenario
-from amronet.sim import Simulation
-from amronet.sim.api import run
+from amronet.kernel_cache import configure as _configure_kernel_cache
+
+_configure_kernel_cache()  # before any module with kernels is imported (see amronet.kernel_cache)
+
+from amronet.errors import AmronetError, MapError, ScenarioError  # noqa: E402
+from amronet.scenario import Scenario, list_presets, load_scenario  # noqa: E402
+from amronet.sim import Simulation  # noqa: E402
+from amronet.sim.api import run  # noqa: E402
 
 __all__ = [
     "AmronetError",

@@ -113,6 +113,21 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_compile(args: argparse.Namespace) -> int:
+    from amronet.sim.warmup import warm_up
+
+    if args.jobs < 1:
+        raise AmronetError(f"--jobs: must be >= 1, got {args.jobs}")
+
+    def progress(label: str, seconds: float) -> None:
+        if not args.quiet:
+            print(f"{seconds:7.1f} s  {label}")
+
+    seconds = warm_up(jobs=args.jobs, progress=progress)
+    print(f"amronet's kernels are compiled and cached ({seconds:.1f} s): a first run no longer compiles")
+    return 0
+
+
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from amronet.experiments.common import STORE_FILES
     from amronet.experiments.registry import FIGURES, check_options, group
@@ -216,6 +231,13 @@ def _parser() -> argparse.ArgumentParser:
     add_executor_arguments(rp)
     rp.add_argument("-q", "--quiet", action="store_true")
     rp.set_defaults(func=_cmd_reproduce)
+
+    c = sub.add_parser("compile", help="compile the simulator's kernels into numba's cache (make does it once at "
+                                       "installation, so that a first run does not spend tens of seconds compiling)")
+    c.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
+                   help="worker processes (default: 2, or 1 on a one-core machine)")
+    c.add_argument("-q", "--quiet", action="store_true", help="print only the closing line")
+    c.set_defaults(func=_cmd_compile)
 
     b = sub.add_parser("bench", help="measure robot-steps per second of an algorithm's full step")
     b.add_argument("--algorithm", default="self-spreading")

@@ -213,8 +213,9 @@ def heard_cells(xy, mask, gox, goy, gres, reach, covered, cell_s, block_s, r_c, 
     """
     total = 0
     for k in range(xy.shape[0]):
-        total += _mark_node(xy[k, 0], xy[k, 1], mask, gox, goy, gres, reach, covered, np.intp(0), np.intp(0), cell_s, block_s, r_c,
-                            n10, wall_db, walls, jump, ox, oy, res, shadow, sx0, sy0, sh, corr, clip)
+        total += _mark_node(xy[k, 0], xy[k, 1], mask, gox, goy, gres, reach, covered, np.intp(0), np.intp(0),
+                            cell_s, block_s, r_c, n10, wall_db, walls, jump, ox, oy, res, shadow, sx0, sy0, sh, corr,
+                            clip)
     return total
 
 

@@ -1,0 +1,103 @@
+"""Where numba keeps amronet's compiled kernels: one cache per version of the kernels' source.
+
+numba's own cache (``cache=True``) checks only the timestamp of the file that holds a kernel. A kernel whose
+*callee* in another file changed (``count_walls`` in ``walls.py``, called from ``hearing.py``), or a constant it
+reads from another module, would load its old machine code and compute with code that is no longer there. So
+unless the user chose a cache folder (``NUMBA_CACHE_DIR``), amronet keeps its kernels in a folder named by a hash
+of the source of every module that holds kernels and of every amronet module they import, directly or not:
+``$XDG_CACHE_HOME/amronet/numba-HASH`` (``~/.cache/...`` without ``XDG_CACHE_HOME``). A change to any of them
+starts a fresh cache, which the next run (or ``amronet compile``) fills; a change elsewhere (the command line,
+the experiments, the pictures) keeps it. The folders of the :data:`KEEP` most recently used versions are kept,
+older ones removed (they hold only what amronet wrote there). Where no such folder can be written, numba's
+default (``__pycache__`` next to the sources) applies.
+
+This module must run before any module with kernels is imported: ``amronet/__init__.py`` calls
+:func:`configure` first.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+from pathlib import Path
+
+__all__ = ["KEEP", "cache_folder", "configure"]
+
+KEEP = 8
+"""Cache folders of this many source versions are kept (most recently used first)."""
+
+_PACKAGE = Path(__file__).resolve().parent
+_KERNEL = re.compile(r"^@(numba\.)?njit\b", re.MULTILINE)
+"""A module holds kernels when a line starts with a numba decorator."""
+
+_IMPORT = re.compile(r"^\s*(?:from|import) (amronet(?:\.\w+)*)", re.MULTILINE)
+
+
+def _module_file(name: str) -> Path | None:
+    path = _PACKAGE.joinpath(*name.split(".")[1:])
+    for candidate in (path.with_suffix(".py"), path / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _kernel_sources() -> list[Path]:
+    """The modules that hold kernels and every amronet module they import, directly or not.
+
+    numba compiles the constants a kernel reads from other modules (state codes, cell values) into its machine
+    code, so a change to any of them must start a fresh cache too.
+    """
+    found = {p for p in _PACKAGE.rglob("*.py") if _KERNEL.search(p.read_text(encoding="utf-8"))}
+    todo = list(found)
+    while todo:
+        for name in _IMPORT.findall(todo.pop().read_text(encoding="utf-8")):
+            path = _module_file(name)
+            if path is not None and path not in found:
+                found.add(path)
+                todo.append(path)
+    return sorted(found)
+
+
+def cache_folder(root: Path | None = None) -> Path:
+    """The cache folder of the kernels' present source, under ``root`` (default: the user's cache folder)."""
+    if root is None:
+        root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "amronet"
+    digest = hashlib.sha256()
+    for path in _kernel_sources():
+        digest.update(path.relative_to(_PACKAGE).as_posix().encode())
+        digest.update(b"\0")
+        digest.update(path.read_bytes())
+        digest.update(b"\0")
+    return root / f"numba-{digest.hexdigest()[:16]}"
+
+
+def _prune(folder: Path) -> None:
+    """Remove the cache folders of all but the :data:`KEEP` most recently used source versions."""
+    others = [p for p in folder.parent.glob("numba-*") if p.is_dir() and p != folder]
+    others.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    for old in others[KEEP - 1:]:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def configure() -> Path | None:
+    """Point numba's cache at :func:`cache_folder` unless ``NUMBA_CACHE_DIR`` is set; return the folder used.
+
+    ``None``: the user's ``NUMBA_CACHE_DIR`` applies, or no folder could be written (numba's default applies).
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return None
+    try:
+        folder = cache_folder()
+        folder.mkdir(parents=True, exist_ok=True)
+        os.utime(folder)  # used now: the pruning keeps the most recently used versions
+        _prune(folder)
+    except OSError:
+        return None
+    if not os.access(folder, os.W_OK):
+        return None
+    import numba
+
+    numba.config.CACHE_DIR = str(folder)
+    return folder

@@ -1,0 +1,144 @@
+"""Compile amronet's kernels ahead of the first run: a few short runs that reach every compiled kernel.
+
+amronet's hot loops are numba kernels compiled on first use and kept in numba's on-disk cache (``cache=True``),
+so the first run in a fresh environment pays the compiling (tens of seconds) and every later one loads the
+machine code in milliseconds. :func:`warm_up` moves that cost to the installation (``make`` calls ``amronet
+compile``): it runs, for a few simulated seconds, one scenario per algorithm, explorer, drop rule, walk rule and
+radio model that amronet registers, a batch of the batchable algorithms, runs with faults and packet loss, and the
+signal map, so that a user's first run finds every kernel it uses compiled. The cases are built from the
+registries: a new explorer, drop rule or radio model is warmed up without a change here.
+
+The runs' results are thrown away; they change nothing but numba's cache (the same machine code a first run would
+have compiled), so results are bit for bit the same with or without a warm-up.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from amronet.algorithms.base import ALGORITHMS
+from amronet.algorithms.drops.base import DROP_RULES
+from amronet.algorithms.explorers.base import EXPLORERS
+from amronet.algorithms.walks import WALKS
+from amronet.engine.propagation import LinkBudget
+from amronet.engine.radio import MEDIA, make_medium
+from amronet.scenario import load_scenario
+from amronet.sim.batch import run_seeds
+from amronet.sim.loop import Simulation
+from amronet.world.builtin import resolve_map
+
+__all__ = ["BASE_PRESETS", "WarmupCase", "warm_up", "warmup_cases"]
+
+BASE_PRESETS: dict[str, str] = {
+    "agent-assisted": "agent-assisted-office",
+    "self-spreading": "self-spreading-obstacles-6x6",
+    "potential-field": "potential-field-obstacles-6x6",
+    "dssa": "dssa-obstacles-6x6",
+}
+"""The preset each registered algorithm is warmed up on (a test checks that every algorithm has one)."""
+
+_SECONDS = 3.0
+"""Simulated seconds per warm-up run: enough for every phase of a step to run a few times."""
+
+
+@dataclass(frozen=True)
+class WarmupCase:
+    """One warm-up run: a preset with overrides, for a few simulated seconds.
+
+    Attributes:
+        label: What the case warms up, for the report.
+        preset: The built-in scenario.
+        overrides: Dotted-path fields to replace.
+        seeds: One seed: a single run; several: one batch of them (the batched kernels).
+        seconds: Simulated seconds.
+    """
+
+    label: str
+    preset: str
+    overrides: dict[str, Any] = field(default_factory=dict)
+    seeds: tuple[int, ...] = (1,)
+    seconds: float = _SECONDS
+
+    def run(self) -> None:
+        """Run the case (the result is discarded)."""
+        scenario = load_scenario(self.preset, {"sim.time_limit": self.seconds, **self.overrides})
+        if len(self.seeds) > 1:
+            run_seeds(scenario, list(self.seeds))
+        else:
+            Simulation(scenario, self.seeds[0]).run()
+
+
+def _signal_map() -> None:
+    """The signal layer's kernel (snapshots, animations, the replay page and ``amronet radio-map``)."""
+    omap = resolve_map("obstacles-6x6")
+    medium = make_medium("multi-wall", LinkBudget(r_c=1.0, exponent=2.0, wall_db=6.9), omap)
+    medium.signal_dbm(omap, np.array([[3.0, 3.0]]))
+
+
+def warmup_cases() -> list[WarmupCase]:
+    """The warm-up runs, built from the registries (every algorithm, explorer, drop rule, walk and radio model)."""
+    aa, ss = BASE_PRESETS["agent-assisted"], BASE_PRESETS["self-spreading"]
+    cases = [WarmupCase(f"algorithm {name}", BASE_PRESETS[name]) for name in ALGORITHMS]
+    cases += [WarmupCase(f"explorer {name}", aa, {"algorithm.params.explorer": name}) for name in EXPLORERS]
+    cases += [WarmupCase(f"drop rule {name}", aa, {"algorithm.params.drop_rule": name,
+                                                   "algorithm.params.explorer": "frontier"}) for name in DROP_RULES]
+    cases += [WarmupCase(f"walk {name}", ss, {"algorithm.params.walk": name}) for name in WALKS]
+    cases += [WarmupCase(f"radio {name}", ss, {"radio.model": name}) for name in MEDIA]
+    cases += [WarmupCase(f"radio {name}, agents", aa, {"radio.model": name, "algorithm.params.explorer": "frontier"})
+              for name in MEDIA]
+    cases += [
+        WarmupCase("packet loss, link-quality stop rule", ss,
+                   {"radio.model": "multi-wall", "radio.packet_loss": True, "radio.shadowing_db": 4.0,
+                    "algorithm.params.stop_rule": "link-quality", "algorithm.params.triangle_rule": "link-quality"}),
+        WarmupCase("faults and relocation", aa,
+                   {"faults": [{"at": 1.0, "routers": 0.5}], "algorithm.params.repair": "relocate",
+                    "algorithm.params.explorer": "frontier", "sim.coverage_target": "off"}),
+        # two networks that meet within seconds: triangle routers drive to their goal points
+        WarmupCase("triangular deployment", "self-spreading-6x6",
+                   {"base_stations": [{"x": -1.2, "y": 0.0, "region": [0.6, 0.6]},
+                                      {"x": 1.2, "y": 0.0, "region": [0.6, 0.6]}]}, seconds=20.0),
+        WarmupCase("batch self-spreading", "self-spreading-6x6", seeds=(1, 2)),
+        WarmupCase("batch potential field", "potential-field-6x6", seeds=(1, 2)),
+    ]
+    return cases
+
+
+def _run_case(k: int) -> float:
+    t = time.perf_counter()
+    if k < 0:
+        _signal_map()
+    else:
+        warmup_cases()[k].run()
+    return time.perf_counter() - t
+
+
+def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None) -> float:
+    """Run every warm-up case (:func:`warmup_cases`) and the signal map; return the wall time in seconds.
+
+    Args:
+        jobs: Worker processes (1: in this process). Kernels compiled by one worker are written to the cache, so
+            the workers share what they compile once it is written.
+        progress: Called with each case's label and its wall time as it finishes.
+    """
+    cases = warmup_cases()
+    labels = ["signal map", *(c.label for c in cases)]
+    order = [-1, *range(len(cases))]
+    t0 = time.perf_counter()
+    if jobs <= 1:
+        for label, k in zip(labels, order, strict=True):
+            seconds = _run_case(k)
+            if progress is not None:
+                progress(label, seconds)
+        return time.perf_counter() - t0
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        for label, seconds in zip(labels, pool.map(_run_case, order), strict=True):
+            if progress is not None:
+                progress(label, seconds)
+    return time.perf_counter() - t0

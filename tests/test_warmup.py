@@ -1,0 +1,77 @@
+"""The warm-up (``amronet compile``): its cases reach every kernel that runs use, so a first run compiles nothing."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from amronet.algorithms.base import ALGORITHMS
+from amronet.algorithms.drops.base import DROP_RULES
+from amronet.algorithms.explorers.base import EXPLORERS
+from amronet.algorithms.walks import WALKS
+from amronet.cli.main import main
+from amronet.engine.radio import MEDIA
+from amronet.scenario import list_presets
+from amronet.sim.warmup import BASE_PRESETS, warmup_cases
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# In a fresh process: warm up (loads the kernels from numba's cache, or compiles them if the cache is cold), then
+# listen for numba compiling anything while runs that the warm-up did not list run: every built-in preset, and
+# random scenarios of the soak (tools/soak.py: any map, algorithm and parameters, radio model, faults, robots).
+_PROBE = """
+import importlib.util, json, sys
+from numba.core import event
+from amronet.scenario import list_presets, load_scenario
+from amronet.sim import Simulation
+from amronet.sim.warmup import warm_up
+
+warm_up(jobs=1)
+compiled = []
+
+class Listener(event.Listener):
+    def on_start(self, ev):
+        d = ev.data["dispatcher"]
+        compiled.append(d.py_func.__module__ + "." + d.py_func.__name__)
+
+    def on_end(self, ev):
+        pass
+
+event.register("numba:compile", Listener())
+for name in list_presets():
+    Simulation(load_scenario(name, {"sim.time_limit": 3.0}), 1).run()
+spec = importlib.util.spec_from_file_location("soak", sys.argv[1])
+soak = importlib.util.module_from_spec(spec)
+sys.modules["soak"] = soak
+spec.loader.exec_module(soak)
+for index in range(int(sys.argv[2])):
+    scenario, seed = soak.draw_scenario(7, index, max_time=3.0)
+    try:
+        Simulation(load_scenario(scenario), seed).run()
+    except Exception:
+        pass  # a scenario the tool refuses (the soak counts those): what ran until then still counts
+print(json.dumps(sorted(set(compiled))))
+"""
+
+
+def test_cases_cover_every_registered_name():
+    assert set(BASE_PRESETS) == set(ALGORITHMS)
+    assert set(BASE_PRESETS.values()) <= set(list_presets())
+    labels = {case.label for case in warmup_cases()}
+    for kind, names in (("explorer", EXPLORERS), ("drop rule", DROP_RULES), ("walk", WALKS), ("radio", MEDIA),
+                        ("algorithm", ALGORITHMS)):
+        assert {f"{kind} {name}" for name in names} <= labels
+
+
+def test_after_the_warm_up_runs_compile_nothing():
+    proc = subprocess.run([sys.executable, "-c", _PROBE, str(ROOT / "tools" / "soak.py"), "30"], cwd=ROOT,
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    compiled = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert compiled == [], f"kernels the warm-up does not reach: {compiled}"
+
+
+def test_compile_command_refuses_bad_jobs(capsys):
+    assert main(["compile", "--jobs", "0"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "amronet: error: --jobs: must be >= 1, got 0"
