@@ -110,7 +110,7 @@ def test_routers_drive_to_lattice_goals_and_the_network_stays_connected():
     sw = sim.swarm
     base = sw.xy[c.bases[0]]
     s = c.drop_rule.params.spacing * sim.scenario.radio.r_c
-    arrived = [i for i, g in c.strip_goal.items() if np.allclose(sw.xy[i], g, atol=1e-6)]
+    arrived = [i for i, g in c.strips.goal.items() if np.allclose(sw.xy[i], g, atol=1e-6)]
     assert arrived
     for i in arrived:  # on the lattice anchored at the base station
         rows, connectors = strip_goal_points(base, s, sw.xy[i], 1e-6)
@@ -130,8 +130,8 @@ def test_strip_goals_with_settling_routers_drive_once_they_relay():
     sim = Simulation(office(**{"agents.drop_settle_s": 2.0, "sim.time_limit": 60.0}), seed=2)
     sim.run()
     assert sum(sim.controller.mission_report()["strip_goals"].values()) >= 1
-    assert not sim.controller.strip_waiting or all(sim.swarm.state[i] == State.DROPPED
-                                                   for i in sim.controller.strip_waiting)
+    assert not sim.controller.strips.waiting or all(sim.swarm.state[i] == State.DROPPED
+                                                   for i in sim.controller.strips.waiting)
 
 
 @pytest.mark.parametrize(("drop", "field"), [

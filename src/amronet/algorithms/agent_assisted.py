@@ -46,6 +46,7 @@ from amronet.algorithms.explorers import EXPLORERS, PathFollower
 from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.references import best_reference_margin, check_loss_band, track_row
 from amronet.algorithms.relocate import Relocator
+from amronet.algorithms.strip_driving import StripDrivers
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.engine.network import agents_connected
 from amronet.engine.robots import Role, State
@@ -223,17 +224,9 @@ class AgentAssisted(Controller):
         self.relocator = (Relocator(n, self.params.repair_confirm_s, self.params.give_up_steps)
                           if self.params.repair == "relocate" else None)
         """Whether every step takes the general drop path (the paper's rule alone acts only on "about to lose")."""
-        # strip-goals: routers that drive on to a goal point after they are put down
-        self.moving_strips = 0
-        self.strip_goal: dict[int, np.ndarray] = {}
-        """The goal each router was last sent to."""
-        self.strip_taken: list[np.ndarray] = []
-        """Every goal a router was sent to (it stays taken after the router arrives or gives up on it)."""
-        self.strip_waiting: dict[int, int] = {}
-        """Routers still settling that drive to a goal once they relay → the reference they were put down next to."""
-        self.strip_counts = {"reached": 0, "stopped_short": 0, "no_goal": 0}
-        self.strip_tries: dict[int, int] = {}
-        """Goals each router gave up on."""
+        self.strips = (StripDrivers(self.drop_rule, sw, self.steering, self.bases, self._nodes_changed)
+                       if self.drop_rule.drives_to_goal else None)
+        """strip-goals: the routers that drive on to a goal point after they are put down."""
 
     @classmethod
     def start_range(cls, params: AgentAssistedParams, r_c: float) -> float:  # noqa: D102
@@ -376,9 +369,11 @@ class AgentAssisted(Controller):
                     self._nodes_changed()
                 movers.append(tri)
                 speeds.append(length / self.dt)
-        if self.moving_strips:
-            moving, length = self._drive_strips(step, n_before)
+        if self.strips is not None and self.strips.moving:
+            moving, model = self._sensed_in(step, n_before, State.STRIP)
             if len(moving):
+                length = self.strips.drive(moving, step.readings.of(moving, model), sw.models[model].sensor_range,
+                                           sw.max_speed[moving] * self.dt)
                 movers.append(moving)
                 speeds.append(length / self.dt)
         if self.relocator is not None:
@@ -399,55 +394,6 @@ class AgentAssisted(Controller):
         model = int(sw.model[moving[0]])
         sensed = step.readings.groups.get(model, (np.zeros(0, dtype=np.int64), None))[0]
         return moving[np.isin(moving, sensed)], model
-
-    def _drive_strips(self, step: StepInput, n_before: int) -> tuple[np.ndarray, np.ndarray]:
-        """Steer the routers driving to their strip goals (sensed this step); those that arrive or stop settle."""
-        sw = self.swarm
-        moving, model = self._sensed_in(step, n_before, State.STRIP)
-        if not len(moving):
-            return moving, np.zeros(0)
-        length, done = self.steering.steer(moving, sw.xy, sw.heading, step.readings.of(moving, model),
-                                           sw.models[model].sensor_range, sw.max_speed[moving] * self.dt,
-                                           self.drop_rule.keep_radius())
-        if done.any():  # arrived, or blocked on the way: another goal, or it stays and serves as a reference
-            ended = moving[done]
-            arrived = np.hypot(*(sw.xy[ended] - self.steering.goal[ended]).T) <= 1e-6
-            self.strip_counts["reached"] += int(np.count_nonzero(arrived))
-            sw.state[ended] = State.REFERENCE
-            self.moving_strips -= len(ended)
-            self._nodes_changed()
-            for i in ended[~arrived]:
-                self.strip_tries[i] = self.strip_tries.get(i, 0) + 1
-                if self.strip_tries[i] > self.drop_rule.retries():
-                    self.strip_counts["stopped_short"] += 1
-                else:  # the goal stays taken (it is in or behind a wall): the next free one, from here
-                    self._start_strip(int(i), int(self.steering.anchors[i, 0]), retry=True)
-        return moving, length
-
-    def _start_strip(self, router: int, toward: int, retry: bool = False) -> None:
-        """Send a router put down next to ``toward`` to its strip goal (the rule's), or leave it where it is.
-
-        ``retry``: it gave up on its last goal; this is the next.
-        """
-        sw = self.swarm
-        mine = self.bases[sw.status[self.bases] == sw.status[router]]
-        origin = sw.xy[mine[0]] if len(mine) else sw.xy[toward]
-        nodes = np.flatnonzero(sw.role != Role.AGENT)
-        nodes = nodes[nodes != router]
-        taken = sw.xy[nodes]
-        if self.strip_taken:
-            taken = np.concatenate([taken, np.array(self.strip_taken)])
-        goal = self.drop_rule.goal(sw.xy[router], sw.xy[toward], origin, taken)
-        if goal is None:
-            self.strip_counts["stopped_short" if retry else "no_goal"] += 1
-            sw.state[router] = State.REFERENCE
-            return
-        sw.state[router] = State.STRIP
-        self.strip_goal[router] = goal
-        self.strip_taken.append(goal)
-        self.steering.start(np.array([router]), goal[None], np.array([[toward, -1]]))
-        self.moving_strips += 1
-        self._nodes_changed()
 
     def _relocate(self, step: StepInput, n_before: int) -> tuple[np.ndarray, np.ndarray]:
         """The relocation repair: start and stop relocations, steer the routers that relocate (sensed this step)."""
@@ -507,8 +453,8 @@ class AgentAssisted(Controller):
             self.swarm.state[ready] = State.REFERENCE
             for i in ready:
                 del self.settle_at[i]
-                if i in self.strip_waiting:
-                    self._start_strip(i, self.strip_waiting.pop(i))
+                if self.strips is not None:
+                    self.strips.settled(i)
             self._nodes_changed()
 
     def _reverse_drops(self, view: AgentView, drop: np.ndarray) -> np.ndarray:
@@ -544,8 +490,8 @@ class AgentAssisted(Controller):
             out["reverse_drops"] = self.reverse_drops
         if self.relocator is not None:
             out["relocations"] = self.relocator.moves
-        if self.drop_rule.drives_to_goal:
-            out["strip_goals"] = dict(self.strip_counts)
+        if self.strips is not None:
+            out["strip_goals"] = dict(self.strips.counts)
         out.update(self.drop_rule.report())
         out.update(self.explorer.report())
         return out
@@ -618,10 +564,10 @@ class AgentAssisted(Controller):
             return None
         if self.settle_s > 0:
             self.settle_at[new] = t + self.settle_s
-            if self.drop_rule.drives_to_goal:
-                self.strip_waiting[new] = current
-        elif self.drop_rule.drives_to_goal:
-            self._start_strip(new, current)
+            if self.strips is not None:
+                self.strips.waiting[new] = current
+        elif self.strips is not None:
+            self.strips.start(new, current)
         return new
 
     def _release_triangle(self, agent: int, ref_i: int, ref_j: int) -> None:
