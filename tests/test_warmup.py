@@ -75,3 +75,14 @@ def test_compile_command_refuses_bad_jobs(capsys):
     assert main(["compile", "--jobs", "0"]) == 2
     err = capsys.readouterr().err.strip()
     assert err == "amronet: error: --jobs: must be >= 1, got 0"
+
+
+def test_compile_interrupted_says_what_stays(monkeypatch, capsys):
+    import amronet.sim.warmup as warmup
+
+    def interrupted(**kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(warmup, "warm_up", interrupted)
+    assert main(["compile", "--jobs", "1"]) == 130
+    assert "the kernels compiled so far stay cached" in capsys.readouterr().err

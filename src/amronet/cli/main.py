@@ -123,7 +123,12 @@ def _cmd_compile(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"{seconds:7.1f} s  {label}")
 
-    seconds = warm_up(jobs=args.jobs, progress=progress)
+    try:
+        seconds = warm_up(jobs=args.jobs, progress=progress)
+    except KeyboardInterrupt:  # not "nothing was written": what was compiled stays in the cache, and is sound
+        print("amronet: interrupted; the kernels compiled so far stay cached, runs compile the rest",
+              file=sys.stderr)
+        return 130
     print(f"amronet's kernels are compiled and cached ({seconds:.1f} s): a first run no longer compiles")
     return 0
 
