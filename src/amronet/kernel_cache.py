@@ -11,6 +11,11 @@ the experiments, the pictures) keeps it. The folders of the :data:`KEEP` most re
 older ones removed (they hold only what amronet wrote there). Where no such folder can be written, numba's
 default (``__pycache__`` next to the sources) applies.
 
+numba has one cache setting per process, so a program that imports amronet and then defines kernels of its own
+with ``cache=True`` finds their cache in the same folder (still correct: numba checks their own source files;
+they are compiled again when a new amronet version starts a new folder). Set ``NUMBA_CACHE_DIR`` to keep them
+elsewhere.
+
 This module must run before any module with kernels is imported: ``amronet/__init__.py`` calls
 :func:`configure` first.
 """
