@@ -161,3 +161,21 @@ def test_the_escaping_random_walk_is_reproducible_and_draws_from_the_runs_genera
 
     a, b, c = run(7), run(7), run(8)
     assert a == b and a != c
+
+
+def test_random_escape_keeps_an_agents_memory_when_the_agents_steered_change():
+    from amronet.algorithms.explorers.random_walk import RandomEscapeExplorer
+
+    ex = RandomEscapeExplorer(0.5, 0.6, 0.1, 4.0, (0.0, 10.0, 0.0, 10.0))
+    rng = np.random.default_rng(0)
+    heading = np.zeros(5)
+    xy = np.array([[1.0, 1.0], [5.0, 5.0], [8.0, 8.0], [2.0, 8.0], [8.0, 2.0]])
+    scans = np.full((1, 16), 3.0)
+    for _ in range(10):  # agent 3 steered alone (its path ended first)
+        ex.steer(heading, np.array([3]), scans, 3.0, np.zeros(1, bool), rng, xy, xy[:0])
+    before = ex._visits[0].copy()
+    ex.steer(heading, np.array([1, 3]), np.full((2, 16), 3.0), 3.0, np.zeros(2, bool), rng, xy, xy[:0])
+    assert before.sum() == pytest.approx(10 * 9 * 0.1)  # ten steps, each for the 3 x 3 cells around it
+    np.testing.assert_allclose(ex._visits[1], before * 11 / 10)  # agent 3's memory went on: one more step
+    assert ex._visits[0].sum() == pytest.approx(9 * 0.1)  # agent 1's began with this step
+    assert (ex._visits[0] * before == 0).all()  # in its own cells

@@ -133,10 +133,27 @@ class RandomEscapeExplorer(Explorer):
         xmin, xmax, ymin, ymax = extent
         self._shape = (max(1, int(np.ceil((ymax - ymin) / MEMORY_CELL_M))),
                        max(1, int(np.ceil((xmax - xmin) / MEMORY_CELL_M))))
+        self._ids = np.zeros(0, dtype=np.int64)
+        """The robots the memory rows belong to (the agents of the last step)."""
         self._visits = np.zeros((0, *self._shape))
         """Seconds each agent spent around each memory cell ``(A, rows, cols)``."""
         self._quiet = np.zeros(0)
         """Seconds until each agent may be lured again."""
+
+    def _follow(self, who: np.ndarray) -> None:
+        """Line the memory rows up with ``who``: an agent keeps its memory when the set of agents steered changes.
+
+        With ``agents.trajectories`` this explorer steers the agents whose paths have ended, more and more of them.
+        """
+        if np.array_equal(who, self._ids):
+            return
+        visits, quiet = np.zeros((len(who), *self._shape)), np.zeros(len(who))
+        known = np.isin(who, self._ids)
+        if known.any():
+            row_of = {int(i): k for k, i in enumerate(self._ids)}  # a handful of agents, once per change
+            rows = np.array([row_of[int(i)] for i in who[known]])
+            visits[known], quiet[known] = self._visits[rows], self._quiet[rows]
+        self._ids, self._visits, self._quiet = who.copy(), visits, quiet
 
     def _cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Memory cells ``(rows, cols)`` of points ``(..., 2)``, clipped to the grid."""
@@ -160,9 +177,7 @@ class RandomEscapeExplorer(Explorer):
         m = len(who)
         if m == 0:
             return
-        if len(self._visits) != m:
-            self._visits = np.zeros((m, *self._shape))
-            self._quiet = np.zeros(m)
+        self._follow(np.asarray(who, dtype=np.int64))
         here = xy[who]
         rows, cols = self._cells(here)
         self._remember(rows, cols)
