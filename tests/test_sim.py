@@ -22,13 +22,15 @@ def test_a_simulation_is_the_loop_with_one_run():
     assert sim.groups is None and sim.books.swarm is sim.swarm and sim.books.table is sim.table
 
 
-def test_step_advances_time_and_every_phase():
-    sim = Simulation(scenario(), 1)
+@pytest.mark.parametrize(("step", "phases"), [("reference", {"sense", "decide", "move", "radio"}),
+                                              ("compiled", {"sense+decide+move", "radio"})])
+def test_step_advances_time_and_every_phase(step, phases):
+    sim = Simulation(scenario(), 1, step=step)
     xy = sim.swarm.xy.copy()
     for _ in range(5):
         sim.step()
     assert sim.steps == 5 and sim.t == pytest.approx(0.5)
-    assert set(sim.phase_seconds) == {"sense", "decide", "move", "radio"}
+    assert set(sim.phase_seconds) == phases
     assert all(v > 0 for v in sim.phase_seconds.values())
     assert not np.array_equal(xy, sim.swarm.xy)
     np.testing.assert_array_equal(sim.table.xy, sim.swarm.xy)  # the radio ran on the new positions

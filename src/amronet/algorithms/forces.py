@@ -24,7 +24,7 @@ from amronet.engine.radio import NeighbourTable
 from amronet.engine.sensing import beam_angles
 
 __all__ = ["Links", "ObstacleHits", "clamp_norm", "constrained_coverage_force", "constrained_coverage_forces",
-           "inverse_square_obstacle_forces", "links_of", "obstacle_hits", "sum_per_node"]
+           "inverse_square_obstacle_forces", "inverse_square_one", "links_of", "obstacle_hits", "sum_per_node"]
 
 
 @dataclass(frozen=True)
@@ -157,21 +157,26 @@ def constrained_coverage_forces(table: NeighbourTable, xy: np.ndarray, who: np.n
     return out
 
 
+@numba.njit(cache=True, inline="always")
+def inverse_square_one(scans, heading, angles, max_range, k, cap):  # pragma: no cover - numba
+    """Net push ``(fx, fy)`` on one robot with readings ``scans`` ``(n_beams,)`` (see the array form below)."""
+    fx = 0.0
+    fy = 0.0
+    for b in range(scans.shape[0]):
+        d = scans[b]
+        if d < max_range - 1e-9:
+            d = max(d, 1e-6)
+            mag = min(k / (d * d), cap)
+            theta = heading + angles[b]
+            fx -= mag * np.cos(theta)
+            fy -= mag * np.sin(theta)
+    return fx, fy
+
+
 @numba.njit(cache=True)
 def _inverse_square_hits(scans, heading, angles, max_range, k, cap, out):  # pragma: no cover - numba
     for m in range(scans.shape[0]):
-        fx = 0.0
-        fy = 0.0
-        for b in range(scans.shape[1]):
-            d = scans[m, b]
-            if d < max_range - 1e-9:
-                d = max(d, 1e-6)
-                mag = min(k / (d * d), cap)
-                theta = heading[m] + angles[b]
-                fx -= mag * np.cos(theta)
-                fy -= mag * np.sin(theta)
-        out[m, 0] = fx
-        out[m, 1] = fy
+        out[m, 0], out[m, 1] = inverse_square_one(scans[m], heading[m], angles, max_range, k, cap)
 
 
 def inverse_square_obstacle_forces(scans: np.ndarray, heading: np.ndarray, sensor_range: float, k: float,

@@ -17,49 +17,50 @@ from numba import njit
 from amronet.engine.motion import escape_one
 from amronet.engine.sensing import beam_angles
 
-__all__ = ["GoalSteering"]
+__all__ = ["GoalSteering", "steer_one"]
+
+
+@njit(cache=True, inline="always")
+def steer_one(i, xy, heading, goal, anchors, scans, angles, sensor_range, max_step, r_keep, last_to_goal,
+              blocked_steps, give_up, min_progress):  # pragma: no cover - numba
+    """One go-to-goal step of robot ``i`` (heading set in place): ``(step_length, done)``."""
+    gx = goal[i, 0] - xy[i, 0]
+    gy = goal[i, 1] - xy[i, 1]
+    to_goal = math.hypot(gx, gy)
+    if to_goal <= 1e-9:
+        return 0.0, True
+    if last_to_goal[i] - to_goal < min_progress * max_step:
+        blocked_steps[i] += 1
+    else:
+        blocked_steps[i] = 0
+    last_to_goal[i] = to_goal
+    if blocked_steps[i] >= give_up:
+        return 0.0, True
+    want = math.atan2(gy, gx)
+    escape, alarm = escape_one(heading[i], scans, angles, sensor_range)
+    if alarm:
+        want = math.atan2(math.sin(want) + math.sin(escape), math.cos(want) + math.cos(escape))
+    heading[i] = want
+    step = min(max_step, to_goal)
+    nx = xy[i, 0] + step * math.cos(want)
+    ny = xy[i, 1] + step * math.sin(want)
+    for k in range(anchors.shape[1]):
+        a = anchors[i, k]
+        if a < 0:
+            continue
+        now = math.hypot(xy[i, 0] - xy[a, 0], xy[i, 1] - xy[a, 1])
+        after = math.hypot(nx - xy[a, 0], ny - xy[a, 1])
+        if after > max(now, r_keep):
+            return 0.0, False
+    return step, False
 
 
 @njit(cache=True)
 def _steer(who, xy, heading, goal, anchors, scans, angles, sensor_range, max_step, r_keep, last_to_goal,
            blocked_steps, give_up, min_progress, length, done):  # pragma: no cover - numba
     for m in range(who.shape[0]):
-        i = who[m]
-        gx = goal[i, 0] - xy[i, 0]
-        gy = goal[i, 1] - xy[i, 1]
-        to_goal = math.hypot(gx, gy)
-        length[m] = 0.0
-        done[m] = False
-        if to_goal <= 1e-9:
-            done[m] = True
-            continue
-        if last_to_goal[i] - to_goal < min_progress * max_step[m]:
-            blocked_steps[i] += 1
-        else:
-            blocked_steps[i] = 0
-        last_to_goal[i] = to_goal
-        if blocked_steps[i] >= give_up:
-            done[m] = True
-            continue
-        want = math.atan2(gy, gx)
-        escape, alarm = escape_one(heading[i], scans[m], angles, sensor_range)
-        if alarm:
-            want = math.atan2(math.sin(want) + math.sin(escape), math.cos(want) + math.cos(escape))
-        heading[i] = want
-        step = min(max_step[m], to_goal)
-        nx = xy[i, 0] + step * math.cos(want)
-        ny = xy[i, 1] + step * math.sin(want)
-        ok = True
-        for k in range(anchors.shape[1]):
-            a = anchors[i, k]
-            if a < 0:
-                continue
-            now = math.hypot(xy[i, 0] - xy[a, 0], xy[i, 1] - xy[a, 1])
-            after = math.hypot(nx - xy[a, 0], ny - xy[a, 1])
-            if after > max(now, r_keep):
-                ok = False
-        if ok:
-            length[m] = step
+        length[m], done[m] = steer_one(who[m], xy, heading, goal, anchors, scans[m], angles, sensor_range,
+                                       max_step[m], r_keep, last_to_goal, blocked_steps, give_up, min_progress)
 
 
 class GoalSteering:

@@ -53,7 +53,7 @@ from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, Step
 from amronet.algorithms.forces import constrained_coverage_force, inverse_square_obstacle_forces
 from amronet.engine.robots import Role, State
 
-__all__ = ["PotentialField", "PotentialFieldParams"]
+__all__ = ["PotentialField", "PotentialFieldParams", "come_to_rest", "wake_and_accelerate"]
 
 _Positive = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
 
@@ -146,7 +146,7 @@ class PotentialField(Controller):
         table = step.table
         movers = np.empty(len(self.routers), dtype=np.int64)
         speed = np.empty(len(self.routers))
-        n_movers = _wake_and_accelerate(
+        n_movers = wake_and_accelerate(
             self.routers, sw.state, table.indptr, table.indices, table.dist, sw.xy, self.obstacle_force,
             self.velocity, sw.heading, sw.max_speed, self.rest_count, self.window_start, self.force,
             self.held_force, self.k_cover, self.k_degree, self.q_rc, self.force_cap,
@@ -158,7 +158,7 @@ class PotentialField(Controller):
         if len(movers) == 0:
             return
         p = self.params
-        _come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), self.swarm.state,
+        come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), self.swarm.state,
                       self.swarm.xy, self.swarm.max_speed, self.velocity, self.rest_count, self.window_start,
                       self.force, self.held_force, p.rest_steps, self.dt, p.rest_fraction, p.damping,
                       State.REFERENCE)
@@ -174,7 +174,7 @@ class PotentialField(Controller):
 
 # -- compiled kernels: one pass over the routers per phase (30 robots are all overhead in NumPy) -----------------
 @numba.njit(cache=True)
-def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
+def wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
                          rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap,
                          k_conn, damping, mass, dt, rest_fraction, explore, reference, wakeups, movers,
                          speed):  # pragma: no cover - numba
@@ -218,7 +218,7 @@ def _wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_for
 
 
 @numba.njit(cache=True)
-def _come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, window_start, force, held_force,
+def come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, window_start, force, held_force,
                   rest_steps, dt, rest_fraction, damping, reference):  # pragma: no cover - numba
     """The rest rule after a move (see the module docstring)."""
     window = rest_steps * dt

@@ -216,6 +216,19 @@ class SelfSpreading(Controller):
                                     want_other=want_other)
             current, other, has_reference = view.current, view.other, view.has_reference
             about_to_lose = view.nearest_distance >= self.r_eff
+        self.settle_explorers(step, explorers, current, other, has_reference, about_to_lose)
+
+    def settle_explorers(self, step: StepInput, explorers: np.ndarray, current: np.ndarray, other: np.ndarray,
+                         has_reference: np.ndarray, about_to_lose: np.ndarray) -> None:
+        """What the exploring robots do with what they found this step (arrays aligned with ``explorers``).
+
+        They keep ``current`` as their references; those that met a reference of another status (``other``)
+        start the triangular deployments the rule allows; the others that hear a reference and are about to lose
+        it stop and become references. Shared by the reference step and the compiled one
+        (:mod:`amronet.sim.compiled_step`), which calls it when a triangular deployment may start.
+        """
+        sw = self.swarm
+        is_ref = sw.deployed
         self.current[explorers] = current
 
         triangles = np.zeros(len(explorers), dtype=bool)

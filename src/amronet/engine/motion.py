@@ -21,14 +21,14 @@ import math
 import numpy as np
 from numba import njit
 
-from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.radio import NeighbourTable
-from amronet.engine.sensing import beam_angles
+from amronet.engine.sensing import beam_angles, body_table
 from amronet.engine.streams import RunStreams, draw_per_run
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance, path_is_clear
 
-__all__ = ["avoidance_heading", "drive", "escape_one", "integrate", "path_clear", "random_walk"]
+__all__ = ["avoidance_heading", "drive", "drive_one", "escape_one", "integrate", "path_clear", "random_walk",
+           "turn_draws", "walk_one"]
 
 
 @njit(cache=True, inline="always")
@@ -72,15 +72,20 @@ def _escape(heading, scans, angles, sensor_range, escape, alarmed):  # pragma: n
         escape[i], alarmed[i] = escape_one(heading[i], scans[i], angles, sensor_range)
 
 
+@njit(cache=True, inline="always")
+def walk_one(heading, scans, angles, sensor_range, refused, noise, fresh):  # pragma: no cover - numba
+    """The random walk's new heading of one robot (see :func:`random_walk`)."""
+    if refused:
+        return fresh
+    escape, alarm = escape_one(heading, scans, angles, sensor_range)
+    return (escape if alarm else heading) + noise
+
+
 @njit(cache=True)
 def _random_walk(heading, who, scans, angles, sensor_range, refused, noise, fresh):  # pragma: no cover - numba
     for m in range(who.shape[0]):
         i = who[m]
-        if refused[m]:
-            heading[i] = fresh[m]
-            continue
-        escape, alarm = escape_one(heading[i], scans[m], angles, sensor_range)
-        heading[i] = (escape if alarm else heading[i]) + noise[m]
+        heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, refused[m], noise[m], fresh[m])
 
 
 def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: float) -> tuple[np.ndarray, np.ndarray]:
@@ -106,7 +111,7 @@ def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: floa
     return escape, alarmed
 
 
-def _turn_draws(rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
+def turn_draws(rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
     """``m`` standard normal, then ``m`` standard uniform numbers (cheaper calls than ``normal``/``uniform``)."""
     return rng.standard_normal(m), rng.random(m)
 
@@ -135,7 +140,7 @@ def random_walk(
         rng: The run's random generator (or the streams of a batch of runs).
         turn_sigma: Standard deviation of the heading noise per step, radians.
     """
-    normal, uniform = draw_per_run(rng, who, _turn_draws)
+    normal, uniform = draw_per_run(rng, who, turn_draws)
     noise = turn_sigma * normal  # rng.normal(0.0, turn_sigma, m) and rng.uniform(-pi, pi, m), bit for bit
     fresh = -np.pi + (2.0 * np.pi) * uniform
     if len(who):
@@ -174,50 +179,52 @@ def path_clear(omap: OccupancyMap, start: np.ndarray, end: np.ndarray, radius: n
     return out
 
 
+@njit(cache=True, inline="always")
+def drive_one(blocked, clear, ox, oy, res, i, heading, length, xy, radius, bodies, indptr, indices, dist,
+              near):  # pragma: no cover - numba
+    """Move robot ``i`` by ``length`` along ``heading`` if it may (see :func:`drive`); ``(refused, travelled)``.
+
+    A move is refused when its path meets an obstacle, or (with ``bodies``) when it brings the body closer to a
+    neighbour it overlaps at the end (neighbours from the CSR ``indptr, indices, dist``, those farther than
+    ``near`` skipped).
+    """
+    x0 = xy[i, 0]
+    y0 = xy[i, 1]
+    nx = x0 + length * math.cos(heading)
+    ny = y0 + length * math.sin(heading)
+    c0 = int(math.floor((x0 - ox) / res))
+    r0 = int(math.floor((y0 - oy) / res))
+    rows, cols = clear.shape
+    roomy = 0 <= r0 < rows and 0 <= c0 < cols and clear[r0, c0] >= radius[i] + length + 1.5 * res
+    if not roomy and not path_is_clear(blocked, clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
+        return True, 0.0
+    if bodies:
+        for e in range(indptr[i], indptr[i + 1]):
+            if dist[e] > near:
+                continue  # too far apart before this step to touch after it
+            j = indices[e]
+            reach = radius[i] + radius[j]
+            ex = nx - xy[j, 0]
+            ey = ny - xy[j, 1]
+            new2 = ex * ex + ey * ey
+            if new2 >= reach * reach:
+                continue
+            ox_ = x0 - xy[j, 0]
+            oy_ = y0 - xy[j, 1]
+            if new2 < ox_ * ox_ + oy_ * oy_ - 1e-18:
+                return True, 0.0
+    xy[i, 0] = nx
+    xy[i, 1] = ny
+    return False, math.hypot(nx - x0, ny - y0)
+
+
 @njit(cache=True)
 def _drive(blocked, clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indptr, indices, dist, near,
            refused, travelled):  # pragma: no cover - numba
-    """Move robots one after another.
-
-    A move is refused when its path meets an obstacle, or (with ``bodies``) when it brings the body closer to a
-    neighbour it overlaps at the end.
-    """
+    """Move robots one after another (:func:`drive_one`)."""
     for m in range(movers.shape[0]):
-        i = movers[m]
-        x0 = xy[i, 0]
-        y0 = xy[i, 1]
-        nx = x0 + length[m] * math.cos(heading[m])
-        ny = y0 + length[m] * math.sin(heading[m])
-        refused[m] = True
-        travelled[m] = 0.0
-        c0 = int(math.floor((x0 - ox) / res))
-        r0 = int(math.floor((y0 - oy) / res))
-        rows, cols = clear.shape
-        roomy = 0 <= r0 < rows and 0 <= c0 < cols and clear[r0, c0] >= radius[i] + length[m] + 1.5 * res
-        if not roomy and not path_is_clear(blocked, clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
-            continue
-        bad = False
-        if bodies:
-            for e in range(indptr[i], indptr[i + 1]):
-                if dist[e] > near:
-                    continue  # too far apart before this step to touch after it
-                j = indices[e]
-                reach = radius[i] + radius[j]
-                ex = nx - xy[j, 0]
-                ey = ny - xy[j, 1]
-                new2 = ex * ex + ey * ey
-                if new2 >= reach * reach:
-                    continue
-                ox_ = x0 - xy[j, 0]
-                oy_ = y0 - xy[j, 1]
-                if new2 < ox_ * ox_ + oy_ * oy_ - 1e-18:
-                    bad = True
-                    break
-        if not bad:
-            xy[i, 0] = nx
-            xy[i, 1] = ny
-            refused[m] = False
-            travelled[m] = math.hypot(nx - x0, ny - y0)
+        refused[m], travelled[m] = drive_one(blocked, clear, ox, oy, res, movers[m], heading[m], length[m], xy,
+                                             radius, bodies, indptr, indices, dist, near)
 
 
 def integrate(
@@ -294,11 +301,7 @@ def drive(
     dist = np.zeros(0)
     reach = 2.0 * float(radius.max()) + 2.0 * float(length.max())
     if bodies and len(xy) > 1:
-        near = None if table is None else table.geometric  # every body within its r, walls or not
-        if near is not None and reach <= near.r:
-            indptr, indices, dist = near.indptr, near.indices, near.dist
-        else:
-            indptr, indices, dist = neighbour_csr(xy, reach, None if table is None else table.groups)
+        indptr, indices, dist = body_table(xy, reach, table)
     _drive(omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
            float(omap.resolution), movers, heading, length, xy, radius, bodies, indptr, indices, dist, reach, refused,
            travelled)

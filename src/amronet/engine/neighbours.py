@@ -54,6 +54,9 @@ _MIN_CELL = 1e-150  # below this r * r is subnormal and loses relative precision
 # --------------------------------------------------------------------------------------------------------
 
 
+_INT32_MAX = int(np.iinfo(np.int32).max)
+"""Most points a table holds (its column indices are int32)."""
+
 @njit(cache=True)
 def _grid(xy, r, n_groups):  # pragma: no cover - numba
     """Grid over the bounding box: ``(ok, xmin, ymin, inv_h, nx, ny)``; not ``ok`` if xy is not finite.
@@ -328,7 +331,7 @@ def neighbour_csr(xy: np.ndarray, r: float, groups: np.ndarray | None = None
     xy = np.ascontiguousarray(xy, dtype=np.float64)
     if xy.ndim != 2 or xy.shape[1] != 2:
         raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
-    if xy.shape[0] > np.iinfo(np.int32).max:
+    if xy.shape[0] > _INT32_MAX:
         raise ValueError(f"at most 2**31 - 1 points, got {xy.shape[0]}")
     if groups is None:
         group, n_groups = np.zeros(xy.shape[0], dtype=np.int64), 1

@@ -19,7 +19,7 @@ from amronet.engine.radio import NeighbourTable
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
 
-__all__ = ["beam_angles", "range_scan"]
+__all__ = ["beam_angles", "body_table", "cast_bodies_one", "cast_grid_one", "range_scan"]
 
 
 @functools.cache
@@ -30,36 +30,72 @@ def beam_angles(n_beams: int) -> np.ndarray:
     return angles
 
 
+@njit(cache=True, inline="always")
+def cast_grid_one(blocked, clear, ox, oy, res, x, y, heading, angles, max_range, out):  # pragma: no cover - numba
+    """The beams of one robot at ``(x, y)`` with ``heading`` against the grid, into ``out`` ``(n_beams,)``."""
+    rows, cols = blocked.shape
+    c0 = int(math.floor((x - ox) / res))
+    r0 = int(math.floor((y - oy) / res))
+    if 0 <= r0 < rows and 0 <= c0 < cols and not blocked[r0, c0] and clear[r0, c0] - res >= max_range:
+        for k in range(angles.shape[0]):
+            out[k] = max_range  # nothing within reach in any direction
+        return
+    for k in range(angles.shape[0]):
+        a = heading + angles[k]
+        dx = math.cos(a)
+        dy = math.sin(a)
+        t = 0.0
+        hit = max_range
+        while t < max_range:
+            px = x + dx * t
+            py = y + dy * t
+            c = int(math.floor((px - ox) / res))
+            r = int(math.floor((py - oy) / res))
+            if r < 0 or r >= rows or c < 0 or c >= cols or blocked[r, c]:
+                hit = t
+                break
+            step = clear[r, c] - res
+            if step < 0.5 * res:
+                step = 0.5 * res
+            t += step
+        out[k] = min(hit, max_range)
+
+
 @njit(cache=True)
 def _cast_grid(blocked, clear, ox, oy, res, who, xy, heading, angles, max_range, out):  # pragma: no cover - numba
-    rows, cols = blocked.shape
     for s in range(who.shape[0]):
         i = who[s]
-        c0 = int(math.floor((xy[i, 0] - ox) / res))
-        r0 = int(math.floor((xy[i, 1] - oy) / res))
-        if 0 <= r0 < rows and 0 <= c0 < cols and not blocked[r0, c0] and clear[r0, c0] - res >= max_range:
-            for k in range(angles.shape[0]):
-                out[s, k] = max_range  # nothing within reach in any direction
+        cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, max_range, out[s])
+
+
+@njit(cache=True, inline="always")
+def cast_bodies_one(i, indptr, indices, dist, xy, heading, angles, max_range, other_radius, big,
+                    out):  # pragma: no cover - numba
+    """Shorten robot ``i``'s beams ``out`` ``(n_beams,)`` that meet another robot's disc (exact ray-disc test).
+
+    ``big``: the largest body radius (neighbours farther than ``max_range + big`` cannot be met).
+    """
+    for e in range(indptr[i], indptr[i + 1]):
+        if dist[e] > max_range + big:
+            continue
+        j = indices[e]
+        vx = xy[j, 0] - xy[i, 0]
+        vy = xy[j, 1] - xy[i, 1]
+        rj = other_radius[j]
+        dist2 = vx * vx + vy * vy
+        if dist2 > (max_range + rj) ** 2:
             continue
         for k in range(angles.shape[0]):
-            a = heading[i] + angles[k]
-            dx = math.cos(a)
-            dy = math.sin(a)
-            t = 0.0
-            hit = max_range
-            while t < max_range:
-                px = xy[i, 0] + dx * t
-                py = xy[i, 1] + dy * t
-                c = int(math.floor((px - ox) / res))
-                r = int(math.floor((py - oy) / res))
-                if r < 0 or r >= rows or c < 0 or c >= cols or blocked[r, c]:
-                    hit = t
-                    break
-                step = clear[r, c] - res
-                if step < 0.5 * res:
-                    step = 0.5 * res
-                t += step
-            out[s, k] = min(hit, max_range)
+            a = heading + angles[k]
+            tca = vx * math.cos(a) + vy * math.sin(a)
+            if tca <= 0.0:
+                continue
+            d2 = dist2 - tca * tca
+            if d2 > rj * rj:
+                continue
+            t = max(tca - math.sqrt(rj * rj - d2), 0.0)
+            if t < out[k]:
+                out[k] = t
 
 
 @njit(cache=True)
@@ -68,27 +104,19 @@ def _cast_bodies(who, indptr, indices, dist, xy, heading, angles, max_range, oth
     big = other_radius.max()
     for s in range(who.shape[0]):
         i = who[s]
-        for e in range(indptr[i], indptr[i + 1]):
-            if dist[e] > max_range + big:
-                continue
-            j = indices[e]
-            vx = xy[j, 0] - xy[i, 0]
-            vy = xy[j, 1] - xy[i, 1]
-            rj = other_radius[j]
-            dist2 = vx * vx + vy * vy
-            if dist2 > (max_range + rj) ** 2:
-                continue
-            for k in range(angles.shape[0]):
-                a = heading[i] + angles[k]
-                tca = vx * math.cos(a) + vy * math.sin(a)
-                if tca <= 0.0:
-                    continue
-                d2 = dist2 - tca * tca
-                if d2 > rj * rj:
-                    continue
-                t = max(tca - math.sqrt(rj * rj - d2), 0.0)
-                if t < out[s, k]:
-                    out[s, k] = t
+        cast_bodies_one(i, indptr, indices, dist, xy, heading[i], angles, max_range, other_radius, big, out[s])
+
+
+def body_table(xy: np.ndarray, reach: float, table: NeighbourTable | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """CSR ``(indptr, indices, dist)`` holding every pair of robots within ``reach`` of each other.
+
+    The table's geometric view when it reaches that far (every body within its ``r``, whatever the walls do to the
+    radio links), otherwise a neighbour search of its own (of the table's groups; one group without a table).
+    """
+    near = None if table is None else table.geometric
+    if near is not None and reach <= near.r:
+        return near.indptr, near.indices, near.dist
+    return neighbour_csr(xy, reach, None if table is None else table.groups)
 
 
 def range_scan(
@@ -129,11 +157,6 @@ def range_scan(
         who, xy, heading, angles, float(max_range), out,
     )
     if radius is not None and table is not None and len(xy) > 1:
-        reach = float(max_range + radius.max())
-        near = table.geometric  # every body within table.r, whatever the walls do to the radio links
-        if reach <= near.r:
-            indptr, indices, dist = near.indptr, near.indices, near.dist
-        else:  # the sensor reaches beyond the radio range: a neighbour search of its own
-            indptr, indices, dist = neighbour_csr(xy, reach, table.groups)
+        indptr, indices, dist = body_table(xy, float(max_range + radius.max()), table)
         _cast_bodies(who, indptr, indices, dist, xy, heading, angles, float(max_range), radius, out)
     return out

@@ -25,7 +25,7 @@ from amronet.algorithms import ALGORITHMS
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario
 from amronet.sim.assemble import medium_needs_rng
-from amronet.sim.loop import Loop, Simulation
+from amronet.sim.loop import Loop, Simulation, StepKind
 from amronet.world.occupancy import OccupancyMap
 
 if TYPE_CHECKING:
@@ -57,17 +57,19 @@ class BatchSimulation(Loop):
         scenario: The validated scenario (see :func:`batchable`).
         seeds: One seed per run.
         omap: Use this map instead of loading the scenario's.
+        step: ``compiled`` or ``reference`` (see :class:`~amronet.sim.loop.Loop`).
 
     Raises:
         ScenarioError: If the scenario cannot be batched, or a seed is invalid.
     """
 
-    def __init__(self, scenario: Scenario, seeds: Sequence[int], omap: OccupancyMap | None = None) -> None:
+    def __init__(self, scenario: Scenario, seeds: Sequence[int], omap: OccupancyMap | None = None, *,
+                 step: StepKind = "compiled") -> None:
         if not batchable(scenario):
             raise ScenarioError("algorithm.name", f"runs of {scenario.algorithm.name!r} with "
                                 f"{scenario.agents.per_base} agents per base cannot be stepped in batches; "
                                 "run them one by one (amronet.sim.Simulation)")
-        super().__init__(scenario, seeds, omap)
+        super().__init__(scenario, seeds, omap, step=step)
 
     def run(self) -> list[RunResult]:
         """Run every run until its stop condition holds; results in the order of the seeds (see ``Loop.execute``)."""

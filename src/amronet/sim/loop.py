@@ -15,6 +15,10 @@ The life of a step, in this order and nowhere else (:meth:`Loop.step`):
    stop conditions: all routers settled or the coverage target reached (*terminated*), or the time limit
    (*truncated*) (:meth:`Loop.execute`).
 
+For self-spreading with its paper rules and for the potential field, phases 1–3 run as compiled passes
+(:mod:`amronet.sim.compiled_step`) that call the same per-robot functions in the same order: the same result, bit
+for bit, as the phases one by one (``step="reference"``).
+
 A :class:`Loop` holds ``G`` runs of one scenario in one set of arrays: their robots block by block, one neighbour
 table that never links robots of different runs, one controller, and every random draw split by run
 (:class:`~amronet.engine.streams.RunStreams`). A single run is the loop with ``G = 1`` (:class:`Simulation`);
@@ -29,7 +33,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -51,6 +55,7 @@ from amronet.sim.assemble import (
     medium_needs_rng,
     robot_model,
 )
+from amronet.sim.compiled_step import CompiledStep, compiled_step_for
 from amronet.sim.guard import check_scenario, check_world
 from amronet.sim.results import RunResult
 from amronet.sim.run import Metrics, Run
@@ -60,7 +65,11 @@ from amronet.world.trajectories import AgentPaths
 if TYPE_CHECKING:
     from amronet.outputs.recording import Recorder
 
-__all__ = ["Loop", "Metrics", "Simulation", "move", "sense"]
+__all__ = ["Loop", "Metrics", "Simulation", "StepKind", "move", "sense"]
+
+StepKind = Literal["compiled", "reference"]
+"""How a loop steps: ``compiled`` where the algorithm has a compiled step, else (and always with ``reference``) phase
+by phase."""
 
 
 def sense(controller: Controller, sw: Swarm, omap: OccupancyMap, table: NeighbourTable) -> Readings:
@@ -103,6 +112,10 @@ class Loop:
         omap: Use this map instead of loading the scenario's (for generated or scaled maps).
         force: Run even what the resource guard (:mod:`amronet.sim.guard`) calls absurdly long: more than
             ``amronet.limits.MAX_STEPS`` steps or ``MAX_ROBOT_STEPS`` robot-steps (``--force`` on the command line).
+        step: ``compiled`` (the default): where the algorithm has one (self-spreading with its paper rules,
+            :mod:`amronet.sim.compiled_step`), sense, decide and move run as two compiled passes; ``reference``:
+            always the phases one by one, through the controller's Python code. Both give the same result bit for
+            bit.
 
     Raises:
         ScenarioError: A seed is invalid, the scenario cannot be set up (see the scenario's fields), or the resource
@@ -111,7 +124,9 @@ class Loop:
     """
 
     def __init__(self, scenario: Scenario, seeds: Sequence[int], omap: OccupancyMap | None = None, *,
-                 force: bool = False) -> None:
+                 force: bool = False, step: StepKind = "compiled") -> None:
+        if step not in ("compiled", "reference"):
+            raise ValueError(f"step must be 'compiled' or 'reference', got {step!r}")
         if len(seeds) == 0:
             raise ScenarioError("seeds", "a batch needs at least one seed")
         seeds = [_check_seed(s) for s in seeds]
@@ -147,7 +162,11 @@ class Loop:
         self.steps = 0
         self._places_robots = sc.agents.per_base > 0 and self.groups is None
         """Whether the controller may put robots down in the decide phase (agents releasing routers; never batched)."""
-        self.phase_seconds = {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0}
+        self.compiled: CompiledStep | None = compiled_step_for(self) if step == "compiled" else None
+        """The compiled sense-decide-move of this loop, or ``None`` (the phases one by one)."""
+        self.phase_seconds = ({"sense+decide+move": 0.0, "radio": 0.0} if self.compiled is not None
+                              else {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0})
+        """Wall time spent in each phase (the compiled step's three phases are one)."""
         target = sc.sim.coverage_target
         if target is None:  # a replayed mission (agents.trajectories) runs to the end of its paths
             target = None if self.paths is not None else controller_cls.default_coverage_target
@@ -186,6 +205,15 @@ class Loop:
         """Advance every run by one step: faults → sense → decide → move → radio, then the agents' connection."""
         sw = self.swarm
         clock = time.perf_counter
+        if self.compiled is not None:
+            t0 = clock()
+            self.compiled.step()
+            t3 = clock()
+            self.table = self.medium.update(sw.xy, self.groups)
+            self.steps += 1
+            self.phase_seconds["sense+decide+move"] += t3 - t0
+            self.phase_seconds["radio"] += clock() - t3
+            return
         if self._faulty is not None:
             self._fail_nodes(self._faulty)
         t0 = clock()
@@ -304,11 +332,12 @@ class Simulation(Loop):
         seed: Seed of the run's random generator.
         omap: Use this map instead of loading the scenario's (for generated or scaled maps).
         force: Run even what the resource guard calls absurdly long (see :class:`Loop`).
+        step: ``compiled`` or ``reference`` (see :class:`Loop`).
     """
 
     def __init__(self, scenario: Scenario, seed: int, omap: OccupancyMap | None = None, *,
-                 force: bool = False) -> None:
-        super().__init__(scenario, [seed], omap, force=force)
+                 force: bool = False, step: StepKind = "compiled") -> None:
+        super().__init__(scenario, [seed], omap, force=force, step=step)
         self.books = self.runs[0]
         """The run's books (:class:`~amronet.sim.run.Run`): rows, stop reason, agents' connection."""
         self.seed = self.books.seed

@@ -1,0 +1,210 @@
+"""The compiled steps: sense, decide and move of the batchable algorithms in one or two compiled passes.
+
+The loop's step (:meth:`amronet.sim.loop.Loop.step`) calls the sense phase, the controller's ``decide`` and the move
+phase one after another, each a handful of NumPy calls and compiled kernels. For a few dozen robots that glue, not
+the work, is most of a step. A compiled step does the same three phases in compiled passes over the arrays (the
+kernels are in :mod:`amronet.sim.step_kernels`):
+
+* :class:`CompiledSpreading`, self-spreading with its paper rules (``walk: random``, ``stop_rule: distance``,
+  ``triangle_rule: geometric``, every ``triangular`` mode). First every exploring router reads its row of the
+  neighbour table (the reference tracking of :func:`~amronet.algorithms.references.track_row`) and, unless a
+  triangular deployment may start this step (a router met a reference of another status, the two references are
+  more than ``r_c`` apart and the local rule does not rule it out: then the controller's own Python code settles
+  the explorers, :meth:`~amronet.algorithms.self_spreading.SelfSpreading.settle_explorers`), the routers about to
+  lose their last reference stop. Python then draws the walkers' random numbers from the run's generator (or a
+  batch's streams), in the order and number the controller draws them. Second, the routers still moving read
+  their range rings (grid and bodies), steer (the random walk, :func:`~amronet.engine.motion.walk_one`, or the
+  triangle router's go-to-goal, :func:`~amronet.algorithms.goto.steer_one`) and drive one after another with the
+  collision checks (:func:`~amronet.engine.motion.drive_one`).
+* :class:`CompiledField`, the potential field (every rule): the exploring routers' rings and obstacle forces, the
+  controller's wake-and-accelerate kernel, the moves and its come-to-rest kernel, in one call (no random draws).
+
+Every per-robot computation is the same compiled function the phase-by-phase path calls, in the same order, so a run
+gives the same result bit for bit with either step (the tests run both on the same seeds and compare;
+``Loop(..., step="reference")`` selects the phase-by-phase path through the controllers' Python code, which stays
+the readable reference). Runs with faults or agents, and any other algorithm or rule, step phase by phase.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amronet.algorithms.base import Readings, StepInput
+from amronet.algorithms.potential_field import PotentialField
+from amronet.algorithms.self_spreading import SelfSpreading
+from amronet.engine.motion import turn_draws
+from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
+from amronet.engine.sensing import beam_angles, body_table
+from amronet.engine.streams import draw_per_run
+from amronet.sim.step_kernels import field_step, list_movers, sense_steer_drive, track_explorers
+from amronet.world.space import clearance
+
+if TYPE_CHECKING:
+    from amronet.sim.loop import Loop
+
+__all__ = ["COMPILED_STEPS", "CompiledField", "CompiledSpreading", "CompiledStep", "compiled_step_for"]
+
+
+class CompiledSpreading:
+    """Sense, decide and move of a self-spreading loop in two compiled passes (see the module docstring).
+
+    Args:
+        loop: The loop whose phases it does; :meth:`applies` must hold.
+    """
+
+    def __init__(self, loop: Loop) -> None:
+        c = loop.controller
+        assert isinstance(c, SelfSpreading)
+        sw = loop.swarm
+        omap = loop.world.omap
+        self.loop = loop
+        self.controller = c
+        n = len(sw)
+        self.model = sw.models[c.router_model]
+        self.angles = beam_angles(self.model.sensor_beams)
+        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
+                     float(omap.resolution))
+        self.deployed_lookup = state_lookup(DEPLOYED_STATES)
+        self.want_other = c.several_statuses and c.params.triangular != "off"
+        self.local = c.params.triangular == "local"
+        self.r_c = float(c.r_c)
+        self.turn_sigma = float(c.walker.turn_sigma)
+        self.bodies = loop.scenario.sim.robot_collisions
+        self.is_ref = np.zeros(n, dtype=np.bool_)
+        self.explorers = np.zeros(n, dtype=np.int64)
+        self.new_current = np.zeros(n, dtype=np.int64)
+        self.nearest = np.zeros(n)
+        self.other = np.zeros(n, dtype=np.int64)
+        self.movers = np.zeros(n, dtype=np.int64)
+        self.walkers = np.zeros(n, dtype=np.int64)
+        self.scans = np.zeros((n, self.model.sensor_beams))
+        self.length = np.zeros(n)
+        self.no_bodies = (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
+        # bodies and speeds stay what they are during a self-spreading run (no robot is added or changed)
+        self.sensor_range = float(self.model.sensor_range)
+        biggest = float(sw.radius.max())
+        self.sense_reach = float(self.sensor_range + biggest)
+        fastest = float(sw.max_speed[sw.role == Role.ROUTER].max(initial=0.0))
+        self.drive_reach = (2.0 * biggest + 2.0 * fastest * loop.dt) * (1.0 + 1e-9) + 1e-12
+        """Every pair that could touch after this step's longest move is this close (with room for rounding: the
+        kernel's exact reach, from lengths rounded through speeds, is at most this)."""
+
+    @staticmethod
+    def applies(loop: Loop) -> bool:
+        """Whether the loop's phases are those this step compiles: self-spreading with its paper rules."""
+        c = loop.controller
+        if not isinstance(c, SelfSpreading) or loop.scenario.faults or loop.scenario.agents.per_base > 0:
+            return False
+        p = c.params
+        sw = loop.swarm
+        routers = sw.role == Role.ROUTER
+        return (p.walk == "random" and p.stop_rule == "distance" and p.triangle_rule == "geometric"
+                and c.needs_range_readings and not (sw.role == Role.AGENT).any()
+                and bool(np.all(sw.model[routers] == c.router_model)))
+
+    def step(self) -> None:
+        """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
+        loop, c, sw = self.loop, self.controller, self.loop.swarm
+        table = loop.table
+        k, candidates, n_movers, n_walkers = track_explorers(
+            sw.state, sw.status, c.current, self.deployed_lookup, self.is_ref, table.indptr, table.indices,
+            table.dist, self.want_other, c.r_eff, sw.xy, self.r_c, self.local, c.disabled, self.explorers,
+            self.new_current, self.nearest, self.other, self.movers, self.walkers)
+        if candidates:  # a triangular deployment may start: the controller's own rules decide
+            step = StepInput(loop.steps, loop.t, loop.dt, table, Readings({}))
+            current = self.new_current[:k].copy()
+            c.settle_explorers(step, self.explorers[:k].copy(), current, self.other[:k].copy(), current >= 0,
+                               self.nearest[:k] >= c.r_eff)
+            n_movers, n_walkers = list_movers(sw.state, self.movers, self.walkers)
+        if n_movers == 0:
+            c.refused[:] = False
+            return
+        normal, uniform = draw_per_run(c.rng, self.walkers[:n_walkers], turn_draws)
+        several = len(sw.xy) > 1
+        s_csr = body_table(sw.xy, self.sense_reach, table) if several else self.no_bodies
+        drive_bodies = self.bodies and several
+        d_csr = body_table(sw.xy, self.drive_reach, table) if drive_bodies else self.no_bodies
+        s = c.steering
+        sense_steer_drive(*self.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,
+                           self.movers[:n_movers], normal, uniform, self.turn_sigma, self.angles, self.sensor_range,
+                           *s_csr, several,
+                           s.goal, s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps, s.min_progress,
+                           c.r_eff, loop.dt, drive_bodies, *d_csr, self.scans, self.length)
+
+
+class CompiledField:
+    """Sense, decide and move of a potential-field loop in one compiled pass (:func:`_field_step`).
+
+    The controller (:class:`~amronet.algorithms.potential_field.PotentialField`) already decides in one kernel and
+    comes to rest in another; this step runs them with the range rings, the obstacle forces and the moves in one
+    call, without random draws. Bit for bit the reference's result.
+
+    Args:
+        loop: The loop whose phases it does; :meth:`applies` must hold.
+    """
+
+    def __init__(self, loop: Loop) -> None:
+        c = loop.controller
+        assert isinstance(c, PotentialField)
+        sw, omap = loop.swarm, loop.world.omap
+        self.loop, self.controller = loop, c
+        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
+                     float(omap.resolution))
+        routers = c.routers
+        self.model = sw.models[int(sw.model[routers[0]])] if len(routers) else sw.models[0]
+        self.angles = beam_angles(self.model.sensor_beams)
+        self.sensor_range = float(self.model.sensor_range)
+        self.scan = np.zeros(self.model.sensor_beams)
+        biggest = float(sw.radius.max())
+        self.sense_reach = float(self.sensor_range + biggest)
+        fastest = float(sw.max_speed[routers].max(initial=0.0))
+        self.drive_reach = (2.0 * biggest + 2.0 * fastest * loop.dt) * (1.0 + 1e-9) + 1e-12
+        self.bodies = loop.scenario.sim.robot_collisions
+        n = len(sw)
+        self.no_bodies = (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
+        self.movers = np.zeros(len(routers), dtype=np.int64)
+        self.speed = np.zeros(len(routers))
+        self.refused = np.zeros(len(routers), dtype=np.bool_)
+
+    @staticmethod
+    def applies(loop: Loop) -> bool:
+        """Whether the loop runs the potential field, without faults or agents, with one router model."""
+        c = loop.controller
+        if not isinstance(c, PotentialField) or loop.scenario.faults or loop.scenario.agents.per_base > 0:
+            return False
+        sw = loop.swarm
+        return not (sw.role == Role.AGENT).any() and len(np.unique(sw.model[c.routers])) <= 1
+
+    def step(self) -> None:
+        """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
+        loop, c, sw, p = self.loop, self.controller, self.loop.swarm, self.controller.params
+        table = loop.table
+        several = len(sw.xy) > 1
+        sense = bool(c.needs_range_readings)
+        s_csr = body_table(sw.xy, self.sense_reach, table) if sense and several else self.no_bodies
+        drive_bodies = self.bodies and several
+        d_csr = body_table(sw.xy, self.drive_reach, table) if drive_bodies else self.no_bodies
+        field_step(*self.grid, c.routers, sw.state, sw.xy, sw.heading, sw.max_speed, sw.radius, sw.distance,
+                    table.indptr, table.indices, table.dist, sense, self.angles, self.sensor_range, *s_csr,
+                    several, float(c.k_obstacle), float(c.force_cap), c.obstacle_force, self.scan, c.velocity,
+                    c.rest_count, c.window_start, c.force, c.held_force, float(c.k_cover), float(c.k_degree),
+                    float(c.q_rc), int(p.connectivity_k), float(p.damping), float(p.mass), float(loop.dt),
+                    float(p.rest_fraction), c.wakeups, int(p.rest_steps), drive_bodies, *d_csr, self.movers,
+                    self.speed, self.refused)
+
+
+CompiledStep = CompiledSpreading | CompiledField
+"""A loop's compiled sense-decide-move."""
+
+COMPILED_STEPS = (CompiledSpreading, CompiledField)
+"""The compiled steps, each for the algorithm and rules its :meth:`applies` names."""
+
+
+def compiled_step_for(loop: Loop) -> CompiledStep | None:
+    """The compiled step that does the loop's sense, decide and move, or ``None`` (phase by phase)."""
+    for kind in COMPILED_STEPS:
+        if kind.applies(loop):
+            return kind(loop)
+    return None

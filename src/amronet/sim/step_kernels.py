@@ -1,0 +1,185 @@
+"""The kernels of the compiled steps (:mod:`amronet.sim.compiled_step`): sense, decide and move in compiled passes.
+
+Each calls, robot by robot and in the reference's order, the same compiled functions the phase-by-phase path
+calls (range rings, reference tracking, random walk, go-to-goal, forces, drive), so the result is the same bit for
+bit. Kept apart from the Python that drives them so that the kernel cache's key (:mod:`amronet.kernel_cache`)
+covers only what the kernels read.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from amronet.algorithms.forces import inverse_square_one
+from amronet.algorithms.goto import steer_one
+from amronet.algorithms.potential_field import come_to_rest, wake_and_accelerate
+from amronet.algorithms.references import track_row
+from amronet.engine.motion import drive_one, walk_one
+from amronet.engine.robots import State
+from amronet.engine.sensing import cast_bodies_one, cast_grid_one
+
+__all__ = ["field_step", "list_movers", "sense_steer_drive", "track_explorers"]
+
+_EXPLORE = State.EXPLORE
+_REFERENCE = State.REFERENCE
+_TRIANGLE = State.TRIANGLE
+_TRIANGLE_SETTLED = State.TRIANGLE_SETTLED
+
+
+@njit(cache=True)
+def list_movers(state, movers, walkers):  # pragma: no cover - numba
+    """The routers that move this step (exploring or on their way to a triangle goal), and the walkers among them."""
+    m = 0
+    w = 0
+    for i in range(state.shape[0]):
+        s = state[i]
+        if s == _EXPLORE or s == _TRIANGLE:
+            movers[m] = i
+            m += 1
+            if s == _EXPLORE:
+                walkers[w] = i
+                w += 1
+    return m, w
+
+
+@njit(cache=True)
+def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, indices, dist, want_other, r_eff,
+                     xy, r_c, local, disabled, explorers, new_current, nearest, other, movers,
+                     walkers):  # pragma: no cover - numba
+    """Reference tracking of every exploring router; the stops too when no triangular deployment may start.
+
+    A router that met a reference of another status is a *candidate* unless the rules of
+    :func:`~amronet.algorithms.triangular.select_triangles` that need no graph already rule its triangle out: its
+    two references are within ``r_c`` of each other, or (``local``) both are disabled.
+
+    Returns:
+        ``(k, candidates, n_movers, n_walkers)``: the number of explorers (their ids, new references, nearest
+        reference distances and references of another status in the first ``k`` entries of the output arrays) and
+        how many are candidates. With candidates nothing is changed (the caller settles the explorers and lists
+        the movers); without, the routers that move on (:func:`list_movers`) are listed too.
+    """
+    n = state.shape[0]
+    for j in range(n):
+        is_ref[j] = deployed_lookup[state[j]]
+    k = 0
+    candidates = 0
+    for i in range(n):
+        if state[i] != _EXPLORE:
+            continue
+        c, d, o, _ = track_row(i, current[i], is_ref, status, indptr, indices, dist, want_other)
+        explorers[k] = i
+        new_current[k] = c
+        nearest[k] = d
+        other[k] = o
+        if o >= 0:
+            dx = xy[c, 0] - xy[o, 0]
+            dy = xy[c, 1] - xy[o, 1]
+            if math.sqrt(dx * dx + dy * dy) > r_c and not (local and disabled[c] and disabled[o]):
+                candidates += 1
+        k += 1
+    if candidates:
+        return k, candidates, 0, 0
+    for m in range(k):
+        i = explorers[m]
+        c = new_current[m]
+        current[i] = c
+        if c >= 0 and nearest[m] >= r_eff:
+            state[i] = _REFERENCE
+            status[i] = status[c]
+    n_movers, n_walkers = list_movers(state, movers, walkers)
+    return k, 0, n_movers, n_walkers
+
+
+@njit(cache=True)
+def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed, radius, distance, refused,
+                       movers, normal, uniform, turn_sigma, angles, sensor_range, s_indptr, s_indices, s_dist,
+                       sense_bodies,
+                       goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt, bodies,
+                       d_indptr, d_indices, d_dist, scans, length):  # pragma: no cover - numba
+    """Sense, steer and drive the ``movers``; the same per-robot functions, in the same order, as the reference.
+
+    ``normal`` and ``uniform``: the walkers' draws (:func:`~amronet.engine.motion.turn_draws`), scaled here as
+    :func:`~amronet.engine.motion.random_walk` scales them (the same operations on the same numbers).
+    """
+    big = radius.max()
+    for m in range(movers.shape[0]):  # sense: every mover's ring, from where everybody stands now
+        i = movers[m]
+        cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, scans[m])
+        if sense_bodies:
+            cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big,
+                            scans[m])
+    w = 0
+    longest = 0.0
+    for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
+        i = movers[m]
+        if state[i] == _EXPLORE:
+            noise = turn_sigma * normal[w]
+            fresh = -np.pi + (2.0 * np.pi) * uniform[w]
+            heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, refused[i], noise, fresh)
+            w += 1
+            speed = max_speed[i]
+        else:
+            step, done = steer_one(i, xy, heading, goal, anchors, scans[m], angles, sensor_range, max_speed[i] * dt,
+                                   r_eff, last_to_goal, blocked_steps, give_up, min_progress)
+            if done:
+                state[i] = _TRIANGLE_SETTLED
+            speed = step / dt
+        length[m] = speed * dt
+        if m == 0 or length[m] > longest:
+            longest = length[m]
+    near = 2.0 * big + 2.0 * longest
+    refused[:] = False
+    for m in range(movers.shape[0]):  # move, one after another
+        i = movers[m]
+        r, travelled = drive_one(blocked, clear, ox, oy, res, i, heading[i], length[m], xy, radius, bodies,
+                                 d_indptr, d_indices, d_dist, near)
+        refused[i] = r
+        distance[i] += travelled
+    for m in range(movers.shape[0]):  # a triangle router on its goal has arrived
+        i = movers[m]
+        if state[i] == _TRIANGLE:
+            dx = xy[i, 0] - goal[i, 0]
+            dy = xy[i, 1] - goal[i, 1]
+            if math.sqrt(dx * dx + dy * dy) <= 1e-9:
+                state[i] = _TRIANGLE_SETTLED
+
+
+@njit(cache=True)
+def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_speed, radius, distance, indptr, indices,
+                dist, sense, angles, sensor_range, s_indptr, s_indices, s_dist, sense_bodies, k_obstacle, cap,
+                obstacle_force, scan, velocity, rest_count, window_start, force, held_force, k_cover, k_degree, q_rc,
+                k_conn, damping, mass, dt, rest_fraction, wakeups, rest_steps, bodies, d_indptr, d_indices, d_dist,
+                movers, speed, refused):  # pragma: no cover - numba
+    """Sense, decide and move the potential-field routers: the reference's kernels and per-robot functions in order."""
+    if sense:  # the exploring routers' rings and the obstacles' push (resting routers keep their last one)
+        big = radius.max()
+        for i in routers:
+            if state[i] != _EXPLORE:
+                continue
+            cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, scan)
+            if sense_bodies:
+                cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big,
+                                scan)
+            obstacle_force[i, 0], obstacle_force[i, 1] = inverse_square_one(scan, heading[i], angles, sensor_range,
+                                                                            k_obstacle, cap)
+    n = wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
+                             rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap, k_conn,
+                             damping, mass, dt, rest_fraction, _EXPLORE, _REFERENCE, wakeups, movers, speed)
+    if n == 0:
+        return
+    longest = 0.0
+    for m in range(n):
+        length = speed[m] * dt
+        if m == 0 or length > longest:
+            longest = length
+    near = 2.0 * radius.max() + 2.0 * longest
+    for m in range(n):
+        i = movers[m]
+        refused[m], travelled = drive_one(blocked, clear, ox, oy, res, i, heading[i], speed[m] * dt, xy, radius,
+                                          bodies, d_indptr, d_indices, d_dist, near)
+        distance[i] += travelled
+    come_to_rest(movers[:n], refused[:n], state, xy, max_speed, velocity, rest_count, window_start, force,
+                  held_force, rest_steps, dt, rest_fraction, damping, _REFERENCE)

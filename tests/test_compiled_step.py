@@ -1,0 +1,120 @@
+"""The compiled steps (amronet.sim.compiled_step) against the reference phases, bit for bit."""
+
+import numpy as np
+import pytest
+
+from amronet.algorithms.self_spreading import SelfSpreading
+from amronet.engine.robots import State
+from amronet.scenario import load_scenario
+from amronet.sim import BatchSimulation, Simulation
+from amronet.sim.compiled_step import CompiledField, CompiledSpreading
+
+CASES = {
+    "open 6x6": ("self-spreading-6x6", 3, {"sim.time_limit": 40}),
+    "obstacles, global rule": ("self-spreading-obstacles-6x6", 5,
+                               {"sim.time_limit": 40, "algorithm.params.triangular": "global"}),
+    "autolab floor plan": ("self-spreading-autolab", 1, {"sim.time_limit": 40}),
+    "office, two bases, local rule": ("self-spreading-office", 2, {"sim.time_limit": 100}),
+    "office, no optimization": ("self-spreading-office", 3,
+                                {"sim.time_limit": 100, "algorithm.params.triangular": "none"}),
+    "office, global rule": ("self-spreading-office", 4,
+                            {"sim.time_limit": 100, "algorithm.params.triangular": "global"}),
+    "office, greedy only": ("self-spreading-office", 4, {"sim.time_limit": 40, "algorithm.params.triangular": "off"}),
+    "multi-wall radio": ("self-spreading-office", 5, {"sim.time_limit": 40, "radio.model": "multi-wall"}),
+    "no body collisions": ("self-spreading-office", 6, {"sim.time_limit": 40, "sim.robot_collisions": False}),
+    "base station by a wall": ("self-spreading-obstacles-6x6", 7,
+                               {"sim.time_limit": 40, "base_stations": [{"x": -2.7, "y": 0.0}]}),
+    "potential field": ("potential-field-6x6", 1, {"sim.time_limit": 40}),
+    "potential field, obstacles": ("potential-field-obstacles-6x6", 2, {"sim.time_limit": 40}),
+    "Howard's field (K = 0)": ("potential-field-obstacles-6x6", 3,
+                               {"sim.time_limit": 40, "algorithm.params.connectivity_k": 0}),
+    "potential field without obstacle forces": ("potential-field-obstacles-6x6", 4,
+                                                {"sim.time_limit": 40, "algorithm.params.obstacle_forces": False}),
+    "potential field on autolab": ("potential-field-6x6", 6, {"sim.time_limit": 40, "map": "autolab",
+                                                            "base_stations": [{"x": 3.0, "y": 3.0}]}),
+}
+
+
+def _state(sim):
+    sw = sim.swarm
+    return sw.xy, sw.heading, sw.state, sw.status, sw.distance
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_the_compiled_step_gives_the_reference_run_bit_for_bit(name):
+    preset, seed, overrides = CASES[name]
+    sc = load_scenario(preset, overrides)
+    compiled, reference = Simulation(sc, seed), Simulation(sc, seed, step="reference")
+    assert compiled.compiled is not None and reference.compiled is None
+    a, b = compiled.run(), reference.run()
+    for x, y in zip(_state(compiled), _state(reference), strict=True):
+        np.testing.assert_array_equal(x, y)
+    for name in ("current", "disabled", "velocity", "rest_count", "held_force", "wakeups"):
+        if hasattr(reference.controller, name):
+            np.testing.assert_array_equal(getattr(compiled.controller, name), getattr(reference.controller, name))
+    assert compiled.rows == reference.rows and a.network == b.network
+    assert {k: v for k, v in a.summary.items() if k != "wall_time_s"} == \
+        {k: v for k, v in b.summary.items() if k != "wall_time_s"}
+
+
+def test_it_steps_through_triangular_deployments_by_the_controllers_rules(monkeypatch):
+    """Steps in which a triangle may start go through the controller's own Python rules; the runs still agree."""
+    calls = []
+    settle = SelfSpreading.settle_explorers
+
+    def counting(self, *args):
+        calls.append(1)
+        return settle(self, *args)
+
+    monkeypatch.setattr(SelfSpreading, "settle_explorers", counting)
+    sc = load_scenario("self-spreading-office", {"sim.time_limit": 150, "algorithm.params.triangular": "none"})
+    compiled, reference = Simulation(sc, 2), Simulation(sc, 2, step="reference")
+    compiled.run()
+    in_compiled = len(calls)
+    reference.run()
+    assert 0 < in_compiled < compiled.steps  # only the steps in which a triangle may start
+    assert np.count_nonzero(compiled.swarm.state == State.TRIANGLE_SETTLED) > 0
+    np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
+    np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
+
+
+@pytest.mark.parametrize(("preset", "overrides"), [
+    ("self-spreading-office", {"sim.time_limit": 60, "algorithm.params.triangular": "global"}),
+    ("potential-field-obstacles-6x6", {"sim.time_limit": 30}),
+])
+def test_batched_runs_are_the_same_with_either_step(preset, overrides):
+    sc = load_scenario(preset, overrides)
+    seeds = (1, 2, 3)
+    compiled = BatchSimulation(sc, seeds)
+    reference = BatchSimulation(sc, seeds, step="reference")
+    assert compiled.compiled is not None and reference.compiled is None
+    for a, b in zip(compiled.run(), reference.run(), strict=True):
+        assert a.network == b.network
+        for k in a.timeseries:
+            np.testing.assert_array_equal(a.timeseries[k], b.timeseries[k])
+    np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
+
+
+@pytest.mark.parametrize("overrides", [
+    {"algorithm.params.walk": "growth"},
+    {"algorithm.params.walk": "straight"},
+    {"algorithm.params.stop_rule": "link-quality"},
+    {"algorithm.params.triangle_rule": "link-quality"},
+    {"faults": [{"at": 5.0, "routers": 0.5}]},
+])
+def test_rules_it_does_not_compile_take_the_reference_path(overrides):
+    sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 5, **overrides}), 1)
+    assert sim.compiled is None and "sense" in sim.phase_seconds
+    assert not CompiledSpreading.applies(sim)
+
+
+def test_each_algorithm_gets_its_compiled_step_or_none():
+    kinds = {preset: type(Simulation(load_scenario(preset, {"sim.time_limit": 5}), 1).compiled)
+             for preset in ("self-spreading-6x6", "potential-field-6x6", "dssa-6x6", "agent-assisted-office")}
+    assert kinds == {"self-spreading-6x6": CompiledSpreading, "potential-field-6x6": CompiledField,
+                     "dssa-6x6": type(None), "agent-assisted-office": type(None)}
+
+
+def test_an_unknown_step_kind_is_refused():
+    with pytest.raises(ValueError, match="step must be"):
+        Simulation(load_scenario("self-spreading-6x6"), 1, step="fast")
