@@ -135,7 +135,7 @@ class CompiledSpreading:
 
 
 class CompiledField:
-    """Sense, decide and move of a potential-field loop in one compiled pass (:func:`_field_step`).
+    """Sense, decide and move of a potential-field loop in one compiled pass (:func:`.step_kernels.field_step`).
 
     The controller (:class:`~amronet.algorithms.potential_field.PotentialField`) already decides in one kernel and
     comes to rest in another; this step runs them with the range rings, the obstacle forces and the moves in one
