@@ -23,14 +23,13 @@ def main() -> None:
     if args.json:
         print(json.dumps(rows, indent=2))
         return
-    print("| N | map scale | mean degree | steps/s | robot-steps/s | sense | decide | move | radio |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    phases = list(rows[0]["phase_share"])  # sense+decide+move and radio with the compiled step
+    print("| N | map scale | mean degree | steps/s | robot-steps/s | " + " | ".join(phases) + " |")
+    print("|---:|---:|---:|---:|---:|" + "---:|" * len(phases))
     for r in rows:
-        p = r["phase_share"]
+        shares = " | ".join(f"{r['phase_share'][k]:.0%}" for k in phases)
         print(f"| {r['robots']:,} | {r['map_scale']:.2f} | {r['mean_degree']:.1f} | {r['steps_per_s']:,.1f} | "
-              f"{r['robot_steps_per_s']:,} | {p['sense']:.0%} | {p['decide']:.0%} | {p['move']:.0%} | "
-              f"{p['radio']:.0%} |")
-
+              f"{r['robot_steps_per_s']:,} | {shares} |")
 
 if __name__ == "__main__":
     main()
