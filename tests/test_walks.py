@@ -58,6 +58,31 @@ def test_growth_walk_heads_down_the_field_then_outward_where_it_grows():
     assert math.cos(heading[3]) > 0.9  # onward along +x
 
 
+def test_guided_walk_heads_down_the_field_and_random_walks_where_the_network_grows():
+    xy = np.array([[0.0, 0.0], [0.9, 0.0], [1.8, 0.0], [0.5, 0.5]])
+    deployed = np.array([True, True, True, False])
+    w = Walker("guided", 4, r_c=1.0, turn_sigma=0.4, growth_s=10.0)
+    w.deployed_at[:2] = -100.0
+    heading = np.zeros(4)
+    # it hears nodes 0 and 1 (old): down the field, to node 1, as growth does (with growth's smaller noise)
+    w.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(0), table_of(xy),
+            xy, deployed, t=0.0)
+    assert math.cos(heading[3] - math.atan2(-0.5, 0.4)) > 0.9
+    # it hears the new node 2: the paper's random walk, heading plus the random walk's noise, same draws
+    xy[3] = [2.2, 0.1]
+    heading[3] = 0.3
+    w.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(5), table_of(xy),
+            xy, deployed, t=0.0)
+    assert heading[3] == 0.3 + 0.4 * np.random.default_rng(5).standard_normal(1)[0]
+    # nothing it hears leads to growth: the random walk too
+    w2 = Walker("guided", 4, r_c=1.0, turn_sigma=0.4, growth_s=10.0)
+    w2.deployed_at[:3] = -100.0
+    heading[3] = 0.3
+    w2.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(5), table_of(xy),
+             xy, deployed, t=0.0)
+    assert heading[3] == 0.3 + 0.4 * np.random.default_rng(5).standard_normal(1)[0]
+
+
 def test_straight_walk_keeps_its_heading_while_the_way_is_clear_and_turns_off_an_obstacle():
     w = Walker("straight", 1, r_c=1.0, turn_sigma=0.3)
     heading = np.array([0.7])
@@ -87,7 +112,7 @@ def test_growth_walker_follows_the_edge_of_an_obstacle_between_it_and_its_goal()
     assert abs(math.cos(heading[2])) < 0.5  # roughly along the obstacle's edge
 
 
-@pytest.mark.parametrize("walk", ["straight", "growth"])
+@pytest.mark.parametrize("walk", ["straight", "growth", "guided"])
 def test_every_deployed_router_stays_connected_on_a_real_map(walk):
     sc = amronet.load_scenario("self-spreading-autolab", overrides={"algorithm.params.walk": walk,
                                                                    "sim.time_limit": 60.0})

@@ -7,8 +7,8 @@ reference has status ``i`` that hears a reference of status ``p != i`` goes into
 and moves to a point that keeps both references linked (:mod:`amronet.algorithms.triangular`).
 
 **Walks** (``walk``): how exploring routers move — ``random`` (the paper's, the default), ``straight`` (a persistent
-walk) or ``growth`` (toward where the network grows, along the routing's growth field); see
-:mod:`amronet.algorithms.walks`.
+walk), ``growth`` (toward where the network grows, along the routing's growth field) or ``guided`` (``growth``'s way
+there, the random walk at the frontier); see :mod:`amronet.algorithms.walks`.
 
 **Stop rules** (``stop_rule``). ``distance`` (the paper's, the default): the current reference is kept while it is
 within ``r_c`` and otherwise the nearest reference is taken; a router stops when every reference it hears is at
@@ -110,10 +110,11 @@ class SelfSpreadingParams(BaseModel):
         triangle_tolerance_db: ``link-quality`` triangles: settle when both margins are within this of
             ``stop_margin_db`` (dB).
         triangle_max_s: ``link-quality`` triangles: settle after searching this long, seconds.
-        walk: How exploring routers walk (:mod:`amronet.algorithms.walks`): ``random`` (the paper's), ``straight``
-            or ``growth``.
-        growth_s: ``growth`` walk: how long a deployed node counts as new (where the network grows), seconds.
-        follow_steps: ``growth`` walk: at most this many steps following an obstacle's edge.
+        walk: How exploring routers walk (:mod:`amronet.algorithms.walks`): ``random`` (the paper's), ``straight``,
+            ``growth`` or ``guided``.
+        growth_s: ``growth`` and ``guided`` walks: how long a deployed node counts as new (where the network
+            grows), seconds.
+        follow_steps: ``growth`` and ``guided`` walks: at most this many steps following an obstacle's edge.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -129,7 +130,7 @@ class SelfSpreadingParams(BaseModel):
     triangle_rule: Literal["geometric", "link-quality"] = "geometric"
     triangle_tolerance_db: Annotated[float, Field(strict=True, gt=0, le=60, allow_inf_nan=False)] = 1.0
     triangle_max_s: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 60.0
-    walk: Literal["random", "straight", "growth"] = "random"
+    walk: Literal["random", "straight", "growth", "guided"] = "random"
     growth_s: Annotated[float, Field(strict=True, gt=0, le=3600, allow_inf_nan=False)] = 10.0
     follow_steps: Annotated[StrictInt, Field(ge=1, le=100_000)] = 200
 

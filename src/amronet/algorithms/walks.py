@@ -22,6 +22,12 @@ it hears, their link lengths, and what they announce: state, position, and what 
   along its edge (a bug algorithm: the obstacle kept on a side drawn at random, corners rounded) until the way is
   clear, for at most ``follow_steps`` steps. Dead ends stop attracting routers once they are full: no new node
   appears there for ``growth_s``.
+* ``guided`` — ``growth``'s way to where the network grows, the paper's random walk there. A router that hears no
+  new node heads down the growth field as ``growth`` does (edge following included); one that hears a new node, or
+  that hears nothing leading to growth, takes the ``random`` step (heading noise, escape from what the beams see).
+  So a router is carried fast across the covered area to the frontier and then attaches to it as the paper's
+  walkers do, where it first meets the rim — at the tips the network grows from, not in the gaps between the
+  newest nodes, which is where ``growth``'s push outward leaves it and why ``growth`` deploys more routers.
 """
 
 from __future__ import annotations
@@ -31,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from amronet.engine.motion import random_walk
+from amronet.engine.motion import random_walk, walk_one
 from amronet.engine.network import hop_counts
 from amronet.engine.sensing import beam_angles
 from amronet.engine.streams import RunStreams, draw_per_run
@@ -39,7 +45,7 @@ from amronet.engine.table import NeighbourTable
 
 __all__ = ["WALKS", "Walker"]
 
-WALKS: tuple[str, ...] = ("random", "straight", "growth")
+WALKS: tuple[str, ...] = ("random", "straight", "growth", "guided")
 """The walk rules, ``random`` the paper's."""
 
 STRAIGHT_SPREAD = math.pi / 4
@@ -117,13 +123,21 @@ def _toward(i, m, want, heading, scans, angles, sensor_range, follow, side, foll
 
 @njit(cache=True)
 def _growth(heading, who, xy, field, indptr, indices, dist, r_c, scans, angles, sensor_range, refused, noise, fresh,
-            follow, side, follow_steps, draw):  # pragma: no cover - numba
+            follow, side, follow_steps, draw, diffuse, walk_noise):  # pragma: no cover - numba
     for m in range(who.shape[0]):
         i = who[m]
         if refused[m]:
             heading[i] = fresh[m]
             follow[i] = 0
             continue
+        if diffuse:  # guided: the random walk where the network grows, or where nothing leads to growth
+            low = np.inf
+            for k in range(indptr[i], indptr[i + 1]):
+                low = min(low, field[indices[k]])
+            if low == 0.0 or low == np.inf:
+                follow[i] = 0
+                heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, False, walk_noise[m], fresh[m])
+                continue
         low = np.inf
         target = -1
         target_d = 0.0
@@ -170,8 +184,8 @@ class Walker:
         if rule not in WALKS:
             raise ValueError(f"unknown walk rule {rule!r}; choose one of {', '.join(WALKS)}")
         self.rule = rule
-        self.reads_network = rule == "growth"
-        """Whether the rule reads which nodes are deployed (``growth``)."""
+        self.reads_network = rule in ("growth", "guided")
+        """Whether the rule reads which nodes are deployed (``growth``, ``guided``)."""
         self.r_c = r_c
         self.turn_sigma = turn_sigma
         self.growth_s = growth_s
@@ -230,4 +244,4 @@ class Walker:
         assert field is not None
         _growth(heading, who, xy, field, table.indptr, table.indices, table.dist, float(self.r_c), scans, angles,
                 float(sensor_range), refused, GROWTH_NOISE * self.turn_sigma * normal, fresh, self.follow, self.side,
-                self.follow_steps, uniform)
+                self.follow_steps, uniform, self.rule == "guided", self.turn_sigma * normal)
