@@ -159,9 +159,9 @@ class PotentialField(Controller):
             return
         p = self.params
         come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), self.swarm.state,
-                      self.swarm.xy, self.swarm.max_speed, self.velocity, self.rest_count, self.window_start,
-                      self.force, self.held_force, p.rest_steps, self.dt, p.rest_fraction, p.damping,
-                      State.REFERENCE)
+                     self.swarm.xy, self.swarm.max_speed, self.velocity, self.rest_count, self.window_start,
+                     self.force, self.held_force, p.rest_steps, self.dt, p.rest_fraction, p.damping,
+                     State.REFERENCE)
 
     def report(self) -> dict[str, object]:
         """The force constants used and how often resting routers woke up."""
@@ -175,9 +175,9 @@ class PotentialField(Controller):
 # -- compiled kernels: one pass over the routers per phase (30 robots are all overhead in NumPy) -----------------
 @numba.njit(cache=True)
 def wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
-                         rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap,
-                         k_conn, damping, mass, dt, rest_fraction, explore, reference, wakeups, movers,
-                         speed):  # pragma: no cover - numba
+                        rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap,
+                        k_conn, damping, mass, dt, rest_fraction, explore, reference, wakeups, movers,
+                        speed):  # pragma: no cover - numba
     """Wake resting routers whose force left the held one, then accelerate every moving router; the mover count.
 
     A router's force depends only on positions and the neighbour table, so one pass in router order gives the
@@ -219,7 +219,7 @@ def wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_forc
 
 @numba.njit(cache=True)
 def come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, window_start, force, held_force,
-                  rest_steps, dt, rest_fraction, damping, reference):  # pragma: no cover - numba
+                 rest_steps, dt, rest_fraction, damping, reference):  # pragma: no cover - numba
     """The rest rule after a move (see the module docstring)."""
     window = rest_steps * dt
     for m in range(len(movers)):

@@ -128,10 +128,10 @@ class CompiledSpreading:
         d_csr = body_table(sw.xy, self.drive_reach, table) if drive_bodies else self.no_bodies
         s = c.steering
         sense_steer_drive(*self.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,
-                           self.movers[:n_movers], normal, uniform, self.turn_sigma, self.angles, self.sensor_range,
-                           *s_csr, several,
-                           s.goal, s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps, s.min_progress,
-                           c.r_eff, loop.dt, drive_bodies, *d_csr, self.scans, self.length)
+                          self.movers[:n_movers], normal, uniform, self.turn_sigma, self.angles, self.sensor_range,
+                          *s_csr, several,
+                          s.goal, s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps, s.min_progress,
+                          c.r_eff, loop.dt, drive_bodies, *d_csr, self.scans, self.length)
 
 
 class CompiledField:
@@ -187,12 +187,12 @@ class CompiledField:
         drive_bodies = self.bodies and several
         d_csr = body_table(sw.xy, self.drive_reach, table) if drive_bodies else self.no_bodies
         field_step(*self.grid, c.routers, sw.state, sw.xy, sw.heading, sw.max_speed, sw.radius, sw.distance,
-                    table.indptr, table.indices, table.dist, sense, self.angles, self.sensor_range, *s_csr,
-                    several, float(c.k_obstacle), float(c.force_cap), c.obstacle_force, self.scan, c.velocity,
-                    c.rest_count, c.window_start, c.force, c.held_force, float(c.k_cover), float(c.k_degree),
-                    float(c.q_rc), int(p.connectivity_k), float(p.damping), float(p.mass), float(loop.dt),
-                    float(p.rest_fraction), c.wakeups, int(p.rest_steps), drive_bodies, *d_csr, self.movers,
-                    self.speed, self.refused)
+                   table.indptr, table.indices, table.dist, sense, self.angles, self.sensor_range, *s_csr,
+                   several, float(c.k_obstacle), float(c.force_cap), c.obstacle_force, self.scan, c.velocity,
+                   c.rest_count, c.window_start, c.force, c.held_force, float(c.k_cover), float(c.k_degree),
+                   float(c.q_rc), int(p.connectivity_k), float(p.damping), float(p.mass), float(loop.dt),
+                   float(p.rest_fraction), c.wakeups, int(p.rest_steps), drive_bodies, *d_csr, self.movers,
+                   self.speed, self.refused)
 
 
 CompiledStep = CompiledSpreading | CompiledField

@@ -47,8 +47,8 @@ def list_movers(state, movers, walkers):  # pragma: no cover - numba
 
 @njit(cache=True)
 def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, indices, dist, want_other, r_eff,
-                     xy, r_c, local, disabled, explorers, new_current, nearest, other, movers,
-                     walkers):  # pragma: no cover - numba
+                    xy, r_c, local, disabled, explorers, new_current, nearest, other, movers,
+                    walkers):  # pragma: no cover - numba
     """Reference tracking of every exploring router; the stops too when no triangular deployment may start.
 
     A router that met a reference of another status is a *candidate* unless the rules of
@@ -95,10 +95,10 @@ def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, ind
 
 @njit(cache=True)
 def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed, radius, distance, refused,
-                       movers, normal, uniform, turn_sigma, angles, sensor_range, s_indptr, s_indices, s_dist,
-                       sense_bodies,
-                       goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt, bodies,
-                       d_indptr, d_indices, d_dist, scans, length):  # pragma: no cover - numba
+                      movers, normal, uniform, turn_sigma, angles, sensor_range, s_indptr, s_indices, s_dist,
+                      sense_bodies,
+                      goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt, bodies,
+                      d_indptr, d_indices, d_dist, scans, length):  # pragma: no cover - numba
     """Sense, steer and drive the ``movers``; the same per-robot functions, in the same order, as the reference.
 
     ``normal`` and ``uniform``: the walkers' draws (:func:`~amronet.engine.motion.turn_draws`), scaled here as
@@ -149,10 +149,10 @@ def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed
 
 @njit(cache=True)
 def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_speed, radius, distance, indptr, indices,
-                dist, sense, angles, sensor_range, s_indptr, s_indices, s_dist, sense_bodies, k_obstacle, cap,
-                obstacle_force, scan, velocity, rest_count, window_start, force, held_force, k_cover, k_degree, q_rc,
-                k_conn, damping, mass, dt, rest_fraction, wakeups, rest_steps, bodies, d_indptr, d_indices, d_dist,
-                movers, speed, refused):  # pragma: no cover - numba
+               dist, sense, angles, sensor_range, s_indptr, s_indices, s_dist, sense_bodies, k_obstacle, cap,
+               obstacle_force, scan, velocity, rest_count, window_start, force, held_force, k_cover, k_degree, q_rc,
+               k_conn, damping, mass, dt, rest_fraction, wakeups, rest_steps, bodies, d_indptr, d_indices, d_dist,
+               movers, speed, refused):  # pragma: no cover - numba
     """Sense, decide and move the potential-field routers: the reference's kernels and per-robot functions in order."""
     if sense:  # the exploring routers' rings and the obstacles' push (resting routers keep their last one)
         big = radius.max()
@@ -166,8 +166,8 @@ def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_spe
             obstacle_force[i, 0], obstacle_force[i, 1] = inverse_square_one(scan, heading[i], angles, sensor_range,
                                                                             k_obstacle, cap)
     n = wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
-                             rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap, k_conn,
-                             damping, mass, dt, rest_fraction, _EXPLORE, _REFERENCE, wakeups, movers, speed)
+                            rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap, k_conn,
+                            damping, mass, dt, rest_fraction, _EXPLORE, _REFERENCE, wakeups, movers, speed)
     if n == 0:
         return
     longest = 0.0
@@ -182,4 +182,4 @@ def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_spe
                                           bodies, d_indptr, d_indices, d_dist, near)
         distance[i] += travelled
     come_to_rest(movers[:n], refused[:n], state, xy, max_speed, velocity, rest_count, window_start, force,
-                  held_force, rest_steps, dt, rest_fraction, damping, _REFERENCE)
+                 held_force, rest_steps, dt, rest_fraction, damping, _REFERENCE)
