@@ -41,45 +41,46 @@ def test_growth_field_counts_hops_to_the_newest_nodes_through_deployed_ones():
     assert np.isinf(w.growth_field(table_of(xy), deployed, t=0.0)).all()
 
 
-def test_growth_walk_heads_down_the_field_then_outward_where_it_grows():
-    # deployed chain 0-1-2 along x (node 2 new); a walker that hears nodes 0 and 1 heads for node 1 (1 hop from it)
+def chain_and_walker(rule: str, turn_sigma: float) -> tuple[np.ndarray, np.ndarray, Walker, np.ndarray]:
+    """A deployed chain 0-1-2 along x (node 2 new, 0 and 1 old) and a walker, robot 3, at (0.5, 0.5)."""
     xy = np.array([[0.0, 0.0], [0.9, 0.0], [1.8, 0.0], [0.5, 0.5]])
     deployed = np.array([True, True, True, False])
-    w = Walker("growth", 4, r_c=1.0, turn_sigma=0.0, growth_s=10.0)
+    w = Walker(rule, 4, r_c=1.0, turn_sigma=turn_sigma, growth_s=10.0)
     w.deployed_at[:2] = -100.0
-    heading = np.zeros(4)
-    w.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(0), table_of(xy),
-            xy, deployed, t=0.0)
+    return xy, deployed, w, np.zeros(4)
+
+
+def steer_walker(w: Walker, heading: np.ndarray, xy: np.ndarray, deployed: np.ndarray, seed: int) -> None:
+    """One step of robot 3, nothing seen, its last move not refused."""
+    w.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(seed),
+            table_of(xy), xy, deployed, t=0.0)
+
+
+def test_growth_walk_heads_down_the_field_then_outward_where_it_grows():
+    # a walker that hears nodes 0 and 1 heads for node 1 (1 hop from the new node)
+    xy, deployed, w, heading = chain_and_walker("growth", 0.0)
+    steer_walker(w, heading, xy, deployed, 0)
     assert heading[3] == pytest.approx(math.atan2(0.0 - 0.5, 0.9 - 0.5))
     # next to the new node: outward, away from the nodes it hears
     xy[3] = [2.2, 0.1]
-    w.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(0), table_of(xy),
-            xy, deployed, t=0.0)
+    steer_walker(w, heading, xy, deployed, 0)
     assert math.cos(heading[3]) > 0.9  # onward along +x
 
 
 def test_guided_walk_heads_down_the_field_and_random_walks_where_the_network_grows():
-    xy = np.array([[0.0, 0.0], [0.9, 0.0], [1.8, 0.0], [0.5, 0.5]])
-    deployed = np.array([True, True, True, False])
-    w = Walker("guided", 4, r_c=1.0, turn_sigma=0.4, growth_s=10.0)
-    w.deployed_at[:2] = -100.0
-    heading = np.zeros(4)
+    xy, deployed, w, heading = chain_and_walker("guided", 0.4)
     # it hears nodes 0 and 1 (old): down the field, to node 1, as growth does (with growth's smaller noise)
-    w.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(0), table_of(xy),
-            xy, deployed, t=0.0)
+    steer_walker(w, heading, xy, deployed, 0)
     assert math.cos(heading[3] - math.atan2(-0.5, 0.4)) > 0.9
     # it hears the new node 2: the paper's random walk, heading plus the random walk's noise, same draws
     xy[3] = [2.2, 0.1]
     heading[3] = 0.3
-    w.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(5), table_of(xy),
-            xy, deployed, t=0.0)
+    steer_walker(w, heading, xy, deployed, 5)
     assert heading[3] == 0.3 + 0.4 * np.random.default_rng(5).standard_normal(1)[0]
     # nothing it hears leads to growth: the random walk too
-    w2 = Walker("guided", 4, r_c=1.0, turn_sigma=0.4, growth_s=10.0)
-    w2.deployed_at[:3] = -100.0
+    w.deployed_at[:3] = -100.0
     heading[3] = 0.3
-    w2.steer(heading, np.array([3]), clear_scans(1), FAR, np.zeros(1, bool), np.random.default_rng(5), table_of(xy),
-             xy, deployed, t=0.0)
+    steer_walker(w, heading, xy, deployed, 5)
     assert heading[3] == 0.3 + 0.4 * np.random.default_rng(5).standard_normal(1)[0]
 
 

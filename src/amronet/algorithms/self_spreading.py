@@ -229,14 +229,13 @@ class SelfSpreading(Controller):
         (:mod:`amronet.sim.compiled_step`), which calls it when a triangular deployment may start.
         """
         sw = self.swarm
-        is_ref = sw.deployed
         self.current[explorers] = current
 
         triangles = np.zeros(len(explorers), dtype=bool)
         if self.params.triangular != "off":
             cand = np.flatnonzero(other >= 0)
             if len(cand):
-                committed = is_ref | (sw.state == State.TRIANGLE)
+                committed = sw.deployed | (sw.state == State.TRIANGLE)
                 go = select_triangles(
                     self.params.triangular, explorers[cand], current[cand], other[cand], sw.xy,
                     self.r_c, self.disabled, step.table, committed,

@@ -130,14 +130,6 @@ def _growth(heading, who, xy, field, indptr, indices, dist, r_c, scans, angles, 
             heading[i] = fresh[m]
             follow[i] = 0
             continue
-        if diffuse:  # guided: the random walk where the network grows, or where nothing leads to growth
-            low = np.inf
-            for k in range(indptr[i], indptr[i + 1]):
-                low = min(low, field[indices[k]])
-            if low == 0.0 or low == np.inf:
-                follow[i] = 0
-                heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, False, walk_noise[m], fresh[m])
-                continue
         low = np.inf
         target = -1
         target_d = 0.0
@@ -147,6 +139,10 @@ def _growth(heading, who, xy, field, indptr, indices, dist, r_c, scans, angles, 
                 low = f
                 target = indices[k]
                 target_d = dist[k]
+        if diffuse and (target < 0 or low == 0.0):  # guided: the random walk where it grows, or nothing leads there
+            follow[i] = 0
+            heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, False, walk_noise[m], fresh[m])
+            continue
         if target < 0:  # nothing it hears leads to growth: a persistent walk
             want = heading[i]
         elif low > 0.0:  # down the field: to the node fewest hops from a new one

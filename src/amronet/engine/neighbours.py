@@ -47,15 +47,13 @@ __all__ = ["neighbour_csr", "pairs_from_csr"]
 
 _EPS = 2.0**-52
 _MIN_CELL = 1e-150  # below this r * r is subnormal and loses relative precision; cells never get smaller
+_INT32_MAX = int(np.iinfo(np.int32).max)  # most points a table holds (its column indices are int32)
 
 
 # --------------------------------------------------------------------------------------------------------
 # numba kernels
 # --------------------------------------------------------------------------------------------------------
 
-
-_INT32_MAX = int(np.iinfo(np.int32).max)
-"""Most points a table holds (its column indices are int32)."""
 
 @njit(cache=True)
 def _grid(xy, r, n_groups):  # pragma: no cover - numba

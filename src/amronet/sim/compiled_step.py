@@ -35,9 +35,10 @@ from amronet.algorithms.base import Readings, StepInput
 from amronet.algorithms.potential_field import PotentialField
 from amronet.algorithms.self_spreading import SelfSpreading
 from amronet.engine.motion import turn_draws
-from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
+from amronet.engine.robots import DEPLOYED_STATES, RobotModel, Role, state_lookup
 from amronet.engine.sensing import beam_angles, body_table
 from amronet.engine.streams import draw_per_run
+from amronet.engine.table import NeighbourTable
 from amronet.sim.step_kernels import field_step, list_movers, sense_steer_drive, track_explorers
 from amronet.world.space import clearance
 
@@ -45,6 +46,49 @@ if TYPE_CHECKING:
     from amronet.sim.loop import Loop
 
 __all__ = ["COMPILED_STEPS", "CompiledField", "CompiledSpreading", "CompiledStep", "compiled_step_for"]
+
+
+class _Surroundings:
+    """What a compiled step reads of the map and of the bodies around its robots (both steps share it).
+
+    The map's grid for the rings and the moves, the movers' sensor ring, and how far apart two robots can be and
+    still meet a beam or touch after a step. Bodies and speeds stay what they are during a run of these algorithms
+    (no robot is added or changed), so the reaches are fixed.
+
+    Args:
+        loop: The loop.
+        movers: Mask or indices of the robots that may move (routers).
+        model: Their robot model (one for all of them).
+    """
+
+    def __init__(self, loop: Loop, movers: np.ndarray, model: RobotModel) -> None:
+        sw, omap = loop.swarm, loop.world.omap
+        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
+                     float(omap.resolution))
+        self.angles = beam_angles(model.sensor_beams)
+        self.sensor_range = float(model.sensor_range)
+        biggest = float(sw.radius.max())
+        self.sense_reach = float(self.sensor_range + biggest)
+        fastest = float(sw.max_speed[movers].max(initial=0.0))
+        self.drive_reach = (2.0 * biggest + 2.0 * fastest * loop.dt) * (1.0 + 1e-9) + 1e-12
+        """Every pair that could touch after this step's longest move is this close (with room for rounding: the
+        kernels' exact reach, from lengths rounded through speeds, is at most this)."""
+        self.collisions = loop.scenario.sim.robot_collisions
+        n = len(sw)
+        self.no_bodies = (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
+
+    def bodies(self, xy: np.ndarray, table: NeighbourTable, sense: bool = True) -> tuple:
+        """``(several, sense CSR, drive with bodies, drive CSR)`` for this step (:func:`body_table`)."""
+        several = len(xy) > 1
+        s_csr = body_table(xy, self.sense_reach, table) if sense and several else self.no_bodies
+        drive_bodies = self.collisions and several
+        d_csr = body_table(xy, self.drive_reach, table) if drive_bodies else self.no_bodies
+        return several, s_csr, drive_bodies, d_csr
+
+
+def _without_faults_or_agents(loop: Loop) -> bool:
+    sc = loop.scenario
+    return not sc.faults and sc.agents.per_base == 0 and not (loop.swarm.role == Role.AGENT).any()
 
 
 class CompiledSpreading:
@@ -58,20 +102,16 @@ class CompiledSpreading:
         c = loop.controller
         assert isinstance(c, SelfSpreading)
         sw = loop.swarm
-        omap = loop.world.omap
         self.loop = loop
         self.controller = c
         n = len(sw)
-        self.model = sw.models[c.router_model]
-        self.angles = beam_angles(self.model.sensor_beams)
-        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
-                     float(omap.resolution))
+        model = sw.models[c.router_model]
+        self.around = _Surroundings(loop, sw.role == Role.ROUTER, model)
         self.deployed_lookup = state_lookup(DEPLOYED_STATES)
         self.want_other = c.several_statuses and c.params.triangular != "off"
         self.local = c.params.triangular == "local"
         self.r_c = float(c.r_c)
         self.turn_sigma = float(c.walker.turn_sigma)
-        self.bodies = loop.scenario.sim.robot_collisions
         self.is_ref = np.zeros(n, dtype=np.bool_)
         self.explorers = np.zeros(n, dtype=np.int64)
         self.new_current = np.zeros(n, dtype=np.int64)
@@ -79,34 +119,23 @@ class CompiledSpreading:
         self.other = np.zeros(n, dtype=np.int64)
         self.movers = np.zeros(n, dtype=np.int64)
         self.walkers = np.zeros(n, dtype=np.int64)
-        self.scans = np.zeros((n, self.model.sensor_beams))
+        self.scans = np.zeros((n, model.sensor_beams))
         self.length = np.zeros(n)
-        self.no_bodies = (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
-        # bodies and speeds stay what they are during a self-spreading run (no robot is added or changed)
-        self.sensor_range = float(self.model.sensor_range)
-        biggest = float(sw.radius.max())
-        self.sense_reach = float(self.sensor_range + biggest)
-        fastest = float(sw.max_speed[sw.role == Role.ROUTER].max(initial=0.0))
-        self.drive_reach = (2.0 * biggest + 2.0 * fastest * loop.dt) * (1.0 + 1e-9) + 1e-12
-        """Every pair that could touch after this step's longest move is this close (with room for rounding: the
-        kernel's exact reach, from lengths rounded through speeds, is at most this)."""
 
     @staticmethod
     def applies(loop: Loop) -> bool:
         """Whether the loop's phases are those this step compiles: self-spreading with its paper rules."""
         c = loop.controller
-        if not isinstance(c, SelfSpreading) or loop.scenario.faults or loop.scenario.agents.per_base > 0:
+        if not isinstance(c, SelfSpreading) or not _without_faults_or_agents(loop):
             return False
         p = c.params
         sw = loop.swarm
-        routers = sw.role == Role.ROUTER
         return (p.walk == "random" and p.stop_rule == "distance" and p.triangle_rule == "geometric"
-                and c.needs_range_readings and not (sw.role == Role.AGENT).any()
-                and bool(np.all(sw.model[routers] == c.router_model)))
+                and c.needs_range_readings and bool(np.all(sw.model[sw.role == Role.ROUTER] == c.router_model)))
 
     def step(self) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
-        loop, c, sw = self.loop, self.controller, self.loop.swarm
+        loop, c, sw, a = self.loop, self.controller, self.loop.swarm, self.around
         table = loop.table
         k, candidates, n_movers, n_walkers = track_explorers(
             sw.state, sw.status, c.current, self.deployed_lookup, self.is_ref, table.indptr, table.indices,
@@ -122,16 +151,12 @@ class CompiledSpreading:
             c.refused[:] = False
             return
         normal, uniform = draw_per_run(c.rng, self.walkers[:n_walkers], turn_draws)
-        several = len(sw.xy) > 1
-        s_csr = body_table(sw.xy, self.sense_reach, table) if several else self.no_bodies
-        drive_bodies = self.bodies and several
-        d_csr = body_table(sw.xy, self.drive_reach, table) if drive_bodies else self.no_bodies
+        several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
         s = c.steering
-        sense_steer_drive(*self.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,
-                          self.movers[:n_movers], normal, uniform, self.turn_sigma, self.angles, self.sensor_range,
-                          *s_csr, several,
-                          s.goal, s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps, s.min_progress,
-                          c.r_eff, loop.dt, drive_bodies, *d_csr, self.scans, self.length)
+        sense_steer_drive(*a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,
+                          self.movers[:n_movers], normal, uniform, self.turn_sigma, a.angles, a.sensor_range,
+                          *s_csr, several, s.goal, s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps,
+                          s.min_progress, c.r_eff, loop.dt, drive_bodies, *d_csr, self.scans, self.length)
 
 
 class CompiledField:
@@ -148,22 +173,12 @@ class CompiledField:
     def __init__(self, loop: Loop) -> None:
         c = loop.controller
         assert isinstance(c, PotentialField)
-        sw, omap = loop.swarm, loop.world.omap
+        sw = loop.swarm
         self.loop, self.controller = loop, c
-        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
-                     float(omap.resolution))
         routers = c.routers
-        self.model = sw.models[int(sw.model[routers[0]])] if len(routers) else sw.models[0]
-        self.angles = beam_angles(self.model.sensor_beams)
-        self.sensor_range = float(self.model.sensor_range)
-        self.scan = np.zeros(self.model.sensor_beams)
-        biggest = float(sw.radius.max())
-        self.sense_reach = float(self.sensor_range + biggest)
-        fastest = float(sw.max_speed[routers].max(initial=0.0))
-        self.drive_reach = (2.0 * biggest + 2.0 * fastest * loop.dt) * (1.0 + 1e-9) + 1e-12
-        self.bodies = loop.scenario.sim.robot_collisions
-        n = len(sw)
-        self.no_bodies = (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
+        model = sw.models[int(sw.model[routers[0]])] if len(routers) else sw.models[0]
+        self.around = _Surroundings(loop, routers, model)
+        self.scan = np.zeros(model.sensor_beams)
         self.movers = np.zeros(len(routers), dtype=np.int64)
         self.speed = np.zeros(len(routers))
         self.refused = np.zeros(len(routers), dtype=np.bool_)
@@ -172,22 +187,17 @@ class CompiledField:
     def applies(loop: Loop) -> bool:
         """Whether the loop runs the potential field, without faults or agents, with one router model."""
         c = loop.controller
-        if not isinstance(c, PotentialField) or loop.scenario.faults or loop.scenario.agents.per_base > 0:
-            return False
-        sw = loop.swarm
-        return not (sw.role == Role.AGENT).any() and len(np.unique(sw.model[c.routers])) <= 1
+        return (isinstance(c, PotentialField) and _without_faults_or_agents(loop)
+                and len(np.unique(loop.swarm.model[c.routers])) <= 1)
 
     def step(self) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
-        loop, c, sw, p = self.loop, self.controller, self.loop.swarm, self.controller.params
+        loop, c, sw, p, a = self.loop, self.controller, self.loop.swarm, self.controller.params, self.around
         table = loop.table
-        several = len(sw.xy) > 1
         sense = bool(c.needs_range_readings)
-        s_csr = body_table(sw.xy, self.sense_reach, table) if sense and several else self.no_bodies
-        drive_bodies = self.bodies and several
-        d_csr = body_table(sw.xy, self.drive_reach, table) if drive_bodies else self.no_bodies
-        field_step(*self.grid, c.routers, sw.state, sw.xy, sw.heading, sw.max_speed, sw.radius, sw.distance,
-                   table.indptr, table.indices, table.dist, sense, self.angles, self.sensor_range, *s_csr,
+        several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table, sense)
+        field_step(*a.grid, c.routers, sw.state, sw.xy, sw.heading, sw.max_speed, sw.radius, sw.distance,
+                   table.indptr, table.indices, table.dist, sense, a.angles, a.sensor_range, *s_csr,
                    several, float(c.k_obstacle), float(c.force_cap), c.obstacle_force, self.scan, c.velocity,
                    c.rest_count, c.window_start, c.force, c.held_force, float(c.k_cover), float(c.k_degree),
                    float(c.q_rc), int(p.connectivity_k), float(p.damping), float(p.mass), float(loop.dt),

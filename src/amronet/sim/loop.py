@@ -112,8 +112,9 @@ class Loop:
         omap: Use this map instead of loading the scenario's (for generated or scaled maps).
         force: Run even what the resource guard (:mod:`amronet.sim.guard`) calls absurdly long: more than
             ``amronet.limits.MAX_STEPS`` steps or ``MAX_ROBOT_STEPS`` robot-steps (``--force`` on the command line).
-        step: ``compiled`` (the default): where the algorithm has one (self-spreading with its paper rules,
-            :mod:`amronet.sim.compiled_step`), sense, decide and move run as two compiled passes; ``reference``:
+        step: ``compiled`` (the default): where the algorithm has one (self-spreading with its paper rules and the
+            potential field, :mod:`amronet.sim.compiled_step`), sense, decide and move run as one or two compiled
+            passes; ``reference``:
             always the phases one by one, through the controller's Python code. Both give the same result bit for
             bit.
 
