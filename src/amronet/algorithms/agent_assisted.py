@@ -42,7 +42,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.drops import DROP_RULES, AgentView, DropContext, validate_drop_params
 from amronet.algorithms.drops.trail import Trails
-from amronet.algorithms.explorers import EXPLORERS, PathFollower
+from amronet.algorithms.explorers import EXPLORERS, Explorer, PathFollower
 from amronet.algorithms.goto import GoalSteering
 from amronet.algorithms.references import best_reference_margin, check_loss_band, track_row
 from amronet.algorithms.relocate import Relocator
@@ -240,6 +240,12 @@ class AgentAssisted(Controller):
         out = self.swarm.in_states((State.TRIANGLE, State.RELOCATING, State.STRIP, State.DROPPED))
         out[self.agents] = self.explorer.active(len(self.agents))
         return out
+
+    @property
+    def settled(self) -> bool:  # noqa: D102
+        if len(self.agents) and type(self.explorer).active is Explorer.active:
+            return False  # agents that explore keep the run going: no need to look at every robot each step
+        return not self.unsettled().any()
 
     # -- growing per-robot state when routers are released --------------------------------------------------
     def _grow(self, n_new: int) -> None:

@@ -296,12 +296,11 @@ def drive(
         return refused, travelled
     heading = np.ascontiguousarray(heading, dtype=float)
     length = np.ascontiguousarray(length, dtype=float)
-    indptr = np.zeros(len(xy) + 1, dtype=np.int64)
-    indices = np.zeros(0, dtype=np.int32)
-    dist = np.zeros(0)
     reach = 2.0 * float(radius.max()) + 2.0 * float(length.max())
     if bodies and len(xy) > 1:
         indptr, indices, dist = body_table(xy, reach, table)
+    else:
+        indptr, indices, dist = np.zeros(len(xy) + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0)
     _drive(omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
            float(omap.resolution), movers, heading, length, xy, radius, bodies, indptr, indices, dist, reach, refused,
            travelled)

@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit
 from numba import uint64 as _u  # unsigned indices: numba then skips its negative-index wraparound code
 
-__all__ = ["neighbour_csr", "pairs_from_csr"]
+__all__ = ["GroupIds", "neighbour_csr", "neighbour_csr_checked", "pairs_from_csr"]
 
 _EPS = 2.0**-52
 _MIN_CELL = 1e-150  # below this r * r is subnormal and loses relative precision; cells never get smaller
@@ -329,16 +329,55 @@ def neighbour_csr(xy: np.ndarray, r: float, groups: np.ndarray | None = None
     xy = np.ascontiguousarray(xy, dtype=np.float64)
     if xy.ndim != 2 or xy.shape[1] != 2:
         raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
-    if xy.shape[0] > _INT32_MAX:
-        raise ValueError(f"at most 2**31 - 1 points, got {xy.shape[0]}")
-    if groups is None:
-        group, n_groups = np.zeros(xy.shape[0], dtype=np.int64), 1
-    else:
-        group = np.ascontiguousarray(groups, dtype=np.int64)
-        if group.shape != (xy.shape[0],) or (len(group) and group.min() < 0):
-            raise ValueError(f"groups must be {xy.shape[0]} integers >= 0, got shape {group.shape}")
-        n_groups = int(group.max()) + 1 if len(group) else 1
-    ok, indptr, indices, dist = _neighbour_csr(xy, r, group, n_groups)
+    return neighbour_csr_checked(xy, r, GroupIds.of(groups, xy.shape[0]))
+
+
+class GroupIds:
+    """Checked group ids of ``n`` points for :func:`neighbour_csr_checked`: ``ids`` int64 ``(n,)``, ``count`` groups.
+
+    A caller that builds a table every step (the radio medium) checks its groups once with :meth:`of` and keeps the
+    result.
+    """
+
+    __slots__ = ("count", "ids", "source")
+
+    def __init__(self, ids: np.ndarray, count: int, source: np.ndarray | None) -> None:
+        self.ids = ids
+        self.count = count
+        self.source = source
+        """The array the ids were checked from (``None``: one group)."""
+
+    @classmethod
+    def of(cls, groups: np.ndarray | None, n: int) -> GroupIds:
+        """Check ``groups`` (``None``: one group) for ``n`` points.
+
+        Raises:
+            ValueError: ``n`` is ``2**31`` or more, or ``groups`` does not give every point an integer id ``>= 0``.
+        """
+        if n > _INT32_MAX:
+            raise ValueError(f"at most 2**31 - 1 points, got {n}")
+        if groups is None:
+            return cls(np.zeros(n, dtype=np.int64), 1, None)
+        ids = np.ascontiguousarray(groups, dtype=np.int64)
+        if ids.shape != (n,) or (n and ids.min() < 0):
+            raise ValueError(f"groups must be {n} integers >= 0, got shape {ids.shape}")
+        return cls(ids, int(ids.max()) + 1 if n else 1, groups)
+
+
+def neighbour_csr_checked(xy: np.ndarray, r: float, groups: GroupIds) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`neighbour_csr` for inputs checked beforehand, without its per-call checks.
+
+    For a few dozen points the checks cost more than the search (the radio medium builds a table every step).
+
+    Args:
+        xy: Positions, float64 C-contiguous ``(N, 2)``.
+        r: Link radius, a positive finite float.
+        groups: The points' checked group ids (:meth:`GroupIds.of` for these ``N`` points).
+
+    Raises:
+        ValueError: ``xy`` has non-finite coordinates.
+    """
+    ok, indptr, indices, dist = _neighbour_csr(xy, r, groups.ids, groups.count)
     if not ok:
         raise ValueError("xy has non-finite coordinates")
     return indptr, indices, dist

@@ -33,7 +33,7 @@ from numba import njit
 
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.hearing import Hearing, best_margin_grid, cell_field, heard_box, heard_cells, link_margin
-from amronet.engine.neighbours import neighbour_csr
+from amronet.engine.neighbours import GroupIds, neighbour_csr_checked
 from amronet.engine.propagation import LinkBudget, delivery_ratio
 from amronet.engine.shadowing import ShadowingField, _cell_value
 from amronet.engine.table import NeighbourTable
@@ -192,6 +192,8 @@ class RadioMedium:
         self._loss_rng = children[1] if packet_loss and children is not None else None
         if packet_loss and self._loss_rng is None:
             raise ValueError("packet loss needs the run's generator")
+        self._groups: GroupIds | None = None
+        """The group ids last checked (:meth:`_group_ids`)."""
         self._grids: dict[tuple, tuple] = {}
         self._boxes: dict[int, tuple] = {}
         """Per coverage area, the node positions met lately: ``[cells heard or None, first call, last call]``. A
@@ -229,8 +231,10 @@ class RadioMedium:
         table (:attr:`NeighbourTable.geometric`) that body sensors and collisions read.
         """
         xy = np.array(xy, dtype=float)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
         b = self.budget
-        indptr, indices, dist = neighbour_csr(xy, self.reach, groups)
+        indptr, indices, dist = neighbour_csr_checked(xy, self.reach, self._group_ids(groups, len(xy)))
         margin = self.margins(xy, indptr, indices, dist)
         candidates = None
         keep = None if margin is None else margin >= 0.0
@@ -251,9 +255,16 @@ class RadioMedium:
             full = b.margin_db(dist) if margin is None else margin
             indptr, indices, dist, kept = _keep(indptr, indices, dist, full, keep)
             margin = None if margin is None else kept
-        return NeighbourTable(xy=xy, r=self.reach, indptr=indptr, indices=indices, dist=dist, groups=groups,
-                              threshold_dbm=b.threshold_dbm, link_margin=margin, exponent=b.exponent,
-                              candidates=candidates)
+        # by position, in the order of the fields (keywords cost more than the rest of a small table's update)
+        return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm, margin, b.exponent,
+                              candidates)
+
+    def _group_ids(self, groups: np.ndarray | None, n: int) -> GroupIds:
+        """``groups`` checked for ``n`` points; kept while the same array (a loop's, for all its steps) comes back."""
+        known = self._groups
+        if known is None or known.source is not groups or len(known.ids) != n:
+            known = self._groups = GroupIds.of(groups, n)
+        return known
 
     def _losses(self, indptr: np.ndarray, indices: np.ndarray, margin: np.ndarray) -> np.ndarray:
         """Which entries drop out this step: one draw per link (pair), shared by its two entries."""

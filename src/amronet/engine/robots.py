@@ -13,6 +13,7 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 __all__ = [
     "AMIGOBOT",
@@ -122,6 +123,15 @@ def state_lookup(states: tuple[int, ...]) -> np.ndarray:
     table[list(states)] = True
     table.flags.writeable = False
     return table
+
+
+@njit(cache=True)
+def _relaying(role, state, silent, agent):  # pragma: no cover - numba
+    """``role != agent and not silent[state]`` robot by robot (one call instead of four array operations)."""
+    out = np.empty(role.shape[0], dtype=np.bool_)
+    for i in range(role.shape[0]):
+        out[i] = role[i] != agent and not silent[state[i]]
+    return out
 
 
 @dataclass
@@ -249,7 +259,7 @@ class Swarm:
 
         A router an agent has just put down relays once it has settled (``agents.drop_settle_s``).
         """
-        return (self.role != Role.AGENT) & ~state_lookup((State.DROPPED, State.FAILED))[self.state]
+        return _relaying(self.role, self.state, state_lookup((State.DROPPED, State.FAILED)), Role.AGENT)
 
     @property
     def deployed(self) -> np.ndarray:

@@ -76,10 +76,13 @@ def sense(controller: Controller, sw: Swarm, omap: OccupancyMap, table: Neighbou
     """The sense phase: the range rings of every moving robot (none when the controller reads none)."""
     if not controller.needs_range_readings:
         return Readings({})
-    mobile = sw.in_states(MOBILE_STATES)
+    mobile = np.flatnonzero(sw.in_states(MOBILE_STATES))
     groups = {}
+    if len(mobile) == 0:
+        return Readings(groups)
+    kinds = sw.model[mobile]
     for m, model in enumerate(sw.models):
-        who = np.flatnonzero(mobile & (sw.model == m))
+        who = mobile[kinds == m]
         if len(who):
             scans = range_scan(omap, sw.xy, sw.heading, who, model.sensor_beams, model.sensor_range,
                                radius=sw.radius, table=table)
@@ -260,9 +263,9 @@ class Loop:
 
     def _settled_runs(self) -> np.ndarray:
         """Per run: no robot of it will move again."""
-        unsettled = self.controller.unsettled()
         if self.groups is None:
-            return np.array([not unsettled.any()])
+            return np.array([self.controller.settled])
+        unsettled = self.controller.unsettled()
         return np.bincount(self.groups[unsettled], minlength=len(self.runs)) == 0
 
     # -- the runs --------------------------------------------------------------------------------------------

@@ -253,7 +253,9 @@ class Run:
         """Which agents have a multi-hop path to a base station through the AMRoNet right now, boolean ``(A,)``."""
         if len(self.agents) == 0:
             return np.zeros(0, dtype=bool)
-        return agents_connected(self.table, self.agents, self.live_bases, self.relay_mask)
+        # every base node is given: a failed one does not relay (relay_mask), so no path starts from it, the same
+        # answer as from live_bases without picking them out every step
+        return agents_connected(self.table, self.agents, self.bases, self.relay_mask)
 
     @staticmethod
     def _fraction(linked: np.ndarray) -> float:
