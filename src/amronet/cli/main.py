@@ -31,7 +31,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_output_folder(args.out)
     overrides = dict(parse_override(item) for item in args.set or [])
     scenario = load_scenario(args.scenario if args.scenario is not None else args.preset, overrides)
-    sim = Simulation(scenario, args.seed, force=args.force)
+    sim = Simulation(scenario, args.seed, force=args.force, step=args.step)
     quiet = args.quiet
     from amronet.cli.viz import make_recorder
 
@@ -104,7 +104,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from amronet.sim.bench import run_bench
 
     report = run_bench(algorithm=args.algorithm, robots=args.robots, steps=args.steps, map_name=args.map,
-                       seed=args.seed, r_c=args.rc, force=args.force)
+                       seed=args.seed, r_c=args.rc, force=args.force, step=args.step)
     if args.json:
         print(json.dumps(report, indent=2))
     else:
@@ -182,6 +182,10 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     r.add_argument("--force", action="store_true", help="run even when the resource guard finds it absurdly long "
                                                         "(more than 10^7 steps or 10^9 robot-steps)")
+    r.add_argument("--step", choices=("compiled", "reference"), default="compiled",
+                   help="compiled (default): sense, decide and move in compiled passes where the algorithm has them; "
+                        "reference: phase by phase through the controllers' Python (the same result bit for bit, "
+                        "slower)")
     r.set_defaults(func=_cmd_run)
 
     m = sub.add_parser("maps", help="built-in maps")
@@ -252,6 +256,8 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--rc", type=float, default=1.0, help="communication radius (default 1 m)")
     b.add_argument("--seed", type=int, default=0)
     b.add_argument("--json", action="store_true", help="print the report as JSON")
+    b.add_argument("--step", choices=("compiled", "reference"), default="compiled",
+                   help="time the compiled step (default) or the phase-by-phase reference (see amronet run --step)")
     b.add_argument("--force", action="store_true", help="run even when the resource guard finds it absurdly long "
                                                         "(more than 10^9 robot-steps)")
     b.set_defaults(func=_cmd_bench)

@@ -24,7 +24,7 @@ from amronet import __version__, limits
 from amronet.engine.robots import Role
 from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
-from amronet.sim.loop import Simulation
+from amronet.sim.loop import Simulation, StepKind
 from amronet.world.builtin import resolve_map
 from amronet.world.space import clearance
 
@@ -53,12 +53,14 @@ def run_bench(
     r_c: float = 1.0,
     area_per_robot: float = 0.25,
     force: bool = False,
+    step: StepKind = "compiled",
 ) -> dict[str, Any]:
     """Time ``steps`` full steps of ``robots`` robots and return a report (robot-steps per second and more).
 
     Before the map is scaled or a robot placed, the resource guard (:mod:`amronet.limits`) estimates the memory
     (``BYTES_PER_ROBOT`` per robot, ``BYTES_PER_LINK`` per link at the density the benchmark sets up) and the work
-    (robots times steps, the warm-up step included).
+    (robots times steps, the warm-up step included). ``step`` picks the loop's step (``compiled`` or the
+    phase-by-phase ``reference``, see :class:`~amronet.sim.loop.Loop`): both give the same robots bit for bit.
 
     Raises:
         AmronetError: ``robots`` or ``steps`` below 1, ``r_c`` not a finite number > 0, more robots than the
@@ -98,7 +100,8 @@ def run_bench(
         "sim": {"time_limit": 1e9, "stop_when_settled": False},
     })
     t0 = time.perf_counter()
-    sim = Simulation(scenario, seed, omap=omap, force=True)  # the work is checked above; time_limit is a sentinel
+    # the work is checked above; time_limit is a sentinel
+    sim = Simulation(scenario, seed, omap=omap, force=True, step=step)
     setup_s = time.perf_counter() - t0
     sim.step()  # warm-up (numba compilation from cache, first allocations)
     for k in sim.phase_seconds:
@@ -113,6 +116,7 @@ def run_bench(
     metrics_s = time.perf_counter() - t1
     return {
         "algorithm": algorithm,
+        "step": step,
         "map": map_name,
         "map_scale": round(scale, 3),
         "robots": n,
