@@ -3,10 +3,12 @@
 import numpy as np
 import pytest
 
+from amronet.algorithms.agent_assisted import AgentAssisted
 from amronet.algorithms.self_spreading import SelfSpreading
 from amronet.engine.robots import State
 from amronet.scenario import load_scenario
 from amronet.sim import BatchSimulation, Simulation
+from amronet.sim.compiled_agents import CompiledAgents
 from amronet.sim.compiled_step import CompiledField, CompiledSpreading
 
 CASES = {
@@ -32,6 +34,22 @@ CASES = {
                                                 {"sim.time_limit": 40, "algorithm.params.obstacle_forces": False}),
     "potential field on autolab": ("potential-field-6x6", 6, {"sim.time_limit": 40, "map": "autolab",
                                                             "base_stations": [{"x": 3.0, "y": 3.0}]}),
+    "agents, paper's random explorer": ("agent-assisted-office", 1, {"sim.time_limit": 150}),
+    "agents, frontier explorer": ("agent-assisted-office", 2, {"sim.time_limit": 200, "radio.r_c": 4.0,
+                                                               "algorithm.params.explorer": "frontier"}),
+    "agents, four bases, triangles": ("agent-assisted-office-4bs", 3, {"sim.time_limit": 120, "agents.per_base": 1,
+                                                                      "algorithm.params.explorer": "frontier"}),
+    "agents, four bases, global rule": ("agent-assisted-office-4bs", 4,
+                                        {"sim.time_limit": 120, "agents.per_base": 1,
+                                         "algorithm.params.explorer": "frontier",
+                                         "algorithm.params.triangular": "global"}),
+    "agents, wall-follow on depot": ("agent-assisted-office", 5, {
+        "sim.time_limit": 150, "map": "depot", "radio.r_c": 3.0, "algorithm.params.explorer": "wall-follow",
+        "base_stations": [{"x": 1.0, "y": 1.0}, {"x": 20.0, "y": 8.0}]}),
+    "agents, random-escape, multi-wall radio": ("agent-assisted-office", 6, {
+        "sim.time_limit": 150, "radio.model": "multi-wall", "algorithm.params.explorer": "random-escape"}),
+    "agents, no body collisions": ("agent-assisted-office", 7, {"sim.time_limit": 150, "sim.robot_collisions": False,
+                                                                "algorithm.params.explorer": "frontier"}),
 }
 
 
@@ -49,9 +67,14 @@ def test_the_compiled_step_gives_the_reference_run_bit_for_bit(name):
     a, b = compiled.run(), reference.run()
     for x, y in zip(_state(compiled), _state(reference), strict=True):
         np.testing.assert_array_equal(x, y)
-    for name in ("current", "disabled", "velocity", "rest_count", "held_force", "wakeups"):
+    for name in ("current", "disabled", "velocity", "rest_count", "held_force", "wakeups", "left", "refused",
+                 "released_by"):
         if hasattr(reference.controller, name):
             np.testing.assert_array_equal(getattr(compiled.controller, name), getattr(reference.controller, name))
+    grid = getattr(getattr(reference.controller, "explorer", None), "grid", None)
+    if grid is not None:  # the frontier explorer's knowledge
+        np.testing.assert_array_equal(compiled.controller.explorer.grid.score, grid.score)
+        np.testing.assert_array_equal(compiled.controller.explorer.visited, reference.controller.explorer.visited)
     assert compiled.rows == reference.rows and a.network == b.network
     assert {k: v for k, v in a.summary.items() if k != "wall_time_s"} == \
         {k: v for k, v in b.summary.items() if k != "wall_time_s"}
@@ -73,6 +96,33 @@ def test_it_steps_through_triangular_deployments_by_the_controllers_rules(monkey
     in_compiled = len(calls)
     reference.run()
     assert 0 < in_compiled < compiled.steps  # only the steps in which a triangle may start
+    assert np.count_nonzero(compiled.swarm.state == State.TRIANGLE_SETTLED) > 0
+    np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
+    np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
+
+
+def test_agents_that_act_and_routers_that_drive_go_through_the_controllers_rules(monkeypatch):
+    """Steps in which an agent acts go through ``decide_tracked``; while a triangle router drives, whole steps go
+    through ``decide`` (the phases); the other steps through neither, and the runs still agree."""
+    calls = {"decide": 0, "decide_tracked": 0}
+    for name in calls:
+        original = getattr(AgentAssisted, name)
+
+        def counting(self, *args, _name=name, _original=original):
+            calls[_name] += 1
+            return _original(self, *args)
+
+        monkeypatch.setattr(AgentAssisted, name, counting)
+    sc = load_scenario("agent-assisted-office-4bs", {"sim.time_limit": 120, "agents.per_base": 1,
+                                                     "algorithm.params.explorer": "frontier"})
+    compiled, reference = Simulation(sc, 3), Simulation(sc, 3, step="reference")
+    assert isinstance(compiled.compiled, CompiledAgents)
+    compiled.run()
+    in_compiled = dict(calls)
+    reference.run()
+    assert reference.steps == calls["decide"] - in_compiled["decide"]  # the reference decides every step
+    assert 0 < in_compiled["decide"] < compiled.steps  # the phases: while triangle routers drive
+    assert 0 < in_compiled["decide_tracked"] - in_compiled["decide"] < compiled.steps  # agents acting
     assert np.count_nonzero(compiled.swarm.state == State.TRIANGLE_SETTLED) > 0
     np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
     np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
@@ -112,7 +162,19 @@ def test_each_algorithm_gets_its_compiled_step_or_none():
     kinds = {preset: type(Simulation(load_scenario(preset, {"sim.time_limit": 5}), 1).compiled)
              for preset in ("self-spreading-6x6", "potential-field-6x6", "dssa-6x6", "agent-assisted-office")}
     assert kinds == {"self-spreading-6x6": CompiledSpreading, "potential-field-6x6": CompiledField,
-                     "dssa-6x6": type(None), "agent-assisted-office": type(None)}
+                     "dssa-6x6": type(None), "agent-assisted-office": CompiledAgents}
+
+
+@pytest.mark.parametrize("overrides", [
+    {"algorithm.params.drop_rule": "radius"},
+    {"agents.when_empty": "continue", "agents.routers_carried": 3},
+    {"agents.drop_settle_s": 2.0},
+    {"algorithm.params.repair": "relocate"},
+    {"faults": [{"at": 5.0, "routers": 0.5}]},
+])
+def test_agent_runs_it_does_not_compile_take_the_reference_path(overrides):
+    sim = Simulation(load_scenario("agent-assisted-office", {"sim.time_limit": 5, **overrides}), 1)
+    assert sim.compiled is None and "sense" in sim.phase_seconds
 
 
 def test_an_unknown_step_kind_is_refused():

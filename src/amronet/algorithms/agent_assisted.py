@@ -101,7 +101,7 @@ class AgentAssistedParams(BaseModel):
 
 
 @njit(cache=True)
-def _track_agents(agents, current, is_reference, status, indptr, indices, dist, want_other, left, r_eff,
+def track_agents(agents, current, is_reference, status, indptr, indices, dist, want_other, left, r_eff,
                   nearest_d, other):  # pragma: no cover - numba
     """Track the agents' references in place and count who must act this step.
 
@@ -282,16 +282,31 @@ class AgentAssisted(Controller):
     # -- the step -------------------------------------------------------------------------------------------
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm
-        agents = self.agents
         if self.settle_at:
             self._settle_dropped(step.t)
         n_before = len(sw)
         is_ref, _ = self._deployed_nodes()
         table = step.table
-        triangular = self.params.triangular != "off"
-        n_cand, n_losing = _track_agents(agents, self.current, is_ref, sw.status, table.indptr, table.indices,
-                                         table.dist, self.several_statuses and triangular, self.left, self.r_eff,
-                                         self._nearest_d, self._other)
+        n_cand, n_losing = track_agents(self.agents, self.current, is_ref, sw.status, table.indptr, table.indices,
+                                         table.dist, self.wants_other, self.left, self.r_eff, self._nearest_d,
+                                         self._other)
+        return self.decide_tracked(step, n_before, n_cand, n_losing)
+
+    @property
+    def wants_other(self) -> bool:
+        """Whether the reference tracking looks for a reference of another status (a triangle may start)."""
+        return self.several_statuses and self.params.triangular != "off"
+
+    def decide_tracked(self, step: StepInput, n_before: int, n_cand: int, n_losing: int) -> Command:
+        """The rest of :meth:`decide` once the agents' references are tracked (:func:`track_agents`'s counts).
+
+        ``n_before``: how many robots there were when the step began. A compiled step that tracks the agents in a
+        pass of its own (:mod:`amronet.sim.compiled_agents`) hands the steps in which an agent must act over here.
+        """
+        sw = self.swarm
+        agents = self.agents
+        is_ref, _ = self._deployed_nodes()
+        table = step.table
         # the rare steps in which an agent must release a router (or turn back) take the general path below
         current = self.current[agents] if n_cand or n_losing else None
 

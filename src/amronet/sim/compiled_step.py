@@ -39,6 +39,7 @@ from amronet.engine.robots import DEPLOYED_STATES, RobotModel, Role, state_looku
 from amronet.engine.sensing import beam_angles, body_table
 from amronet.engine.streams import draw_per_run
 from amronet.engine.table import NeighbourTable
+from amronet.sim.compiled_agents import CompiledAgents
 from amronet.sim.step_kernels import field_step, list_movers, sense_steer_drive, track_explorers
 from amronet.world.space import clearance
 
@@ -205,10 +206,10 @@ class CompiledField:
                    self.speed, self.refused)
 
 
-CompiledStep = CompiledSpreading | CompiledField
+CompiledStep = CompiledSpreading | CompiledField | CompiledAgents
 """A loop's compiled sense-decide-move."""
 
-COMPILED_STEPS = (CompiledSpreading, CompiledField)
+COMPILED_STEPS = (CompiledSpreading, CompiledField, CompiledAgents)
 """The compiled steps, each for the algorithm and rules its :meth:`applies` names."""
 
 

@@ -37,11 +37,10 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, Readings, RouterStock, Setup, StepInput
-from amronet.engine.motion import drive, path_clear
+from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, RouterStock, Setup, StepInput
+from amronet.engine.motion import path_clear
 from amronet.engine.radio import NeighbourTable
-from amronet.engine.robots import MOBILE_STATES, Role, State, Swarm
-from amronet.engine.sensing import range_scan
+from amronet.engine.robots import Role, State, Swarm
 from amronet.engine.streams import RunStreams
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario
@@ -57,6 +56,7 @@ from amronet.sim.assemble import (
 )
 from amronet.sim.compiled_step import CompiledStep, compiled_step_for
 from amronet.sim.guard import check_scenario, check_world
+from amronet.sim.phases import move, sense
 from amronet.sim.results import RunResult
 from amronet.sim.run import Metrics, Run
 from amronet.world.occupancy import OccupancyMap
@@ -70,34 +70,6 @@ __all__ = ["Loop", "Metrics", "Simulation", "StepKind", "move", "sense"]
 StepKind = Literal["compiled", "reference"]
 """How a loop steps: ``compiled`` where the algorithm has a compiled step, else (and always with ``reference``) phase
 by phase."""
-
-
-def sense(controller: Controller, sw: Swarm, omap: OccupancyMap, table: NeighbourTable) -> Readings:
-    """The sense phase: the range rings of every moving robot (none when the controller reads none)."""
-    if not controller.needs_range_readings:
-        return Readings({})
-    mobile = np.flatnonzero(sw.in_states(MOBILE_STATES))
-    groups = {}
-    if len(mobile) == 0:
-        return Readings(groups)
-    kinds = sw.model[mobile]
-    for m, model in enumerate(sw.models):
-        who = mobile[kinds == m]
-        if len(who):
-            scans = range_scan(omap, sw.xy, sw.heading, who, model.sensor_beams, model.sensor_range,
-                               radius=sw.radius, table=table)
-            groups[m] = (who, scans)
-    return Readings(groups)
-
-
-def move(controller: Controller, command: Command, sw: Swarm, omap: OccupancyMap, table: NeighbourTable,
-         dt: float, bodies: bool) -> None:
-    """The move phase: drive the movers, add up distances and tell the controller which moves were refused."""
-    movers = command.movers
-    refused, travelled = drive(omap, sw.xy, movers, sw.heading[movers], command.speed * dt, sw.radius,
-                               bodies=bodies, table=table)
-    sw.distance[movers] += travelled
-    controller.after_move(movers, refused)
 
 
 def _check_seed(seed: object) -> int:
@@ -217,6 +189,8 @@ class Loop:
             self.steps += 1
             self.phase_seconds["sense+decide+move"] += t3 - t0
             self.phase_seconds["radio"] += clock() - t3
+            for run in self._with_agents:
+                run.observe_agents()
             return
         if self._faulty is not None:
             self._fail_nodes(self._faulty)

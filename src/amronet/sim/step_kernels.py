@@ -13,6 +13,8 @@ import math
 import numpy as np
 from numba import njit
 
+from amronet.algorithms.agent_assisted import track_agents
+from amronet.algorithms.explorers.frontier.knowledge import FREE_FLOOR, HIT_GAIN, OCCUPIED_CAP, integrate_readings
 from amronet.algorithms.forces import inverse_square_one
 from amronet.algorithms.goto import steer_one
 from amronet.algorithms.potential_field import come_to_rest, wake_and_accelerate
@@ -21,7 +23,7 @@ from amronet.engine.motion import drive_one, walk_one
 from amronet.engine.robots import State
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
-__all__ = ["field_step", "list_movers", "sense_steer_drive", "track_explorers"]
+__all__ = ["drive_movers", "field_step", "list_movers", "sense_steer_drive", "sense_track_agents", "track_explorers"]
 
 _EXPLORE = State.EXPLORE
 _REFERENCE = State.REFERENCE
@@ -183,3 +185,62 @@ def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_spe
         distance[i] += travelled
     come_to_rest(movers[:n], refused[:n], state, xy, max_speed, velocity, rest_count, window_start, force,
                  held_force, rest_steps, dt, rest_fraction, damping, _REFERENCE)
+
+
+@njit(cache=True)
+def sense_track_agents(blocked, clear, ox, oy, res, xy, heading, radius, agents, angles, sensor_range, s_indptr,
+                       s_indices, s_dist, sense_bodies, scans, current, is_ref, status, indptr, indices, dist,
+                       want_other, left, r_eff, nearest, other, integrate, score, seen, g_ox, g_oy, g_res, nodes,
+                       robot_r, buf_r, buf_c, row_stamp, stamp):  # pragma: no cover - numba
+    """The agents' rings, their reference tracking and, when none of them must act, their rings in the shared grid.
+
+    What the sense phase (:func:`~amronet.engine.sensing.range_scan`), the start of
+    :meth:`~amronet.algorithms.agent_assisted.AgentAssisted.decide` (:func:`track_agents`) and (with ``integrate``)
+    the frontier explorer's :meth:`~amronet.algorithms.explorers.frontier.knowledge.KnowledgeGrid.integrate` do for
+    the agents, with the same functions on the same numbers.
+
+    Returns:
+        ``(triangle candidates, losing)`` as :func:`track_agents` counts them; the grid is left alone unless both
+        are 0.
+    """
+    big = radius.max()
+    n = agents.shape[0]
+    for m in range(n):
+        i = agents[m]
+        cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, scans[m])
+    if sense_bodies:
+        for m in range(n):
+            i = agents[m]
+            cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big,
+                            scans[m])
+    n_cand, n_losing = track_agents(agents, current, is_ref, status, indptr, indices, dist, want_other, left, r_eff,
+                                    nearest, other)
+    if n_cand or n_losing or not integrate:
+        return n_cand, n_losing
+    pos = np.empty((n, 2))
+    facing = np.empty(n)
+    for m in range(n):
+        i = agents[m]
+        pos[m, 0] = xy[i, 0]
+        pos[m, 1] = xy[i, 1]
+        facing[m] = heading[i]
+    integrate_readings(score, seen, g_ox, g_oy, g_res, pos, facing, scans, angles, sensor_range, nodes, robot_r,
+                       HIT_GAIN, OCCUPIED_CAP, FREE_FLOOR, buf_r, buf_c, row_stamp, stamp)
+    return 0, 0
+
+
+@njit(cache=True)
+def drive_movers(blocked, clear, ox, oy, res, movers, length, xy, heading, radius, bodies, indptr, indices, dist,
+                 near, distance, refused):  # pragma: no cover - numba
+    """The move phase of :func:`amronet.sim.phases.move` for ``movers`` (each by ``length[m]``), one after another.
+
+    ``refused`` ``(N,)`` is set for every robot: the movers' refusals, ``False`` for the rest (what the agent
+    controller's ``after_move`` keeps).
+    """
+    refused[:] = False
+    for m in range(movers.shape[0]):
+        i = movers[m]
+        r, travelled = drive_one(blocked, clear, ox, oy, res, i, heading[i], length[m], xy, radius, bodies, indptr,
+                                 indices, dist, near)
+        refused[i] = r
+        distance[i] += travelled

@@ -106,14 +106,23 @@ class FrontierExplorer(Explorer):
     def steer(self, heading: np.ndarray, who: np.ndarray, scans: np.ndarray, sensor_range: float,  # noqa: D102
               refused: np.ndarray, rng: np.random.Generator, xy: np.ndarray, deployed_xy: np.ndarray) -> None:
         who = np.asarray(who, dtype=np.int64)
-        m = len(who)
-        if m == 0:
+        if len(who) == 0:
             return
+        self.grid.integrate(xy[who], heading[who], scans, sensor_range, deployed_xy, self.robot_radius)
+        self.plan_and_steer(heading, who, scans, sensor_range, refused, rng, xy, deployed_xy)
+
+    def plan_and_steer(self, heading: np.ndarray, who: np.ndarray, scans: np.ndarray, sensor_range: float,
+                       refused: np.ndarray, rng: np.random.Generator, xy: np.ndarray, deployed_xy: np.ndarray) -> None:
+        """What :meth:`steer` does once the readings are in the grid: replan and set the agents' headings.
+
+        For a caller that integrates the readings itself, in a compiled pass of its own
+        (:mod:`amronet.sim.compiled_agents`); the arguments are :meth:`steer`'s, ``who`` int64 and not empty.
+        """
+        m = len(who)
         if m != len(self.plans.goal):
             self.plans = AgentPlans.start(m, self.grid.shape[0] * self.grid.shape[1])
         grid = self.grid
         res = grid.resolution
-        grid.integrate(xy[who], heading[who], scans, sensor_range, deployed_xy, self.robot_radius)
         key = (len(deployed_xy), float(deployed_xy.sum()))
         refresh = key != self._nodes_key
         if refresh:

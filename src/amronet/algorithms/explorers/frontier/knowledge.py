@@ -22,6 +22,7 @@ __all__ = [
     "OCCUPIED_CAP",
     "KnowledgeGrid",
     "clearance_offsets",
+    "integrate_readings",
     "is_free",
     "paint_covered",
     "paint_nodes",
@@ -88,8 +89,8 @@ def _near_any(x, y, pts, skip, rr2):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _integrate(score, seen, ox, oy, res, pos, heading, scans, angles, max_range, nodes, robot_r,
-               hit_gain, cap, floor, buf_r, buf_c, row_stamp, stamp):  # pragma: no cover - numba
+def integrate_readings(score, seen, ox, oy, res, pos, heading, scans, angles, max_range, nodes, robot_r,
+                       hit_gain, cap, floor, buf_r, buf_c, row_stamp, stamp):  # pragma: no cover - numba
     """Add the evidence of every beam of every sensing robot (row ``a`` of ``pos`` and ``heading``) to the grid.
 
     A reading that ends within ``robot_r`` of another sensing robot or of one of ``nodes`` marks no obstacle (a
@@ -324,10 +325,10 @@ class KnowledgeGrid:
             return
         nodes = _NO_NODES if robots_xy is None else np.ascontiguousarray(robots_xy, dtype=float).reshape(-1, 2)
         buf_r, buf_c = self.buffers(sensor_range)
-        _integrate(self.score, self.seen, self.origin[0], self.origin[1], self.resolution, xy,
-                   np.ascontiguousarray(heading, dtype=float), np.ascontiguousarray(scans, dtype=float),
-                   beam_angles(scans.shape[1]), float(sensor_range), nodes, float(robot_radius), HIT_GAIN,
-                   OCCUPIED_CAP, FREE_FLOOR, buf_r, buf_c, self.row_stamp, self.stamp + 1)
+        integrate_readings(self.score, self.seen, self.origin[0], self.origin[1], self.resolution, xy,
+                           np.ascontiguousarray(heading, dtype=float), np.ascontiguousarray(scans, dtype=float),
+                           beam_angles(scans.shape[1]), float(sensor_range), nodes, float(robot_radius), HIT_GAIN,
+                           OCCUPIED_CAP, FREE_FLOOR, buf_r, buf_c, self.row_stamp, self.stamp + 1)
         self.stamp += 1
 
 
