@@ -102,7 +102,7 @@ def test_cached_deployed_nodes_follow_releases_and_settling():
     sim = Simulation(agent_scenario(), seed=5)
     for _ in range(400):
         sim.step()
-        deployed, deployed_xy = sim.controller._deployed_nodes()
+        deployed, deployed_xy = sim.controller.deployed_nodes()
         sw = sim.swarm
         assert np.array_equal(deployed, sw.deployed) and np.array_equal(deployed_xy, sw.xy[sw.deployed])
     assert sim.controller.released >= 1

@@ -265,3 +265,15 @@ def test_routers_released_along_a_path_in_the_office_stay_linked_to_the_base_sta
     assert follower.missed.sum() == 0
     assert np.hypot(*(sim.swarm.xy[sim.agents[0]] - waypoints[-1][1:])) <= follower.tolerance[0]
     json.dumps(sim.controller.mission_report())  # plain data for summary.json
+
+
+def test_a_replayed_mission_is_the_same_with_the_compiled_step_and_the_reference(tmp_path):
+    """Agents on paths (and one exploring at random) step the same through the compiled agent step and the phases."""
+    csv_text = "t,agent,x,y\n0,1,2,2\n60,1,20,2\n120,1,20,20\n180,1,5,25\n"
+    sc = with_paths(tmp_path, csv_text, **{"agents.per_base": 2, "sim.time_limit": 220.0})
+    compiled, reference = Simulation(sc, 4), Simulation(sc, 4, step="reference")
+    assert compiled.compiled is not None and reference.compiled is None
+    a, b = compiled.run(), reference.run()
+    np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
+    np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
+    assert a.network == b.network and compiled.rows == reference.rows

@@ -102,7 +102,7 @@ class AgentAssistedParams(BaseModel):
 
 @njit(cache=True)
 def track_agents(agents, current, is_reference, status, indptr, indices, dist, want_other, left, r_eff,
-                  nearest_d, other):  # pragma: no cover - numba
+                 nearest_d, other):  # pragma: no cover - numba
     """Track the agents' references in place and count who must act this step.
 
     For every agent ``agents[m]``: its current reference ``current[agents[m]]`` is updated
@@ -191,8 +191,10 @@ class AgentAssisted(Controller):
             self.explorer = PathFollower(setup.paths, self.explorer, self.dt, self.agent_speed, sw.radius[self.agents])
         self.moving_triangles = 0
         """Released triangle routers that have not reached their goal yet."""
-        self._nearest_d = np.empty(len(self.agents))
-        self._other = np.empty(len(self.agents), dtype=np.int64)
+        self.nearest_d = np.empty(len(self.agents))
+        """Per agent, the distance to its nearest reference in range, as the last tracking found it."""
+        self.other_ref = np.empty(len(self.agents), dtype=np.int64)
+        """Per agent, its nearest reference of another status (-1: none), as the last tracking found it."""
         self._deployed: np.ndarray | None = None
         self._deployed_xy: np.ndarray | None = None
         self.triangles_released: list[tuple[int, int, int]] = []
@@ -219,11 +221,11 @@ class AgentAssisted(Controller):
         self.reverse_drops = 0
         self.trails = (Trails(sw.xy[self.agents], spacing=0.125 * self.r_c) if self.reverse_after_s is not None
                        else None)
-        self._general = (self.params.drop_rule != "last-reference" or self.settle_s > 0 or not self.tether
-                         or self.reverse_after_s is not None)
+        self.general_path = (self.params.drop_rule != "last-reference" or self.settle_s > 0 or not self.tether
+                             or self.reverse_after_s is not None)
+        """Whether every step takes the general drop path (the paper's rule alone acts only on "about to lose")."""
         self.relocator = (Relocator(n, self.params.repair_confirm_s, self.params.give_up_steps)
                           if self.params.repair == "relocate" else None)
-        """Whether every step takes the general drop path (the paper's rule alone acts only on "about to lose")."""
         self.strips = (StripDrivers(self.drop_rule, sw, self.steering, self.bases, self._nodes_changed)
                        if self.drop_rule.drives_to_goal else None)
         """strip-goals: the routers that drive on to a goal point after they are put down."""
@@ -263,7 +265,7 @@ class AgentAssisted(Controller):
             self.relocator.grow(n_new)
 
     # -- the deployed nodes (they change only when this controller releases a router or one settles) ---------
-    def _deployed_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+    def deployed_nodes(self) -> tuple[np.ndarray, np.ndarray]:
         """Mask of the deployed nodes (base nodes and deployed routers) and their positions, cached.
 
         Deployed nodes never move, and only this controller changes robots' states (releasing a router, a
@@ -285,11 +287,11 @@ class AgentAssisted(Controller):
         if self.settle_at:
             self._settle_dropped(step.t)
         n_before = len(sw)
-        is_ref, _ = self._deployed_nodes()
+        is_ref, _ = self.deployed_nodes()
         table = step.table
         n_cand, n_losing = track_agents(self.agents, self.current, is_ref, sw.status, table.indptr, table.indices,
-                                         table.dist, self.wants_other, self.left, self.r_eff, self._nearest_d,
-                                         self._other)
+                                        table.dist, self.wants_other, self.left, self.r_eff, self.nearest_d,
+                                        self.other_ref)
         return self.decide_tracked(step, n_before, n_cand, n_losing)
 
     @property
@@ -305,14 +307,14 @@ class AgentAssisted(Controller):
         """
         sw = self.swarm
         agents = self.agents
-        is_ref, _ = self._deployed_nodes()
+        is_ref, _ = self.deployed_nodes()
         table = step.table
         # the rare steps in which an agent must release a router (or turn back) take the general path below
         current = self.current[agents] if n_cand or n_losing else None
 
         if n_cand:
             assert current is not None
-            other = self._other
+            other = self.other_ref
             cand = np.flatnonzero((other >= 0) & (self.left[agents] >= 1))
             if self._served:  # an agent serves a pair of references once
                 fresh = [_pair_key(int(agents[m]), int(current[m]), int(other[m])) not in self._served for m in cand]
@@ -326,7 +328,7 @@ class AgentAssisted(Controller):
         losing = None
         held = None
         view = None
-        if n_losing or self._general:
+        if n_losing or self.general_path:
             if current is None:
                 current = self.current[agents]
             view = self._view(step, current)
@@ -360,7 +362,7 @@ class AgentAssisted(Controller):
         scans = step.readings.of(agents, self.agent_model)
         sensor_range = sw.models[self.agent_model].sensor_range
         self.explorer.steer(sw.heading, agents, scans, sensor_range, self.refused[agents], self.rng, sw.xy,
-                            self._deployed_nodes()[1])
+                            self.deployed_nodes()[1])
         if losing is not None:
             assert view is not None
             tethered = losing & (self.left[agents] < 1) if self.tether else np.zeros(len(agents), dtype=bool)
@@ -440,7 +442,7 @@ class AgentAssisted(Controller):
     def _view(self, step: StepInput, current: np.ndarray) -> AgentView:
         """What the agents know this step (:class:`~amronet.algorithms.drops.AgentView`)."""
         sw, agents, rule = self.swarm, self.agents, self.drop_rule
-        is_ref, ref_xy = self._deployed_nodes()
+        is_ref, ref_xy = self.deployed_nodes()
         settling = sw.state == State.DROPPED
         relay_xy = np.concatenate([ref_xy, sw.xy[settling]]) if self.settle_at else ref_xy
         contact = None
@@ -449,7 +451,7 @@ class AgentAssisted(Controller):
         best = (best_reference_margin(step.table, agents, is_ref) if not rule.reads_positions
                 else np.full(len(agents), -np.inf))
         return AgentView(
-            t=step.t, current=current, nearest_d=self._nearest_d, best_margin=best, xy=sw.xy[agents],
+            t=step.t, current=current, nearest_d=self.nearest_d, best_margin=best, xy=sw.xy[agents],
             heading=sw.heading[agents], relay_xy=relay_xy, base_xy=sw.xy[self.bases], in_contact=contact,
             scans=step.readings.of(agents, self.agent_model) if rule.needs_scans else None,
             can_drop=(self.left[agents] >= 1) & (self.pending_until <= step.t))
@@ -461,7 +463,7 @@ class AgentAssisted(Controller):
         """
         if view.current[m] >= 0:
             return int(view.current[m])
-        deployed = np.flatnonzero(self._deployed_nodes()[0])
+        deployed = np.flatnonzero(self.deployed_nodes()[0])
         if len(deployed) == 0:
             return -1
         d = np.linalg.norm(self.swarm.xy[deployed] - view.xy[m], axis=1)

@@ -72,7 +72,7 @@ class CompiledAgents:
         """
         c = loop.controller
         return (isinstance(c, AgentAssisted) and loop.groups is None and not loop.scenario.faults
-                and not c._general and c.relocator is None and c.strips is None and c.trails is None
+                and not c.general_path and c.relocator is None and c.strips is None and c.trails is None
                 and c.needs_range_readings and len(c.agents) > 0)
 
     def _largest_radius(self) -> float:
@@ -87,11 +87,11 @@ class CompiledAgents:
         loop, c, sw = self.loop, self.controller, self.loop.swarm
         table = loop.table
         if c.settle_at or c.moving_triangles:  # another robot moves or settles: the phases one by one
-            self._phases(table)
+            self._phases()
             return
         agents = c.agents
         n_before = len(sw)
-        is_ref, deployed_xy = c._deployed_nodes()
+        is_ref, deployed_xy = c.deployed_nodes()
         explorer, grid = self.explorer, self.knowledge
         several = len(sw.xy) > 1
         s_csr = (body_table(sw.xy, float(self.sensor_range + self._largest_radius()), table) if several
@@ -101,9 +101,9 @@ class CompiledAgents:
         n_cand, n_losing = sense_track_agents(
             *self.grid, sw.xy, sw.heading, sw.radius, agents, self.angles, self.sensor_range, *s_csr, several, scans,
             c.current, is_ref, sw.status, table.indptr, table.indices, table.dist, c.wants_other, c.left, c.r_eff,
-            c._nearest_d, c._other, self.frontier, grid.score, grid.seen, float(grid.origin[0]), float(grid.origin[1]),
-            float(grid.resolution), deployed_xy, self.robot_radius, buf_r, buf_c, grid.row_stamp,
-            grid.stamp + 1)
+            c.nearest_d, c.other_ref, self.frontier, grid.score, grid.seen, float(grid.origin[0]),
+            float(grid.origin[1]), float(grid.resolution), deployed_xy, self.robot_radius, buf_r, buf_c,
+            grid.row_stamp, grid.stamp + 1)
         if n_cand or n_losing:  # an agent acts: the controller's own rules, then the move phase
             readings = Readings({c.agent_model: (agents, scans)})
             before = sw.xy.copy()
@@ -128,7 +128,7 @@ class CompiledAgents:
         drive_movers(*self.grid, agents, length, sw.xy, sw.heading, sw.radius, self.collisions, *d_csr, reach,
                      sw.distance, c.refused)
 
-    def _phases(self, table: object) -> None:
+    def _phases(self) -> None:
         """The loop's sense, decide and move phases for this step (as :meth:`~amronet.sim.loop.Loop.step` runs them)."""
         loop, c, sw = self.loop, self.controller, self.loop.swarm
         omap = loop.world.omap

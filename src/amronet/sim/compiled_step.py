@@ -19,10 +19,12 @@ kernels are in :mod:`amronet.sim.step_kernels`):
 * :class:`CompiledField`, the potential field (every rule): the exploring routers' rings and obstacle forces, the
   controller's wake-and-accelerate kernel, the moves and its come-to-rest kernel, in one call (no random draws).
 
+Agent-assisted runs have one of their own (:mod:`amronet.sim.compiled_agents`), listed here with the others.
+
 Every per-robot computation is the same compiled function the phase-by-phase path calls, in the same order, so a run
 gives the same result bit for bit with either step (the tests run both on the same seeds and compare;
 ``Loop(..., step="reference")`` selects the phase-by-phase path through the controllers' Python code, which stays
-the readable reference). Runs with faults or agents, and any other algorithm or rule, step phase by phase.
+the readable reference). Runs with faults, and any other algorithm or rule, step phase by phase.
 """
 
 from __future__ import annotations

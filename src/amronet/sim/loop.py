@@ -15,9 +15,10 @@ The life of a step, in this order and nowhere else (:meth:`Loop.step`):
    stop conditions: all routers settled or the coverage target reached (*terminated*), or the time limit
    (*truncated*) (:meth:`Loop.execute`).
 
-For self-spreading with its paper rules and for the potential field, phases 1–3 run as compiled passes
-(:mod:`amronet.sim.compiled_step`) that call the same per-robot functions in the same order: the same result, bit
-for bit, as the phases one by one (``step="reference"``).
+For self-spreading with its paper rules, the potential field and agent-assisted deployment under the paper's drop
+rule, phases 1–3 run as compiled passes (:mod:`amronet.sim.compiled_step`, :mod:`amronet.sim.compiled_agents`) that
+call the same per-robot functions in the same order: the same result, bit for bit, as the phases one by one
+(``step="reference"``, :mod:`amronet.sim.phases`).
 
 A :class:`Loop` holds ``G`` runs of one scenario in one set of arrays: their robots block by block, one neighbour
 table that never links robots of different runs, one controller, and every random draw split by run
@@ -88,8 +89,9 @@ class Loop:
         force: Run even what the resource guard (:mod:`amronet.sim.guard`) calls absurdly long: more than
             ``amronet.limits.MAX_STEPS`` steps or ``MAX_ROBOT_STEPS`` robot-steps (``--force`` on the command line).
         step: ``compiled`` (the default): where the algorithm has one (self-spreading with its paper rules and the
-            potential field, :mod:`amronet.sim.compiled_step`), sense, decide and move run as one or two compiled
-            passes; ``reference``:
+            potential field, :mod:`amronet.sim.compiled_step`; agent-assisted runs under the paper's drop rule,
+            :mod:`amronet.sim.compiled_agents`), sense, decide and move run as one or two compiled passes;
+            ``reference``:
             always the phases one by one, through the controller's Python code. Both give the same result bit for
             bit.
 
