@@ -131,7 +131,7 @@ class FrontierExplorer(Explorer):
             self.gap = self.gap_weight * gap_to_uncovered(self.covered)
             self._work.synced[1:3] = -1  # the uncovered counts and the traversable cells must be computed again
         settings, avoid = self._settings(sensor_range)
-        fresh = rng.uniform(-np.pi, np.pi, size=m)
+        fresh = -np.pi + (2.0 * np.pi) * rng.random(m)  # rng.uniform(-pi, pi, m), the same numbers at less cost
         cells_r, cells_c = grid.buffers(max(sensor_range, (self.lookahead + 2) * res * 1.5))
         if cells_r is not self._work.cells_r:  # the grid's scratch cell lists grew
             self._work = self._work._replace(cells_r=cells_r, cells_c=cells_c)
@@ -143,7 +143,7 @@ class FrontierExplorer(Explorer):
         navigate(step, layers, settings, self.plans, self._work)
         self.steps += 1
         active = self.plans.active
-        if not active.all():
+        if np.count_nonzero(active) < m:  # (a tenth of ndarray.all's cost on a few agents)
             idle = ~active
             self._fallback.steer(heading, who[idle], scans[idle], sensor_range, step.refused[idle], rng, xy,
                                  deployed_xy)
