@@ -20,17 +20,17 @@ bit (``tests/test_compiled_step.py`` compares both paths).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amronet.algorithms.agent_assisted import AgentAssisted
-from amronet.algorithms.base import Readings, StepInput
+from amronet.algorithms.base import Command, Readings, StepInput
 from amronet.algorithms.explorers.frontier import FrontierExplorer, KnowledgeGrid
-from amronet.engine.sensing import beam_angles, body_table
 from amronet.sim.phases import move, sense
 from amronet.sim.step_kernels import drive_movers, sense_track_agents
-from amronet.world.space import clearance
+from amronet.sim.surroundings import Surroundings
 
 if TYPE_CHECKING:
     from amronet.sim.loop import Loop
@@ -48,20 +48,14 @@ class CompiledAgents:
     def __init__(self, loop: Loop) -> None:
         c = loop.controller
         assert isinstance(c, AgentAssisted)
-        sw, omap = loop.swarm, loop.world.omap
+        sw = loop.swarm
         self.loop, self.controller, self.explorer = loop, c, c.explorer
         self.frontier = type(c.explorer) is FrontierExplorer
         """Whether the readings go into the frontier explorer's grid in the compiled call."""
-        self.knowledge = c.explorer.grid if isinstance(c.explorer, FrontierExplorer) else KnowledgeGrid((0, 1, 0, 1), 1)
+        self.knowledge = c.explorer.grid if self.frontier else KnowledgeGrid((0, 1, 0, 1), 1)
         """The grid the compiled call updates (a stand-in of the same types for other explorers: left alone)."""
         self.robot_radius = float(c.explorer.robot_radius) if self.frontier else 0.0
-        model = sw.models[c.agent_model]
-        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
-                     float(omap.resolution))
-        self.angles = beam_angles(model.sensor_beams)
-        self.sensor_range = float(model.sensor_range)
-        self.collisions = loop.scenario.sim.robot_collisions
-        self._biggest: tuple[np.ndarray, float] | None = None
+        self.around = Surroundings(loop, sw.models[c.agent_model])
 
     @staticmethod
     def applies(loop: Loop) -> bool:
@@ -75,13 +69,6 @@ class CompiledAgents:
                 and not c.general_path and c.relocator is None and c.strips is None and c.trails is None
                 and c.needs_range_readings and len(c.agents) > 0)
 
-    def _largest_radius(self) -> float:
-        """The largest body radius (kept while the robots stay the same: robots are only ever added)."""
-        radius = self.loop.swarm.radius
-        if self._biggest is None or self._biggest[0] is not radius:
-            self._biggest = (radius, float(radius.max()))
-        return self._biggest[1]
-
     def step(self) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
         loop, c, sw = self.loop, self.controller, self.loop.swarm
@@ -92,48 +79,41 @@ class CompiledAgents:
         agents = c.agents
         n_before = len(sw)
         is_ref, deployed_xy = c.deployed_nodes()
-        explorer, grid = self.explorer, self.knowledge
+        explorer, grid, a = self.explorer, self.knowledge, self.around
         several = len(sw.xy) > 1
-        s_csr = (body_table(sw.xy, float(self.sensor_range + self._largest_radius()), table) if several
-                 else (np.zeros(len(sw) + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0)))
-        buf_r, buf_c = grid.buffers(self.sensor_range)
-        scans = np.empty((len(agents), len(self.angles)))  # fresh, as the sense phase's: an explorer may keep it
+        s_csr = a.near(sw.xy, table, float(a.sensor_range + a.largest_radius()))
+        buf_r, buf_c = grid.buffers(a.sensor_range)
+        scans = np.empty((len(agents), len(a.angles)))  # fresh, as the sense phase's: an explorer may keep it
         n_cand, n_losing = sense_track_agents(
-            *self.grid, sw.xy, sw.heading, sw.radius, agents, self.angles, self.sensor_range, *s_csr, several, scans,
+            *a.grid, sw.xy, sw.heading, sw.radius, agents, a.angles, a.sensor_range, *s_csr, several, scans,
             c.current, is_ref, sw.status, table.indptr, table.indices, table.dist, c.wants_other, c.left, c.r_eff,
             c.nearest_d, c.other_ref, self.frontier, grid.score, grid.seen, float(grid.origin[0]),
             float(grid.origin[1]), float(grid.resolution), deployed_xy, self.robot_radius, buf_r, buf_c,
             grid.row_stamp, grid.stamp + 1)
         if n_cand or n_losing:  # an agent acts: the controller's own rules, then the move phase
-            readings = Readings({c.agent_model: (agents, scans)})
-            before = sw.xy.copy()
-            command = c.decide_tracked(StepInput(loop.steps, loop.t, loop.dt, table, readings), n_before, n_cand,
-                                       n_losing)
-            moved_table = table if np.array_equal(before, sw.xy) else None
-            move(c, command, sw, loop.world.omap, moved_table, loop.dt, self.collisions)
+            self._decide_and_move(lambda step: c.decide_tracked(step, n_before, n_cand, n_losing),
+                                  Readings({c.agent_model: (agents, scans)}))
             return
-        if self.frontier:
+        if self.frontier:  # the readings are in its grid already
             grid.stamp += 1
-            explorer.plan_and_steer(sw.heading, agents, scans, self.sensor_range, c.refused[agents], c.rng, sw.xy,
-                                    deployed_xy)
-        else:
-            explorer.steer(sw.heading, agents, scans, self.sensor_range, c.refused[agents], c.rng, sw.xy,
-                           deployed_xy)
+        steer = explorer.plan_and_steer if self.frontier else explorer.steer
+        steer(sw.heading, agents, scans, a.sensor_range, c.refused[agents], c.rng, sw.xy, deployed_xy)
         length = explorer.speed(c.agent_speed) * loop.dt
-        reach = 2.0 * self._largest_radius() + 2.0 * float(length.max())
-        if self.collisions and several:
-            d_csr = body_table(sw.xy, reach, table)
-        else:
-            d_csr = (np.zeros(len(sw) + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
-        drive_movers(*self.grid, agents, length, sw.xy, sw.heading, sw.radius, self.collisions, *d_csr, reach,
-                     sw.distance, c.refused)
+        reach = 2.0 * a.largest_radius() + 2.0 * float(length.max())
+        d_csr = a.near(sw.xy, table, reach) if a.collisions else a.no_bodies(len(sw))
+        drive_movers(*a.grid, agents, length, sw.xy, sw.heading, sw.radius, a.collisions, *d_csr, reach, sw.distance,
+                     c.refused)
 
     def _phases(self) -> None:
         """The loop's sense, decide and move phases for this step (as :meth:`~amronet.sim.loop.Loop.step` runs them)."""
+        loop = self.loop
+        self._decide_and_move(self.controller.decide, sense(self.controller, loop.swarm, loop.world.omap, loop.table))
+
+    def _decide_and_move(self, decide: Callable[[StepInput], Command], readings: Readings) -> None:
+        """The controller's rules (``decide``, given this step's input) and the move phase, as the loop runs them."""
         loop, c, sw = self.loop, self.controller, self.loop.swarm
-        omap = loop.world.omap
-        readings = sense(c, sw, omap, loop.table)
         before = sw.xy.copy()
-        command = c.decide(StepInput(loop.steps, loop.t, loop.dt, loop.table, readings))
+        command = decide(StepInput(loop.steps, loop.t, loop.dt, loop.table, readings))
+        # a router put down this step is not where the table has it: the move phase then searches the bodies afresh
         moved_table = loop.table if np.array_equal(before, sw.xy) else None
-        move(c, command, sw, omap, moved_table, loop.dt, self.collisions)
+        move(c, command, sw, loop.world.omap, moved_table, loop.dt, self.around.collisions)

@@ -37,56 +37,16 @@ from amronet.algorithms.base import Readings, StepInput
 from amronet.algorithms.potential_field import PotentialField
 from amronet.algorithms.self_spreading import SelfSpreading
 from amronet.engine.motion import turn_draws
-from amronet.engine.robots import DEPLOYED_STATES, RobotModel, Role, state_lookup
-from amronet.engine.sensing import beam_angles, body_table
+from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
 from amronet.engine.streams import draw_per_run
-from amronet.engine.table import NeighbourTable
 from amronet.sim.compiled_agents import CompiledAgents
 from amronet.sim.step_kernels import field_step, list_movers, sense_steer_drive, track_explorers
-from amronet.world.space import clearance
+from amronet.sim.surroundings import Surroundings
 
 if TYPE_CHECKING:
     from amronet.sim.loop import Loop
 
 __all__ = ["COMPILED_STEPS", "CompiledField", "CompiledSpreading", "CompiledStep", "compiled_step_for"]
-
-
-class _Surroundings:
-    """What a compiled step reads of the map and of the bodies around its robots (both steps share it).
-
-    The map's grid for the rings and the moves, the movers' sensor ring, and how far apart two robots can be and
-    still meet a beam or touch after a step. Bodies and speeds stay what they are during a run of these algorithms
-    (no robot is added or changed), so the reaches are fixed.
-
-    Args:
-        loop: The loop.
-        movers: Mask or indices of the robots that may move (routers).
-        model: Their robot model (one for all of them).
-    """
-
-    def __init__(self, loop: Loop, movers: np.ndarray, model: RobotModel) -> None:
-        sw, omap = loop.swarm, loop.world.omap
-        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
-                     float(omap.resolution))
-        self.angles = beam_angles(model.sensor_beams)
-        self.sensor_range = float(model.sensor_range)
-        biggest = float(sw.radius.max())
-        self.sense_reach = float(self.sensor_range + biggest)
-        fastest = float(sw.max_speed[movers].max(initial=0.0))
-        self.drive_reach = (2.0 * biggest + 2.0 * fastest * loop.dt) * (1.0 + 1e-9) + 1e-12
-        """Every pair that could touch after this step's longest move is this close (with room for rounding: the
-        kernels' exact reach, from lengths rounded through speeds, is at most this)."""
-        self.collisions = loop.scenario.sim.robot_collisions
-        n = len(sw)
-        self.no_bodies = (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
-
-    def bodies(self, xy: np.ndarray, table: NeighbourTable, sense: bool = True) -> tuple:
-        """``(several, sense CSR, drive with bodies, drive CSR)`` for this step (:func:`body_table`)."""
-        several = len(xy) > 1
-        s_csr = body_table(xy, self.sense_reach, table) if sense and several else self.no_bodies
-        drive_bodies = self.collisions and several
-        d_csr = body_table(xy, self.drive_reach, table) if drive_bodies else self.no_bodies
-        return several, s_csr, drive_bodies, d_csr
 
 
 def _without_faults_or_agents(loop: Loop) -> bool:
@@ -109,7 +69,7 @@ class CompiledSpreading:
         self.controller = c
         n = len(sw)
         model = sw.models[c.router_model]
-        self.around = _Surroundings(loop, sw.role == Role.ROUTER, model)
+        self.around = Surroundings(loop, model, sw.role == Role.ROUTER)
         self.deployed_lookup = state_lookup(DEPLOYED_STATES)
         self.want_other = c.several_statuses and c.params.triangular != "off"
         self.local = c.params.triangular == "local"
@@ -180,7 +140,7 @@ class CompiledField:
         self.loop, self.controller = loop, c
         routers = c.routers
         model = sw.models[int(sw.model[routers[0]])] if len(routers) else sw.models[0]
-        self.around = _Surroundings(loop, routers, model)
+        self.around = Surroundings(loop, model, routers)
         self.scan = np.zeros(model.sensor_beams)
         self.movers = np.zeros(len(routers), dtype=np.int64)
         self.speed = np.zeros(len(routers))
