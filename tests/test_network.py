@@ -2,7 +2,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.engine.network import agents_connected, components, connected_to, hop_counts
+from amronet.engine.network import agents_connected, component_counts, components, connected_to, hop_counts
 from amronet.engine.radio import UnitDisk
 
 
@@ -63,3 +63,18 @@ def test_components_match_scipy(n, seed):
         for j in np.flatnonzero(nodes):
             assert (labels[i] == labels[j]) == (ref[i] == ref[j])
     assert (labels[~nodes] == -1).all()
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.integers(0, 12), min_size=1, max_size=5), st.integers(0, 10_000))
+def test_component_counts_per_group_are_each_blocks_count(sizes, seed):
+    # several runs in one table (as a batch has them): every group gets what components gives for its block alone
+    rng = np.random.default_rng(seed)
+    xy = rng.random((sum(sizes), 2)) * 3
+    groups = np.repeat(np.arange(len(sizes)), sizes)
+    nodes = rng.random(len(xy)) < 0.7
+    counts = component_counts(UnitDisk(1.0).update(xy, groups), nodes, groups, len(sizes) + 1)
+    assert counts[-1] == 0
+    for g in range(len(sizes)):
+        mine = groups == g
+        assert counts[g] == components(UnitDisk(1.0).update(xy[mine]), nodes[mine])[0]

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.engine.streams import RunStreams, draw_per_run
+from amronet.engine.streams import RunStreams, draw_per_run, normal_then_uniform
 
 
 def draw_mixed(rng: np.random.Generator, m: int) -> tuple[np.ndarray, ...]:
@@ -61,6 +61,37 @@ def batches(draw_):
 
 
 # --- the batch gives every run its own numbers --------------------------------------------------------------
+
+
+def draw_normal_uniform(rng: np.random.Generator, m: int) -> tuple[np.ndarray, ...]:
+    return rng.standard_normal(m), rng.random(m)
+
+
+@settings(max_examples=150, deadline=None)
+@given(batches(), st.booleans())
+def test_the_walkers_pair_of_draws_is_the_general_draw(batch, in_order) -> None:
+    # normal_then_uniform fills each run's slices in place (robots in order) or goes the general way (not in order)
+    seeds, sizes, steps = batch
+    streams = make_streams(seeds, sizes)
+    expected = expected_alone(seeds, sizes, [np.sort(w) if in_order else w for w in steps], draw_normal_uniform)
+    for who, want in zip(steps, expected, strict=True):
+        got = normal_then_uniform(streams, np.sort(who) if in_order else who)
+        for g, w in zip(got, want, strict=True):
+            assert g.dtype == np.float64
+            np.testing.assert_array_equal(g, w)
+    for g, rng in enumerate(streams.generators):  # every stream is where the runs alone have theirs
+        alone = np.random.default_rng(seeds[g])
+        for who in steps:
+            m = np.count_nonzero((who >= sum(sizes[:g])) & (who < sum(sizes[: g + 1])))
+            draw_normal_uniform(alone, m)
+        assert rng.random() == alone.random()
+
+
+def test_the_walkers_pair_from_one_generator() -> None:
+    a, b = np.random.default_rng(4), np.random.default_rng(4)
+    normal, uniform = normal_then_uniform(a, np.array([7, 2, 5]))
+    np.testing.assert_array_equal(normal, b.standard_normal(3))
+    np.testing.assert_array_equal(uniform, b.random(3))
 
 
 @settings(max_examples=150, deadline=None)

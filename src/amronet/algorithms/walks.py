@@ -40,7 +40,7 @@ from numba import njit
 from amronet.engine.motion import random_walk, walk_one
 from amronet.engine.network import hop_counts
 from amronet.engine.sensing import beam_angles
-from amronet.engine.streams import RunStreams, draw_per_run
+from amronet.engine.streams import RunStreams, normal_then_uniform
 from amronet.engine.table import NeighbourTable
 
 __all__ = ["WALKS", "Walker"]
@@ -56,11 +56,6 @@ EDGE_LEAN = 0.3
 """``growth``: how far (radians) a router following an obstacle's edge leans toward it, so as not to drift off."""
 CORNER_TURN = 0.35
 """``growth``: turn per step (radians) toward the side of an edge the router has lost (rounding a corner)."""
-
-
-def _draws(rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """``m`` standard normal, then ``m`` standard uniform numbers."""
-    return rng.standard_normal(m), rng.random(m)
 
 
 @njit(cache=True, inline="always")
@@ -226,7 +221,7 @@ class Walker:
         if self.reads_network:
             assert deployed is not None
             field = self.growth_field(table, deployed, t)
-        normal, uniform = draw_per_run(rng, who, _draws)
+        normal, uniform = normal_then_uniform(rng, who)
         if not len(who):
             return
         fresh = -np.pi + (2.0 * np.pi) * uniform

@@ -23,12 +23,12 @@ from numba import njit
 
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.sensing import beam_angles, body_table
-from amronet.engine.streams import RunStreams, draw_per_run
+from amronet.engine.streams import RunStreams, normal_then_uniform
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance, path_is_clear
 
 __all__ = ["avoidance_heading", "drive", "drive_one", "escape_one", "integrate", "path_clear", "random_walk",
-           "turn_draws", "walk_one"]
+           "walk_one"]
 
 
 @njit(cache=True, inline="always")
@@ -111,11 +111,6 @@ def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: floa
     return escape, alarmed
 
 
-def turn_draws(rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """``m`` standard normal, then ``m`` standard uniform numbers (cheaper calls than ``normal``/``uniform``)."""
-    return rng.standard_normal(m), rng.random(m)
-
-
 def random_walk(
     heading: np.ndarray,
     who: np.ndarray,
@@ -140,7 +135,7 @@ def random_walk(
         rng: The run's random generator (or the streams of a batch of runs).
         turn_sigma: Standard deviation of the heading noise per step, radians.
     """
-    normal, uniform = draw_per_run(rng, who, turn_draws)
+    normal, uniform = normal_then_uniform(rng, who)
     noise = turn_sigma * normal  # rng.normal(0.0, turn_sigma, m) and rng.uniform(-pi, pi, m), bit for bit
     fresh = -np.pi + (2.0 * np.pi) * uniform
     if len(who):

@@ -12,7 +12,7 @@ from typing import Protocol
 import numpy as np
 from numba import njit
 
-__all__ = ["CSRGraph", "agents_connected", "components", "connected_to", "hop_counts"]
+__all__ = ["CSRGraph", "agents_connected", "component_counts", "components", "connected_to", "hop_counts"]
 
 
 class CSRGraph(Protocol):
@@ -86,6 +86,26 @@ def components(graph: CSRGraph, nodes: np.ndarray | None = None) -> tuple[int, n
     """
     count, labels, _ = _run(graph, nodes, np.zeros(0, dtype=np.int64))
     return count, labels
+
+
+def component_counts(graph: CSRGraph, nodes: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
+    """Per group, the number of connected components of the graph restricted to ``nodes``.
+
+    For the graph of several runs in one set of arrays (no edge joins two groups): one search for every run, the
+    count :func:`components` gives for each run's block alone.
+
+    Args:
+        graph: The graph.
+        nodes: Boolean mask of the nodes that count.
+        groups: Group of every node, ``(N,)``.
+        n_groups: Number of groups.
+
+    Returns:
+        Counts ``(n_groups,)``.
+    """
+    _, labels, hops = _run(graph, nodes, np.zeros(0, dtype=np.int64))
+    roots = (labels >= 0) & (hops == 0)  # the node each component's search started from, one per component
+    return np.bincount(groups[roots], minlength=n_groups)
 
 
 def connected_to(graph: CSRGraph, sources: np.ndarray, nodes: np.ndarray | None = None) -> np.ndarray:

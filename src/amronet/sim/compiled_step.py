@@ -36,9 +36,8 @@ import numpy as np
 from amronet.algorithms.base import Readings, StepInput
 from amronet.algorithms.potential_field import PotentialField
 from amronet.algorithms.self_spreading import SelfSpreading
-from amronet.engine.motion import turn_draws
 from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
-from amronet.engine.streams import draw_per_run
+from amronet.engine.streams import normal_then_uniform
 from amronet.sim.compiled_agents import CompiledAgents
 from amronet.sim.step_kernels import field_step, list_movers, sense_steer_drive, track_explorers
 from amronet.sim.surroundings import Surroundings
@@ -113,7 +112,7 @@ class CompiledSpreading:
         if n_movers == 0:
             c.refused[:] = False
             return
-        normal, uniform = draw_per_run(c.rng, self.walkers[:n_walkers], turn_draws)
+        normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
         several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
         s = c.steering
         sense_steer_drive(*a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,

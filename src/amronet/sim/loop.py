@@ -59,7 +59,7 @@ from amronet.sim.compiled_step import CompiledStep, compiled_step_for
 from amronet.sim.guard import check_scenario, check_world
 from amronet.sim.phases import move, sense
 from amronet.sim.results import RunResult
-from amronet.sim.run import Metrics, Run
+from amronet.sim.run import Metrics, Run, metrics_of
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.trajectories import AgentPaths
 
@@ -261,19 +261,18 @@ class Loop:
         start = time.perf_counter()
         results: list[RunResult | None] = [None] * len(self.runs)
 
-        def finish(run: Run, reason: str) -> None:
-            run.end(reason)
-            final = run.metrics(method=sim.coverage_method)
+        def finish(run: Run, reason: str, final: Metrics) -> None:
+            run.end(reason)  # (the metrics just recorded are the final ones: nothing has moved since)
             wall = (time.perf_counter() - start) / len(self.runs)
             results[run.index] = RunResult.from_run(run, final, wall_time_s=wall, recorder=recorders[run.index])
 
         active = []
-        for run in self.runs:
-            reached = run.record()
+        for run, m in zip(self.runs, metrics_of(self.runs), strict=True):
+            reached = run.record(m)
             if recorders[run.index] is not None:
                 recorders[run.index].observe(run)
             if reached:
-                finish(run, "coverage_target")
+                finish(run, "coverage_target", m)
             else:
                 active.append(run)
         max_steps = round(sim.time_limit / self.dt)
@@ -282,13 +281,16 @@ class Loop:
             now_settled = self._settled_runs()
             at_limit = self.steps >= max_steps
             on_record = self.steps % sim.record_every == 0 or at_limit
+            recording = active if on_record else [
+                run for run in active if sim.stop_when_settled and now_settled[run.index]]
+            metrics = dict(zip((run.index for run in recording), metrics_of(recording), strict=True))
             still = []
             for run in active:
                 run.settle(bool(now_settled[run.index]))
                 settled = sim.stop_when_settled and bool(now_settled[run.index])
                 reached = False
                 if on_record or settled:
-                    reached = run.record()
+                    reached = run.record(metrics[run.index])
                     if progress is not None:
                         progress(self.t, sim.time_limit)
                 reason = "coverage_target" if reached else "settled" if settled else "time_limit" if at_limit else None
@@ -299,7 +301,7 @@ class Loop:
                 if reason is None:
                     still.append(run)
                 else:
-                    finish(run, reason)
+                    finish(run, reason, metrics[run.index])
             active = still
         return [r for r in results if r is not None]
 

@@ -7,12 +7,13 @@ the block of the loop's arrays it owns differs (all of them, or one run's rows).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amronet.engine.network import agents_connected, components, connected_to
+from amronet.engine.network import agents_connected, component_counts, components, connected_to
 from amronet.engine.radio import NeighbourTable, RadioMedium
 from amronet.engine.robots import STATE_NAMES, Role, State, Swarm
 from amronet.sim.faults import FaultBook, FaultSchedule
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
     from amronet.sim.assemble import World
     from amronet.sim.loop import Loop
 
-__all__ = ["Metrics", "OutageTracker", "Run"]
+__all__ = ["Metrics", "OutageTracker", "Run", "metrics_of"]
 
 STOP_REASONS = ("coverage_target", "settled", "time_limit")
 """Why a run ends: the first two *terminate* it (the task ended), the last *truncates* it."""
@@ -141,6 +142,8 @@ class Run:
         self.settled_at: float | None = None
         """Start of the final stretch of time in which no router moved (``None`` while one still moves)."""
         self._final: tuple[int, Swarm, NeighbourTable] | None = None
+        self._last_coverage: dict[str, tuple[str, np.ndarray, float]] = {}
+        """Per kind of coverage (``all``, ``linked``), the last one computed: its method, nodes and value."""
         sw = self.swarm
         self.bases = np.flatnonzero(sw.role == Role.BASE)
         self.agents = np.flatnonzero(sw.role == Role.AGENT)
@@ -239,15 +242,28 @@ class Run:
         linked = connected_to(table, self.live_bases, network)
         deployed = sw.deployed
         n_comp, _ = components(table, deployed)
-        medium, area = self.medium, self.world.coverage
-        coverage = medium.coverage(area, sw.xy[network], method=method)
-        everyone_linked = np.array_equal(linked, network)  # then both are the same area: one computation
-        return Metrics(
-            coverage=coverage,
-            connected_coverage=coverage if everyone_linked else medium.coverage(area, sw.xy[linked], method=method),
-            routers_deployed=int(np.count_nonzero(deployed & (sw.role == Role.ROUTER))),
-            components=n_comp,
-        )
+        coverage, connected = self._coverages(sw.xy, network, linked, method)
+        return Metrics(coverage=coverage, connected_coverage=connected,
+                       routers_deployed=int(np.count_nonzero(deployed & (sw.role == Role.ROUTER))), components=n_comp)
+
+    def _coverages(self, xy: np.ndarray, network: np.ndarray, linked: np.ndarray, method: str) -> tuple[float, float]:
+        """Coverage of the ``network`` nodes and of the ``linked`` ones, from the run's positions ``xy``.
+
+        A coverage is computed again only when its nodes have changed since it was last computed (most records find
+        the same deployed network, and the answer depends on nothing else); when every node is linked both are one.
+        """
+        coverage = self._coverage("all", xy[network], method)
+        if np.array_equal(linked, network):
+            return coverage, coverage
+        return coverage, self._coverage("linked", xy[linked], method)
+
+    def _coverage(self, kind: str, nodes: np.ndarray, method: str) -> float:
+        last = self._last_coverage.get(kind)
+        if last is not None and last[0] == method and np.array_equal(last[1], nodes):
+            return last[2]
+        value = self.medium.coverage(self.world.coverage, nodes, method=method)
+        self._last_coverage[kind] = (method, nodes, value)
+        return value
 
     def _agents_linked(self) -> np.ndarray:
         """Which agents have a multi-hop path to a base station through the AMRoNet right now, boolean ``(A,)``."""
@@ -284,9 +300,14 @@ class Run:
             return self.agents_connected_window
         return self.agents_connected_sum / self.agents_connected_steps
 
-    def record(self) -> bool:
-        """Append a row of metrics to the time series; whether the coverage target is reached."""
-        m = self.metrics()
+    def record(self, m: Metrics | None = None) -> bool:
+        """Append a row of metrics to the time series; whether the coverage target is reached.
+
+        Args:
+            m: The run's metrics now, when they are known (:func:`metrics_of`); ``None``: computed here.
+        """
+        if m is None:
+            m = self.metrics()
         row = (round(self.t, 9), m.coverage, m.connected_coverage, m.routers_deployed, m.components)
         if len(self.agents):
             # the worst fraction seen at any step since the last record, so that no dip is hidden
@@ -309,3 +330,34 @@ class Run:
         self.stop_reason = reason
         sw, table = self.swarm, self.table
         self._final = (self.loop.steps, sw.copy() if self.robots != slice(None) else sw, table)
+
+
+def metrics_of(runs: Sequence[Run]) -> list[Metrics]:
+    """The metrics of runs of one loop now: for each, what :meth:`Run.metrics` gives, with one graph search for all.
+
+    A batch records all its running runs at the same steps; their paths to a base station and their components are
+    searched in the loop's whole table at once (no link joins two runs), and only coverage is computed run by run.
+
+    Args:
+        runs: Runs of one loop that have not ended.
+    """
+    if len(runs) == 0:
+        return []
+    loop = runs[0].loop
+    if loop.groups is None:
+        return [run.metrics() for run in runs]
+    sw, table, groups = loop.swarm, loop.table, loop.groups
+    method = loop.scenario.sim.coverage_method
+    network = sw.relaying
+    bases = np.concatenate([run.bases + run.robots.start for run in runs])
+    linked = connected_to(table, bases[sw.state[bases] != State.FAILED], network)
+    deployed = sw.deployed
+    n_components = component_counts(table, deployed, groups, len(loop.runs))
+    routers = np.bincount(groups[deployed & (sw.role == Role.ROUTER)], minlength=len(loop.runs))
+    out = []
+    for run in runs:
+        block = run.robots
+        coverage, connected = run._coverages(sw.xy[block], network[block], linked[block], method)
+        out.append(Metrics(coverage=coverage, connected_coverage=connected, routers_deployed=int(routers[run.index]),
+                           components=int(n_components[run.index])))
+    return out

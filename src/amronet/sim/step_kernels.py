@@ -103,7 +103,7 @@ def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed
                       d_indptr, d_indices, d_dist, scans, length):  # pragma: no cover - numba
     """Sense, steer and drive the ``movers``; the same per-robot functions, in the same order, as the reference.
 
-    ``normal`` and ``uniform``: the walkers' draws (:func:`~amronet.engine.motion.turn_draws`), scaled here as
+    ``normal`` and ``uniform``: the walkers' draws (:func:`~amronet.engine.streams.normal_then_uniform`), scaled here as
     :func:`~amronet.engine.motion.random_walk` scales them (the same operations on the same numbers).
     """
     big = radius.max()
