@@ -19,9 +19,12 @@ from amronet.engine.propagation import LinkBudget, delivery_ratio
 __all__ = ["NeighbourTable"]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(eq=False)
 class NeighbourTable:
     """One step's links, as a symmetric CSR structure.
+
+    A table is a value: nothing changes its fields or arrays once it is built (the medium builds a new one every
+    step). It is not a frozen dataclass only because building a frozen one costs 3 µs, a tenth of a 30-robot step.
 
     Attributes:
         xy: The positions the table was built from ``(N, 2)``.
