@@ -99,7 +99,7 @@ class CompiledAgents:
         steer = explorer.plan_and_steer if self.frontier else explorer.steer
         steer(sw.heading, agents, scans, a.sensor_range, c.refused[agents], c.rng, sw.xy, deployed_xy)
         length = explorer.speed(c.agent_speed) * loop.dt
-        reach = 2.0 * a.largest_radius() + 2.0 * float(length.max())
+        reach = 2.0 * a.largest_radius() + 2.0 * max(length.tolist())  # (ndarray.max costs more on a few agents)
         d_csr = a.near(sw.xy, table, reach) if a.collisions else a.no_bodies(len(sw))
         drive_movers(*a.grid, agents, length, sw.xy, sw.heading, sw.radius, a.collisions, *d_csr, reach, sw.distance,
                      c.refused)

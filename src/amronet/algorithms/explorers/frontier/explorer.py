@@ -96,7 +96,8 @@ class FrontierExplorer(Explorer):
         self._work = NavBuffers(search=search_buffers(rows * cols), trav=np.zeros((2, rows, cols), dtype=np.bool_),
                                 marks=marks, counts=counts, synced=np.full(4, -1, dtype=np.int64),
                                 cells_r=np.zeros(0, dtype=np.int64), cells_c=np.zeros(0, dtype=np.int64))
-        self._nodes_key: tuple[int, float] | None = None
+        self._nodes_key: bytes | None = None
+        """The deployed nodes' coordinates as last painted, as bytes: a change of any of them repaints."""
         self._nodes = np.zeros((0, 2))
         self._settings_for: tuple[float, NavSettings, float] | None = None
         self.steps = 0
@@ -123,7 +124,7 @@ class FrontierExplorer(Explorer):
             self.plans = AgentPlans.start(m, self.grid.shape[0] * self.grid.shape[1])
         grid = self.grid
         res = grid.resolution
-        key = (len(deployed_xy), float(deployed_xy.sum()))
+        key = np.ascontiguousarray(deployed_xy, dtype=float).tobytes()  # exact, and cheaper than a sum
         refresh = key != self._nodes_key
         if refresh:
             self._nodes_key = key
