@@ -13,7 +13,7 @@ The life of a step, in this order and nowhere else (:meth:`Loop.step`):
 5. **metrics** — after every step, whether agents are connected; every ``record_every`` steps (and when a run
    settles or hits its time limit) coverage, connected coverage, deployed routers and components; then the
    stop conditions: all routers settled or the coverage target reached (*terminated*), or the time limit
-   (*truncated*) (:meth:`Loop.execute`).
+   (*truncated*) (:meth:`Loop.execute`; the runs of a batch are recorded together, :func:`~amronet.sim.run.metrics_of`).
 
 For self-spreading with its paper rules, the potential field and agent-assisted deployment under the paper's drop
 rule, phases 1–3 run as compiled passes (:mod:`amronet.sim.compiled_step`, :mod:`amronet.sim.compiled_agents`) that
