@@ -24,12 +24,12 @@ def main() -> None:
         print(json.dumps(rows, indent=2))
         return
     phases = list(rows[0]["phase_share"])  # sense+decide+move and radio with the compiled step
-    print("| N | map scale | mean degree | steps/s | robot-steps/s | " + " | ".join(phases) + " |")
-    print("|---:|---:|---:|---:|---:|" + "---:|" * len(phases))
+    print("| N | threads | map scale | mean degree | steps/s | robot-steps/s | " + " | ".join(phases) + " |")
+    print("|---:|---:|---:|---:|---:|---:|" + "---:|" * len(phases))
     for r in rows:
         shares = " | ".join(f"{r['phase_share'][k]:.0%}" for k in phases)
-        print(f"| {r['robots']:,} | {r['map_scale']:.2f} | {r['mean_degree']:.1f} | {r['steps_per_s']:,.1f} | "
-              f"{r['robot_steps_per_s']:,} | {shares} |")
+        print(f"| {r['robots']:,} | {r['threads']} | {r['map_scale']:.2f} | {r['mean_degree']:.1f} | "
+              f"{r['steps_per_s']:,.1f} | {r['robot_steps_per_s']:,} | {shares} |")
 
 if __name__ == "__main__":
     main()

@@ -123,6 +123,7 @@ def test_bench_json(capsys):
     assert code == 0
     report = json.loads(cap.out)
     assert report["robots"] == 200 and report["robot_steps_per_s"] > 0
+    assert report["threads"] == 1  # a small run: one thread (amronet.threads)
 
 
 def test_run_step_reference_gives_the_same_network(tmp_path, capsys):

@@ -7,7 +7,7 @@ from amronet.algorithms.agent_assisted import AgentAssisted
 from amronet.algorithms.self_spreading import SelfSpreading
 from amronet.engine.robots import State
 from amronet.scenario import load_scenario
-from amronet.sim import BatchSimulation, Simulation
+from amronet.sim import BatchSimulation, Simulation, compiled_step
 from amronet.sim.compiled_agents import CompiledAgents
 from amronet.sim.compiled_step import CompiledField, CompiledSpreading
 
@@ -180,3 +180,49 @@ def test_agent_runs_it_does_not_compile_take_the_reference_path(overrides):
 def test_an_unknown_step_kind_is_refused():
     with pytest.raises(ValueError, match="step must be"):
         Simulation(load_scenario("self-spreading-6x6"), 1, step="fast")
+
+
+THREADED_CASES = {
+    "triangle routers": ("self-spreading-office", 2, {"sim.time_limit": 150, "algorithm.params.triangular": "none"}),
+    **{name: CASES[name] for name in ("office, two bases, local rule", "obstacles, global rule",
+                                      "base station by a wall", "no body collisions")},
+}
+
+
+@pytest.mark.parametrize("name", sorted(THREADED_CASES))
+def test_the_threaded_step_gives_the_reference_run_bit_for_bit(name, monkeypatch):
+    """Large runs (amronet.threads) sense, decide and plan on several threads, then move one by one: the same run."""
+    calls = []
+    threaded = compiled_step.sense_steer_plan_threaded
+
+    def counting(*args):
+        calls.append(1)
+        return threaded(*args)
+
+    monkeypatch.setattr(compiled_step, "use_threads", lambda n: True)
+    monkeypatch.setattr(compiled_step, "sense_steer_plan_threaded", counting)
+    preset, seed, overrides = THREADED_CASES[name]
+    sc = load_scenario(preset, overrides)
+    fast, reference = Simulation(sc, seed), Simulation(sc, seed, step="reference")
+    fast.run()
+    reference.run()
+    assert len(calls) > 0
+    for x, y in zip(_state(fast), _state(reference), strict=True):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(fast.controller.refused, reference.controller.refused)
+    assert fast.rows == reference.rows
+    if name == "triangle routers":
+        assert np.count_nonzero(fast.swarm.state == State.TRIANGLE_SETTLED) > 0  # triangle routers steered too
+
+
+def test_threaded_batches_are_the_same_as_serial_ones(monkeypatch):
+    sc = load_scenario("self-spreading-office", {"sim.time_limit": 60, "algorithm.params.triangular": "global"})
+    serial = BatchSimulation(sc, (1, 2, 3))
+    serial_results = serial.run()
+    monkeypatch.setattr(compiled_step, "use_threads", lambda n: True)
+    threaded = BatchSimulation(sc, (1, 2, 3))
+    for a, b in zip(threaded.run(), serial_results, strict=True):
+        assert a.network == b.network
+        for k in a.timeseries:
+            np.testing.assert_array_equal(a.timeseries[k], b.timeseries[k])
+    np.testing.assert_array_equal(threaded.swarm.xy, serial.swarm.xy)

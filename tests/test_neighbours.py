@@ -4,6 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
+from amronet.engine import neighbours
 from amronet.engine.neighbours import neighbour_csr, pairs_from_csr
 
 
@@ -165,3 +166,24 @@ def test_bad_groups_are_refused():
         neighbour_csr(np.zeros((3, 2)), 1.0, np.array([0, -1, 0]))
     with pytest.raises(ValueError, match="groups must be 3 integers"):
         neighbour_csr(np.zeros((3, 2)), 1.0, np.array([0, 1]))
+
+
+@settings(max_examples=120, deadline=None)
+@given(clouds(), st.integers(1, 3), st.integers(0, 2**32 - 1))
+def test_the_threaded_table_is_the_serial_one(cloud, n_groups, seed):
+    """Large searches build the rows on several threads (amronet.threads): the same table, bit for bit."""
+    xy, r = cloud
+    groups = np.random.default_rng(seed).integers(0, n_groups, len(xy))
+    serial = neighbour_csr(xy, r, groups)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(neighbours, "use_threads", lambda n: True)
+        threaded = neighbour_csr(xy, r, groups)
+    for a, b in zip(serial, threaded, strict=True):
+        assert a.dtype == b.dtype
+        np.testing.assert_array_equal(a, b)
+
+
+def test_the_threaded_search_refuses_non_finite_points(monkeypatch):
+    monkeypatch.setattr(neighbours, "use_threads", lambda n: True)
+    with pytest.raises(ValueError, match="non-finite"):
+        neighbour_csr(np.array([[0.0, 0.0], [np.nan, 1.0]]), 1.0)

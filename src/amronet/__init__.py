@@ -10,8 +10,10 @@ Example:
 __version__ = "0.1.0"
 
 from amronet.kernel_cache import configure as _configure_kernel_cache
+from amronet.threads import configure as _configure_threads
 
 _configure_kernel_cache()  # before any module with kernels is imported (see amronet.kernel_cache)
+_configure_threads()  # a fork-safe thread pool for the few threaded kernels (see amronet.threads)
 
 from amronet.errors import AmronetError, MapError, ScenarioError  # noqa: E402
 from amronet.scenario import Scenario, list_presets, load_scenario  # noqa: E402

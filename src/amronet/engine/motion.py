@@ -175,24 +175,26 @@ def path_clear(omap: OccupancyMap, start: np.ndarray, end: np.ndarray, radius: n
 
 
 @njit(cache=True, inline="always")
-def drive_one(blocked, clear, ox, oy, res, i, heading, length, xy, radius, bodies, indptr, indices, dist,
-              near):  # pragma: no cover - numba
-    """Move robot ``i`` by ``length`` along ``heading`` if it may (see :func:`drive`); ``(refused, travelled)``.
+def plan_one(blocked, clear, ox, oy, res, x0, y0, heading, length, radius_i):  # pragma: no cover - numba
+    """Where a robot at ``(x0, y0)`` would end after ``length`` along ``heading``, and whether the map lets it.
 
-    A move is refused when its path meets an obstacle, or (with ``bodies``) when it brings the body closer to a
-    neighbour it overlaps at the end (neighbours from the CSR ``indptr, indices, dist``, those farther than
-    ``near`` skipped).
+    ``(path clear, x, y)``: the obstacle half of :func:`drive_one`; it depends on the robot alone.
     """
-    x0 = xy[i, 0]
-    y0 = xy[i, 1]
     nx = x0 + length * math.cos(heading)
     ny = y0 + length * math.sin(heading)
     c0 = int(math.floor((x0 - ox) / res))
     r0 = int(math.floor((y0 - oy) / res))
     rows, cols = clear.shape
-    roomy = 0 <= r0 < rows and 0 <= c0 < cols and clear[r0, c0] >= radius[i] + length + 1.5 * res
-    if not roomy and not path_is_clear(blocked, clear, ox, oy, res, x0, y0, nx, ny, radius[i]):
-        return True, 0.0
+    roomy = 0 <= r0 < rows and 0 <= c0 < cols and clear[r0, c0] >= radius_i + length + 1.5 * res
+    return roomy or path_is_clear(blocked, clear, ox, oy, res, x0, y0, nx, ny, radius_i), nx, ny
+
+
+@njit(cache=True, inline="always")
+def commit_one(i, x0, y0, nx, ny, xy, radius, bodies, indptr, indices, dist, near):  # pragma: no cover - numba
+    """Move robot ``i`` from ``(x0, y0)`` to its planned ``(nx, ny)`` unless a body forbids it.
+
+    The body half of :func:`drive_one` (against its neighbours as they stand now): ``(refused, travelled)``.
+    """
     if bodies:
         for e in range(indptr[i], indptr[i + 1]):
             if dist[e] > near:
@@ -211,6 +213,23 @@ def drive_one(blocked, clear, ox, oy, res, i, heading, length, xy, radius, bodie
     xy[i, 0] = nx
     xy[i, 1] = ny
     return False, math.hypot(nx - x0, ny - y0)
+
+
+@njit(cache=True, inline="always")
+def drive_one(blocked, clear, ox, oy, res, i, heading, length, xy, radius, bodies, indptr, indices, dist,
+              near):  # pragma: no cover - numba
+    """Move robot ``i`` by ``length`` along ``heading`` if it may (see :func:`drive`); ``(refused, travelled)``.
+
+    A move is refused when its path meets an obstacle (:func:`plan_one`), or (with ``bodies``) when it brings the
+    body closer to a neighbour it overlaps at the end (:func:`commit_one`; neighbours from the CSR ``indptr,
+    indices, dist``, those farther than ``near`` skipped).
+    """
+    x0 = xy[i, 0]
+    y0 = xy[i, 1]
+    free, nx, ny = plan_one(blocked, clear, ox, oy, res, x0, y0, heading, length, radius[i])
+    if not free:
+        return True, 0.0
+    return commit_one(i, x0, y0, nx, ny, xy, radius, bodies, indptr, indices, dist, near)
 
 
 @njit(cache=True)

@@ -6,7 +6,9 @@ physically; with ``r_c`` = 1 m and the default 0.25 m² per robot a node hears a
 scattered uniformly over the reachable free space (``routers.start: uniform``) with one base station per
 1 000 robots, and the loop runs the full step — sensing, decision, motion with collision checks, radio medium —
 for ``steps`` steps after one warm-up step (numba compilation is cached on disk, so only the first ever run
-pays it). Metrics (coverage) are not part of the timed step.
+pays it). Metrics (coverage) are not part of the timed step. From :data:`amronet.threads.MIN_ITEMS` robots on, the
+neighbour search and the sensing, deciding and planning of the moves run on every core numba has (``threads`` in
+the report; ``NUMBA_NUM_THREADS=1`` keeps them on one).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from amronet.engine.robots import Role
 from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
 from amronet.sim.loop import Simulation, StepKind
+from amronet.threads import threads_for
 from amronet.world.builtin import resolve_map
 from amronet.world.space import clearance
 
@@ -132,6 +135,7 @@ def run_bench(
         "metrics_call_s": round(metrics_s, 4),
         "coverage_after": round(cov.coverage, 4),
         "routers_deployed_after": cov.routers_deployed,
+        "threads": threads_for(n),
         "python": platform.python_version(),
         "amronet": __version__,
     }

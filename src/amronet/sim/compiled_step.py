@@ -39,8 +39,16 @@ from amronet.algorithms.self_spreading import SelfSpreading
 from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
 from amronet.engine.streams import normal_then_uniform
 from amronet.sim.compiled_agents import CompiledAgents
-from amronet.sim.step_kernels import field_step, list_movers, sense_steer_drive, track_explorers
+from amronet.sim.step_kernels import (
+    commit_moves,
+    field_step,
+    list_movers,
+    sense_steer_drive,
+    sense_steer_plan_threaded,
+    track_explorers,
+)
 from amronet.sim.surroundings import Surroundings
+from amronet.threads import LOCK, use_threads
 
 if TYPE_CHECKING:
     from amronet.sim.loop import Loop
@@ -83,6 +91,9 @@ class CompiledSpreading:
         self.walkers = np.zeros(n, dtype=np.int64)
         self.scans = np.zeros((n, model.sensor_beams))
         self.length = np.zeros(n)
+        self.slot = np.zeros(n, dtype=np.int64)  # the threaded step's (large runs: amronet.threads)
+        self.free = np.zeros(n, dtype=np.bool_)
+        self.planned = np.zeros((n, 2))
 
     @staticmethod
     def applies(loop: Loop) -> bool:
@@ -114,11 +125,22 @@ class CompiledSpreading:
             return
         normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
         several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
+        movers = self.movers[:n_movers]
         s = c.steering
+        if use_threads(n_movers):
+            with LOCK:
+                sense_steer_plan_threaded(
+                    *a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, c.refused, movers, normal, uniform,
+                    self.turn_sigma, a.angles, a.sensor_range, *s_csr, several, s.goal, s.anchors, s.last_to_goal,
+                    s.blocked_steps, s.give_up_steps, s.min_progress, c.r_eff, loop.dt, self.scans, self.length,
+                    self.slot, self.free, self.planned)
+            commit_moves(movers, self.length, self.free, self.planned, sw.xy, sw.radius, sw.state, s.goal,
+                         sw.distance, c.refused, drive_bodies, *d_csr)
+            return
         sense_steer_drive(*a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,
-                          self.movers[:n_movers], normal, uniform, self.turn_sigma, a.angles, a.sensor_range,
-                          *s_csr, several, s.goal, s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps,
-                          s.min_progress, c.r_eff, loop.dt, drive_bodies, *d_csr, self.scans, self.length)
+                          movers, normal, uniform, self.turn_sigma, a.angles, a.sensor_range, *s_csr, several, s.goal,
+                          s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps, s.min_progress, c.r_eff,
+                          loop.dt, drive_bodies, *d_csr, self.scans, self.length)
 
 
 class CompiledField:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from amronet.algorithms.agent_assisted import track_agents
 from amronet.algorithms.explorers.frontier.knowledge import FREE_FLOOR, HIT_GAIN, OCCUPIED_CAP, integrate_readings
@@ -19,11 +19,20 @@ from amronet.algorithms.forces import inverse_square_one
 from amronet.algorithms.goto import steer_one
 from amronet.algorithms.potential_field import come_to_rest, wake_and_accelerate
 from amronet.algorithms.references import track_row
-from amronet.engine.motion import drive_one, walk_one
+from amronet.engine.motion import commit_one, drive_one, plan_one, walk_one
 from amronet.engine.robots import State
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
-__all__ = ["drive_movers", "field_step", "list_movers", "sense_steer_drive", "sense_track_agents", "track_explorers"]
+__all__ = [
+    "commit_moves",
+    "drive_movers",
+    "field_step",
+    "list_movers",
+    "sense_steer_drive",
+    "sense_steer_plan_threaded",
+    "sense_track_agents",
+    "track_explorers",
+]
 
 _EXPLORE = State.EXPLORE
 _REFERENCE = State.REFERENCE
@@ -95,12 +104,41 @@ def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, ind
     return k, 0, n_movers, n_walkers
 
 
+@njit(cache=True, inline="always")
+def sense_one(blocked, clear, ox, oy, res, xy, heading, radius, big, i, angles, sensor_range, s_indptr, s_indices,
+              s_dist, sense_bodies, out):  # pragma: no cover - numba
+    """Robot ``i``'s ring into ``out``: the grid's beams, then (``sense_bodies``) shortened by the bodies near it."""
+    cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, out)
+    if sense_bodies:
+        cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big, out)
+
+
+@njit(cache=True, inline="always")
+def decide_one(i, w, state, heading, xy, max_speed, refused, normal, uniform, turn_sigma, scan, angles, sensor_range,
+               goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt):  # pragma: no cover
+    """Mover ``i``'s decision from its ring ``scan``, and the length of its step.
+
+    A walker (the ``w``-th) walks, a triangle router steers to its goal (and settles when it cannot go on).
+    """
+    if state[i] == _EXPLORE:
+        noise = turn_sigma * normal[w]
+        fresh = -np.pi + (2.0 * np.pi) * uniform[w]
+        heading[i] = walk_one(heading[i], scan, angles, sensor_range, refused[i], noise, fresh)
+        speed = max_speed[i]
+    else:
+        step, done = steer_one(i, xy, heading, goal, anchors, scan, angles, sensor_range, max_speed[i] * dt, r_eff,
+                               last_to_goal, blocked_steps, give_up, min_progress)
+        if done:
+            state[i] = _TRIANGLE_SETTLED
+        speed = step / dt
+    return speed * dt
+
+
 @njit(cache=True)
 def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed, radius, distance, refused,
                       movers, normal, uniform, turn_sigma, angles, sensor_range, s_indptr, s_indices, s_dist,
-                      sense_bodies,
-                      goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt, bodies,
-                      d_indptr, d_indices, d_dist, scans, length):  # pragma: no cover - numba
+                      sense_bodies, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt,
+                      bodies, d_indptr, d_indices, d_dist, scans, length):  # pragma: no cover - numba
     """Sense, steer and drive the ``movers``; the same per-robot functions, in the same order, as the reference.
 
     ``normal`` and ``uniform``: the walkers' draws (:func:`~amronet.engine.streams.normal_then_uniform`), scaled here as
@@ -108,31 +146,18 @@ def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed
     """
     big = radius.max()
     for m in range(movers.shape[0]):  # sense: every mover's ring, from where everybody stands now
-        i = movers[m]
-        cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, scans[m])
-        if sense_bodies:
-            cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big,
-                            scans[m])
+        sense_one(blocked, clear, ox, oy, res, xy, heading, radius, big, movers[m], angles, sensor_range, s_indptr,
+                  s_indices, s_dist, sense_bodies, scans[m])
     w = 0
-    longest = 0.0
     for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
         i = movers[m]
-        if state[i] == _EXPLORE:
-            noise = turn_sigma * normal[w]
-            fresh = -np.pi + (2.0 * np.pi) * uniform[w]
-            heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, refused[i], noise, fresh)
+        walker = state[i] == _EXPLORE
+        length[m] = decide_one(i, w, state, heading, xy, max_speed, refused, normal, uniform, turn_sigma, scans[m],
+                               angles, sensor_range, goal, anchors, last_to_goal, blocked_steps, give_up,
+                               min_progress, r_eff, dt)
+        if walker:
             w += 1
-            speed = max_speed[i]
-        else:
-            step, done = steer_one(i, xy, heading, goal, anchors, scans[m], angles, sensor_range, max_speed[i] * dt,
-                                   r_eff, last_to_goal, blocked_steps, give_up, min_progress)
-            if done:
-                state[i] = _TRIANGLE_SETTLED
-            speed = step / dt
-        length[m] = speed * dt
-        if m == 0 or length[m] > longest:
-            longest = length[m]
-    near = 2.0 * big + 2.0 * longest
+    near = 2.0 * big + 2.0 * _longest(length, movers.shape[0])
     refused[:] = False
     for m in range(movers.shape[0]):  # move, one after another
         i = movers[m]
@@ -140,13 +165,75 @@ def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed
                                  d_indptr, d_indices, d_dist, near)
         refused[i] = r
         distance[i] += travelled
-    for m in range(movers.shape[0]):  # a triangle router on its goal has arrived
+    _arrive(movers, state, xy, goal)
+
+
+@njit(cache=True, inline="always")
+def _longest(length, n):  # pragma: no cover - numba
+    longest = 0.0
+    for m in range(n):
+        if m == 0 or length[m] > longest:
+            longest = length[m]
+    return longest
+
+
+@njit(cache=True, inline="always")
+def _arrive(movers, state, xy, goal):  # pragma: no cover - numba
+    """A triangle router on its goal has arrived."""
+    for m in range(movers.shape[0]):
         i = movers[m]
         if state[i] == _TRIANGLE:
             dx = xy[i, 0] - goal[i, 0]
             dy = xy[i, 1] - goal[i, 1]
             if math.sqrt(dx * dx + dy * dy) <= 1e-9:
                 state[i] = _TRIANGLE_SETTLED
+
+
+@njit(cache=True, parallel=True)
+def sense_steer_plan_threaded(blocked, clear, ox, oy, res, xy, heading, state, max_speed, radius, refused, movers,
+                              normal, uniform, turn_sigma, angles, sensor_range, s_indptr, s_indices, s_dist,
+                              sense_bodies, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff,
+                              dt, scans, length, slot, free, planned):  # pragma: no cover - numba
+    """:func:`sense_steer_drive` up to the moves' obstacle checks, on several threads; :func:`commit_moves` ends it.
+
+    Every mover's ring, decision and path against the map depend on where the robots stand before anybody moves and
+    on the mover's own state, nothing else, so each mover is done in one go by one thread: the same numbers. The
+    walkers' draws are matched to them by their rank among the walkers (``slot``). ``free[m]`` and ``planned[m]``:
+    whether mover ``m``'s path is clear of obstacles, and where it would end.
+    """
+    big = radius.max()
+    w = 0
+    for m in range(movers.shape[0]):
+        slot[m] = w
+        if state[movers[m]] == _EXPLORE:
+            w += 1
+    for m in prange(movers.shape[0]):
+        i = movers[m]
+        sense_one(blocked, clear, ox, oy, res, xy, heading, radius, big, i, angles, sensor_range, s_indptr,
+                  s_indices, s_dist, sense_bodies, scans[m])
+        length[m] = decide_one(i, slot[m], state, heading, xy, max_speed, refused, normal, uniform, turn_sigma,
+                               scans[m], angles, sensor_range, goal, anchors, last_to_goal, blocked_steps, give_up,
+                               min_progress, r_eff, dt)
+        free[m], planned[m, 0], planned[m, 1] = plan_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1],
+                                                         heading[i], length[m], radius[i])
+
+
+@njit(cache=True)
+def commit_moves(movers, length, free, planned, xy, radius, state, goal, distance, refused, bodies, d_indptr,
+                 d_indices, d_dist):  # pragma: no cover - numba
+    """The moves of :func:`sense_steer_plan_threaded`'s movers, one after another, against the bodies as they stand."""
+    near = 2.0 * radius.max() + 2.0 * _longest(length, movers.shape[0])
+    refused[:] = False
+    for m in range(movers.shape[0]):
+        i = movers[m]
+        if free[m]:
+            r, travelled = commit_one(i, xy[i, 0], xy[i, 1], planned[m, 0], planned[m, 1], xy, radius, bodies,
+                                      d_indptr, d_indices, d_dist, near)
+        else:
+            r, travelled = True, 0.0
+        refused[i] = r
+        distance[i] += travelled
+    _arrive(movers, state, xy, goal)
 
 
 @njit(cache=True)

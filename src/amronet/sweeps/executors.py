@@ -7,7 +7,8 @@ dies (killed, out of memory) raises :class:`WorkerDiedError`, one line, instead 
 
 * :class:`LocalExecutor` — ``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes; one worker
   runs the jobs in this process, one after another. Its workers end when this process dies, even by ``kill -9``
-  (:func:`amronet.sweeps.worker.guard_worker`: a parent-death signal on Linux, a watchdog thread everywhere).
+  (:func:`amronet.sweeps.worker.guard_worker`: a parent-death signal on Linux, a watchdog thread everywhere); they
+  run their kernels on one thread (:func:`amronet.threads.serial_only`).
 * :class:`DaskExecutor` — a ``distributed.Client`` on an existing scheduler (``tcp://host:8786``; any cluster:
   ``dask scheduler`` + ``dask worker`` by hand, SLURM/PBS through ``dask-jobqueue``, Kubernetes...) or on a
   ``LocalCluster`` it starts. Dask is optional: ``pip install 'amronet[cluster]'``. Losing the scheduler,
@@ -32,7 +33,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from amronet.errors import AmronetError
-from amronet.sweeps.worker import guard_worker
+from amronet.sweeps.worker import start_worker
 
 __all__ = ["DEFAULT_WORKER_TIMEOUT_S", "ClusterLostError", "DaskExecutor", "Executor", "LocalExecutor",
            "WorkerDiedError", "check_worker_timeout", "default_workers", "make_executor"]
@@ -186,7 +187,7 @@ class LocalExecutor(Executor):
         if self._pool is None:
             # the parent-death signal follows the thread that forks the workers: only from the main thread
             death_signal = threading.current_thread() is threading.main_thread()
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=guard_worker,
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=start_worker,
                                              initargs=(os.getpid(), death_signal))
         pending: dict[Future[Any], int] = {}
         try:

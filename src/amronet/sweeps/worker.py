@@ -25,8 +25,10 @@ from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.sim.batch import run_seeds
+from amronet.threads import serial_only
 
-__all__ = ["SUMMARY_EXTRAS", "execute_batch", "execute_job", "guard_worker", "one_line_error", "pid_alive"]
+__all__ = ["SUMMARY_EXTRAS", "execute_batch", "execute_job", "guard_worker", "one_line_error", "pid_alive",
+           "start_worker"]
 
 SUMMARY_EXTRAS = ("wall_time_s", "amronet_version", "scenario")
 """Summary fields the store keeps in their own columns rather than in the summary JSON (in this order, last)."""
@@ -105,6 +107,16 @@ def guard_worker(parent_pid: int, death_signal: bool = True) -> str:
 
     threading.Thread(target=watch, name="amronet-parent-watchdog", daemon=True).start()
     return used
+
+
+def start_worker(parent_pid: int, death_signal: bool = True) -> str:
+    """A local pool's initializer: kernels on one thread, and no worker outliving the sweep.
+
+    The pool already uses every core (:func:`amronet.threads.serial_only`); :func:`guard_worker` ties the worker to
+    the sweep, and its answer is returned.
+    """
+    serial_only()
+    return guard_worker(parent_pid, death_signal)
 
 
 def one_line_error(exc: BaseException) -> str:
