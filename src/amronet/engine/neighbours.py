@@ -195,10 +195,10 @@ def _upper_pairs(cs, sx, sy, r2, nx, ny, n_groups):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _sorted_point_table(ustart, pb, sidx, by_index):  # pragma: no cover - numba
-    """Neighbour table per sorted point: row a is ``qi[qp[a]:qp[a + 1]]``.
+def _sorted_point_table(ustart, pb, label):  # pragma: no cover - numba
+    """Neighbour table per sorted point: row a is ``qi[qp[a]:qp[a + 1]]``, sorted point b entered as ``label[b]``.
 
-    Entries are original indices (``by_index``) or sorted positions.
+    ``label``: the original indices (``sidx``), or the sorted positions themselves (``0, 1, ...``).
     """
     n = ustart.shape[0] - 1
     npairs = ustart[n]
@@ -213,10 +213,10 @@ def _sorted_point_table(ustart, pb, sidx, by_index):  # pragma: no cover - numba
         u0 = ustart[_u(a)]
         u1 = ustart[_u(a + 1)]
         o = qp[_u(a + 1)] - u1  # row a: earlier neighbours (scattered here by them), then its own upper list
-        ia = sidx[_u(a)] if by_index else a
+        ia = label[_u(a)]
         for k in range(u0, u1):
             b = pb[_u(k)]
-            qi[_u(o + k)] = sidx[_u(b)] if by_index else b
+            qi[_u(o + k)] = label[_u(b)]
             f = fill[_u(b)]
             qi[_u(f)] = ia
             fill[_u(b)] = f + 1
@@ -224,8 +224,8 @@ def _sorted_point_table(ustart, pb, sidx, by_index):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _transpose_by_index(qp, qi, sidx):  # pragma: no cover - numba
-    """Final CSR indices: visiting c = 0, 1, ... and appending c to its neighbours' rows sorts every row."""
+def _rank_and_indptr(qp, sidx):  # pragma: no cover - numba
+    """Every point's place in the cell order (``rank``) and the final CSR's row pointers."""
     n = sidx.shape[0]
     rank = np.empty(n, np.int32)
     for a in range(n):
@@ -235,6 +235,14 @@ def _transpose_by_index(qp, qi, sidx):  # pragma: no cover - numba
     for i in range(n):
         a = rank[_u(i)]
         indptr[_u(i + 1)] = indptr[_u(i)] + (qp[_u(a + 1)] - qp[_u(a)])
+    return rank, indptr
+
+
+@njit(cache=True)
+def _transpose_by_index(qp, qi, sidx):  # pragma: no cover - numba
+    """Final CSR indices: visiting c = 0, 1, ... and appending c to its neighbours' rows sorts every row."""
+    n = sidx.shape[0]
+    rank, indptr = _rank_and_indptr(qp, sidx)
     fill = indptr[:n].copy()
     indices = np.empty(indptr[n], np.int32)
     for c in range(n):
@@ -273,7 +281,7 @@ def _neighbour_csr(xy, r, group, n_groups):  # pragma: no cover - numba
         return False, np.zeros(1, np.int64), np.empty(0, np.int32), np.empty(0)
     cs, sidx, sx, sy = _cell_sort(xy, group, n_groups, xmin, ymin, inv_h, nx, ny)
     ustart, pb = _upper_pairs(cs, sx, sy, r * r, nx, ny, n_groups)
-    qp, qi = _sorted_point_table(ustart, pb, sidx, True)
+    qp, qi = _sorted_point_table(ustart, pb, sidx)
     indptr, indices = _transpose_by_index(qp, qi, sidx)
     return True, indptr, indices, _distances(xy, indptr, indices)
 
@@ -301,14 +309,7 @@ def _rows_threaded(qp, qi, sidx, sx, sy):  # pragma: no cover - numba
                 p -= 1
             cols[_u(p)] = j
             sq[_u(p)] = d2
-    rank = np.empty(n, np.int64)
-    for a in range(n):
-        rank[_u(sidx[_u(a)])] = a
-    indptr = np.empty(n + 1, np.int64)
-    indptr[0] = 0
-    for i in range(n):
-        a = rank[_u(i)]
-        indptr[_u(i + 1)] = indptr[_u(i)] + (qp[_u(a + 1)] - qp[_u(a)])
+    rank, indptr = _rank_and_indptr(qp, sidx)
     indices = np.empty(indptr[n], np.int32)
     dist = np.empty(indptr[n])
     for i in prange(n):  # row i is sorted point rank[i]'s row
@@ -329,7 +330,7 @@ def _sorted_table(xy, r, group, n_groups):  # pragma: no cover - numba
         return False, np.zeros(1, np.int64), np.empty(0, np.int32), np.empty(0, np.int32), empty, empty
     cs, sidx, sx, sy = _cell_sort(xy, group, n_groups, xmin, ymin, inv_h, nx, ny)
     ustart, pb = _upper_pairs(cs, sx, sy, r * r, nx, ny, n_groups)
-    qp, qi = _sorted_point_table(ustart, pb, sidx, False)
+    qp, qi = _sorted_point_table(ustart, pb, np.arange(sidx.shape[0], dtype=np.int32))
     return True, qp, qi, sidx, sx, sy
 
 
