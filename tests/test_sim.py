@@ -4,10 +4,12 @@ import numpy as np
 import pytest
 
 from amronet.algorithms import AreaKnowledge, Setup
-from amronet.errors import ScenarioError
+from amronet.errors import AmronetError, ScenarioError
 from amronet.scenario import load_scenario
 from amronet.sim import BatchSimulation, Simulation
+from amronet.sim.bench import BASE_SPACING_M, _spaced_bases
 from amronet.sim.loop import Loop
+from amronet.world.builtin import resolve_map
 
 
 def scenario(algorithm="self-spreading", **overrides):
@@ -113,3 +115,15 @@ def test_the_loop_asks_controllers_through_their_declared_interface():
     assert aa.default_coverage_target == 0.99 and ss.default_coverage_target is None
     sim = Simulation(scenario("dssa"), 1)
     assert sim.controller.unsettled().sum() == 12 and not sim.controller.settled
+
+
+def test_bench_base_stations_are_spaced_apart_or_refused():
+    """``amronet bench`` draws a base station per 1 000 robots: never two whose reference nodes would overlap."""
+    omap = resolve_map("open-6x6")
+    rows, cols = np.nonzero(omap.free)
+    bases = _spaced_bases(omap, rows, cols, 40, np.random.default_rng(1))
+    assert bases.shape == (40, 2)
+    gaps = np.linalg.norm(bases[:, None] - bases[None], axis=-1) + np.eye(40) * 1e9
+    assert gaps.min() >= BASE_SPACING_M
+    with pytest.raises(AmronetError, match="--robots: the map has no room for 400 base stations"):
+        _spaced_bases(omap, rows, cols, 400, np.random.default_rng(1))  # 36 m² hold about 100

@@ -36,6 +36,9 @@ __all__ = ["run_bench"]
 BASE_CLEARANCE_M = 0.3
 """Base stations go where the nearest obstacle is at least this far (a reference node's body is 0.165 m)."""
 
+BASE_SPACING_M = 2.0 * BASE_CLEARANCE_M
+"""And at least this far from each other (their reference nodes' bodies must not overlap)."""
+
 
 def _largest_free_region(omap) -> np.ndarray:
     """Mask of the largest 4-connected free region of the map (where the benchmark's robots live)."""
@@ -45,6 +48,31 @@ def _largest_free_region(omap) -> np.ndarray:
     sizes = np.bincount(labels.ravel())
     sizes[0] = 0
     return labels == int(np.argmax(sizes))
+
+
+def _spaced_bases(omap, rows: np.ndarray, cols: np.ndarray, n_bases: int, rng: np.random.Generator) -> np.ndarray:
+    """``n_bases`` cell centres among ``rows, cols``, drawn at random, every two at least ``BASE_SPACING_M`` apart.
+
+    The first draw is kept where it is spaced enough (so that a draw without a clash is the one it always was);
+    a base too close to an earlier one is drawn again.
+
+    Raises:
+        AmronetError: The cells cannot hold that many bases that far apart (too many robots for the map).
+    """
+    pick = rng.choice(len(rows), size=min(n_bases, len(rows)), replace=False)
+    kept: list[np.ndarray] = []
+    candidates = iter(omap.cell_centres(rows[pick], cols[pick]))
+    for _ in range(n_bases + 100 * n_bases):
+        xy = next(candidates, None)
+        if xy is None:  # a clash: another cell, at random
+            k = int(rng.integers(len(rows)))
+            xy = omap.cell_centres(rows[k], cols[k])
+        if all(math.dist(xy, other) >= BASE_SPACING_M for other in kept):
+            kept.append(xy)
+            if len(kept) == n_bases:
+                return np.array(kept)
+    raise AmronetError(f"--robots: the map has no room for {n_bases} base stations {BASE_SPACING_M} m apart "
+                       "(one per 1 000 robots); use fewer robots")
 
 
 def run_bench(
@@ -90,9 +118,8 @@ def run_bench(
         omap = dataclasses.replace(omap, resolution=omap.resolution * scale, _cache={})
     roomy = largest & (clearance(omap) >= BASE_CLEARANCE_M)  # room for a base node's body
     rows, cols = np.nonzero(roomy if roomy.any() else largest)
-    n_bases = max(1, robots // 1000)
-    pick = rng.choice(len(rows), size=n_bases, replace=False)
-    bases = omap.cell_centres(rows[pick], cols[pick])
+    bases = _spaced_bases(omap, rows, cols, max(1, robots // 1000), rng)
+    n_bases = len(bases)
     scenario = load_scenario({
         "name": f"bench-{map_name}-{robots}",
         "map": map_name,
