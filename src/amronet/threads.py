@@ -1,10 +1,12 @@
 """When amronet's kernels use more than one core: large runs only, on a thread pool that survives ``fork``.
 
-A step of a few thousand robots takes a millisecond or two, less than handing work to other threads is worth,
+A step of a few thousand robots takes a few milliseconds, less than handing work to other threads is worth,
 and a sweep already keeps every core busy with one run per worker process. A run of tens of thousands of robots
-is different: its neighbour search and its sensor rings take tens of milliseconds, spent row by row and robot by
-robot on independent data. Those two kernels have a threaded twin (``prange`` over rows or robots) that gives
-the same numbers bit for bit; a caller picks it with :func:`use_threads`, which says yes only when
+is different: its neighbour search and the sensing, deciding and obstacle checks of its self-spreading step take
+tens of milliseconds, spent row by row and robot by robot on independent data. Those have threaded twins
+(``prange`` over rows or robots: :func:`amronet.engine.neighbours.neighbour_csr_checked`,
+:class:`amronet.sim.compiled_step.CompiledSpreading`) that give the same numbers bit for bit; a caller picks one
+with :func:`use_threads`, which says yes only when
 
 * the call handles at least :data:`MIN_ITEMS` points or robots,
 * this process may use threads (:func:`serial_only` was not called: a sweep's worker processes call it, the
@@ -12,10 +14,10 @@ the same numbers bit for bit; a caller picks it with :func:`use_threads`, which 
 * numba has more than one thread (``NUMBA_NUM_THREADS``, by default the number of cores).
 
 numba's thread pool comes in three kinds. The GNU OpenMP one that numba picks first on Linux is not safe to
-``fork`` (a child process that forks after its parent used it hangs), and amronet's sweeps fork their workers, so
-:func:`configure` asks numba for a fork-safe pool (``forksafe``: Intel TBB where it is installed, else numba's
-own ``workqueue``), unless the user chose one with ``NUMBA_THREADING_LAYER``. ``workqueue`` must not be entered
-by two Python threads at once; callers hold :data:`LOCK` while a threaded kernel runs.
+``fork`` (a child forked after its parent used it is killed when it uses it), and amronet's sweeps fork their
+workers, so :func:`configure` asks numba for a fork-safe pool (``forksafe``: Intel TBB where it is installed,
+else numba's own ``workqueue``), unless the user chose one with ``NUMBA_THREADING_LAYER``. ``workqueue`` must not
+be entered by two Python threads at once; callers hold :data:`LOCK` while a threaded kernel runs.
 """
 
 from __future__ import annotations
@@ -27,10 +29,13 @@ import numba
 
 __all__ = ["LOCK", "MIN_ITEMS", "configure", "serial_only", "threads_for", "use_threads"]
 
-MIN_ITEMS = 20_000
-"""Fewest points (neighbour search) or moving robots (sensor rings) for which a kernel runs on several threads.
+MIN_ITEMS = 30_000
+"""Fewest points (neighbour search) or moving robots (self-spreading step) for which a kernel runs on several threads.
 
-Measured on the project's 2-core machine: below ~10 000 the threads' start and join cost as much as they save."""
+Measured on the project's 2-core machine, the full self-spreading step of ``amronet bench`` with threads against
+one thread, stepping alternately in one process: 0.95x at 20 000 robots, 0.94-1.29x at 30 000, 1.18-1.42x at
+40 000-50 000, 1.30-1.74x at 100 000. Below that the threads' start and join and the step's extra pass cost as much
+as they save (the work of a few thousand robots stays in the caches)."""
 
 LOCK = threading.Lock()
 """Held while a threaded kernel runs (numba's ``workqueue`` pool takes one caller at a time)."""
