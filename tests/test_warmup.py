@@ -18,13 +18,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # In a fresh process: warm up (loads the kernels from numba's cache, or compiles them if the cache is cold), then
 # listen for numba compiling anything while runs that the warm-up did not list run: every built-in preset, and
-# random scenarios of the soak (tools/soak.py: any map, algorithm and parameters, radio model, faults, robots).
+# random scenarios of the soak (tools/soak.py: any map, algorithm and parameters, radio model, faults, robots), and
+# the threaded kernels of large runs.
 _PROBE = """
 import importlib.util, json, sys
 from numba.core import event
 from amronet.scenario import list_presets, load_scenario
 from amronet.sim import Simulation
 from amronet.sim.warmup import warm_up
+from amronet.threads import threads_from
 
 warm_up(jobs=1)
 compiled = []
@@ -40,6 +42,8 @@ class Listener(event.Listener):
 event.register("numba:compile", Listener())
 for name in list_presets():
     Simulation(load_scenario(name, {"sim.time_limit": 3.0}), 1).run()
+with threads_from(0):  # what a run of 30 000 robots or more runs
+    Simulation(load_scenario("self-spreading-office", {"sim.time_limit": 3.0}), 1).run()
 spec = importlib.util.spec_from_file_location("soak", sys.argv[1])
 soak = importlib.util.module_from_spec(spec)
 sys.modules["soak"] = soak

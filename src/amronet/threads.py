@@ -22,12 +22,14 @@ be entered by two Python threads at once; callers hold :data:`LOCK` while a thre
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
+from collections.abc import Iterator
 
 import numba
 
-__all__ = ["LOCK", "MIN_ITEMS", "configure", "serial_only", "threads_for", "use_threads"]
+__all__ = ["LOCK", "MIN_ITEMS", "configure", "serial_only", "threads_for", "threads_from", "use_threads"]
 
 MIN_ITEMS = 30_000
 """Fewest points (neighbour search) or moving robots (self-spreading step) for which a kernel runs on several threads.
@@ -63,3 +65,18 @@ def use_threads(items: int) -> bool:
 def threads_for(items: int) -> int:
     """How many threads a kernel over ``items`` points or robots runs on (1 unless :func:`use_threads`)."""
     return numba.get_num_threads() if use_threads(items) else 1
+
+
+@contextlib.contextmanager
+def threads_from(items: int) -> Iterator[None]:
+    """Within the block, kernels over ``items`` points or robots or more run threaded.
+
+    ``amronet compile`` compiles the threaded kernels on a small run with ``threads_from(0)``.
+    """
+    global MIN_ITEMS
+    before = MIN_ITEMS
+    MIN_ITEMS = items
+    try:
+        yield
+    finally:
+        MIN_ITEMS = before

@@ -5,7 +5,8 @@ so the first run in a fresh environment pays the compiling (tens of seconds) and
 machine code in milliseconds. :func:`warm_up` moves that cost to the installation (``make`` calls ``amronet
 compile``): it runs, for a few simulated seconds, one scenario per algorithm, explorer, drop rule, walk rule and
 radio model that amronet registers, a batch of the batchable algorithms, runs with faults and packet loss, and the
-signal map, so that a user's first run finds every kernel it uses compiled. The cases are built from the
+signal map, and one small run with the threaded kernels of large runs (:mod:`amronet.threads`), so that a user's
+first run finds every kernel it uses compiled. The cases are built from the
 registries: a new explorer, drop rule or radio model is warmed up without a change here.
 
 The runs' results are thrown away; they change nothing but numba's cache (the same machine code a first run would
@@ -14,6 +15,7 @@ have compiled), so results are bit for bit the same with or without a warm-up.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import time
 from collections.abc import Callable
@@ -31,7 +33,8 @@ from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import MEDIA, make_medium
 from amronet.scenario import load_scenario
 from amronet.sim.batch import run_seeds
-from amronet.sim.loop import Simulation
+from amronet.sim.loop import Simulation, StepKind
+from amronet.threads import threads_from
 from amronet.world.builtin import resolve_map
 
 __all__ = ["BASE_PRESETS", "WarmupCase", "warm_up", "warmup_cases"]
@@ -58,6 +61,8 @@ class WarmupCase:
         overrides: Dotted-path fields to replace.
         seeds: One seed: a single run; several: one batch of them (the batched kernels).
         seconds: Simulated seconds.
+        threaded: Run the kernels that large runs run on several threads (:mod:`amronet.threads`).
+        step: The loop's step (``reference``: phase by phase, as the runs a compiled step does not cover).
     """
 
     label: str
@@ -65,14 +70,17 @@ class WarmupCase:
     overrides: dict[str, Any] = field(default_factory=dict)
     seeds: tuple[int, ...] = (1,)
     seconds: float = _SECONDS
+    threaded: bool = False
+    step: StepKind = "compiled"
 
     def run(self) -> None:
         """Run the case (the result is discarded)."""
         scenario = load_scenario(self.preset, {"sim.time_limit": self.seconds, **self.overrides})
-        if len(self.seeds) > 1:
-            run_seeds(scenario, list(self.seeds))
-        else:
-            Simulation(scenario, self.seeds[0]).run()
+        with threads_from(0) if self.threaded else contextlib.nullcontext():
+            if len(self.seeds) > 1:
+                run_seeds(scenario, list(self.seeds))
+            else:
+                Simulation(scenario, self.seeds[0], step=self.step).run()
 
 
 def _signal_map() -> None:
@@ -100,12 +108,15 @@ def warmup_cases() -> list[WarmupCase]:
         WarmupCase("faults and relocation", aa,
                    {"faults": [{"at": 1.0, "routers": 0.5}], "algorithm.params.repair": "relocate",
                     "algorithm.params.explorer": "frontier", "sim.coverage_target": "off"}),
-        # two networks that meet within seconds: triangle routers drive to their goal points
-        WarmupCase("triangular deployment", "self-spreading-6x6",
-                   {"base_stations": [{"x": -1.2, "y": 0.0, "region": [0.6, 0.6]},
-                                      {"x": 1.2, "y": 0.0, "region": [0.6, 0.6]}]}, seconds=20.0),
+        # two networks that meet within seconds: triangle routers drive to their goal points, in the compiled step
+        # and phase by phase (as in agent-assisted runs with several base stations)
+        *(WarmupCase(f"triangular deployment, {step} step", "self-spreading-6x6",
+                     {"base_stations": [{"x": -1.2, "y": 0.0, "region": [0.6, 0.6]},
+                                        {"x": 1.2, "y": 0.0, "region": [0.6, 0.6]}]}, seconds=20.0, step=step)
+          for step in ("compiled", "reference")),
         WarmupCase("batch self-spreading", "self-spreading-6x6", seeds=(1, 2)),
         WarmupCase("batch potential field", "potential-field-6x6", seeds=(1, 2)),
+        WarmupCase("large runs: the threaded kernels", "self-spreading-6x6", threaded=True),
     ]
     return cases
 
