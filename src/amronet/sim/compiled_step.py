@@ -15,7 +15,11 @@ kernels are in :mod:`amronet.sim.step_kernels`):
   batch's streams), in the order and number the controller draws them. Second, the routers still moving read
   their range rings (grid and bodies), steer (the random walk, :func:`~amronet.engine.motion.walk_one`, or the
   triangle router's go-to-goal, :func:`~amronet.algorithms.goto.steer_one`) and drive one after another with the
-  collision checks (:func:`~amronet.engine.motion.drive_one`).
+  collision checks (:func:`~amronet.engine.motion.drive_one`). With tens of thousands of movers
+  (:func:`amronet.threads.use_threads`) the second pass is split in two: every mover's ring, decision and path
+  against the map on several threads (:func:`~amronet.sim.step_kernels.sense_steer_plan_threaded`; they depend on
+  where the robots stand before anybody moves and on the mover itself), then the collision checks against the
+  bodies and the moves one after another (:func:`~amronet.sim.step_kernels.commit_moves`): the same numbers.
 * :class:`CompiledField`, the potential field (every rule): the exploring routers' rings and obstacle forces, the
   controller's wake-and-accelerate kernel, the moves and its come-to-rest kernel, in one call (no random draws).
 
