@@ -10,7 +10,7 @@ import pytest
 
 from amronet import threads
 from amronet.engine import neighbours
-from amronet.sweeps.worker import start_worker
+from amronet.sweeps.worker import on_one_thread, start_worker
 
 
 def test_only_large_calls_use_threads(monkeypatch):
@@ -64,3 +64,11 @@ def test_a_child_forked_after_a_threaded_kernel_can_run_one(monkeypatch):
         pytest.skip(f"the user chose the {numba.threading_layer()!r} layer")
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
         assert pool.submit(_threaded_search, 2000).result(timeout=120) == expected
+
+
+def test_a_clusters_jobs_run_their_kernels_on_one_thread(monkeypatch):
+    """Dask runs one job per core: every job goes through ``on_one_thread`` (the executor maps it)."""
+    monkeypatch.setattr(threads, "_serial", False)
+    monkeypatch.setattr(numba.config, "NUMBA_NUM_THREADS", 2)
+    assert on_one_thread(_worker_may_use_threads, 0) is False
+    assert on_one_thread(lambda job: job + 1, 41) == 42

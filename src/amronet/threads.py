@@ -9,8 +9,8 @@ tens of milliseconds, spent row by row and robot by robot on independent data. T
 with :func:`use_threads`, which says yes only when
 
 * the call handles at least :data:`MIN_ITEMS` points or robots,
-* this process may use threads (:func:`serial_only` was not called: a sweep's worker processes call it, the
-  pool already runs one run per core), and
+* this process may use threads (:func:`serial_only` was not called: a sweep's worker processes call it, and every
+  job on a Dask cluster: they already run one run per core), and
 * numba has more than one thread (``NUMBA_NUM_THREADS``, by default the number of cores).
 
 numba's thread pool comes in three kinds. The GNU OpenMP one that numba picks first on Linux is not safe to

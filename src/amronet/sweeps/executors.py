@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import importlib
 import logging
 import os
@@ -33,7 +34,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from amronet.errors import AmronetError
-from amronet.sweeps.worker import start_worker
+from amronet.sweeps.worker import on_one_thread, start_worker
 
 __all__ = ["DEFAULT_WORKER_TIMEOUT_S", "ClusterLostError", "DaskExecutor", "Executor", "LocalExecutor",
            "WorkerDiedError", "check_worker_timeout", "default_workers", "make_executor"]
@@ -291,7 +292,8 @@ class DaskExecutor(Executor):
         futures: list[Any] = []
         watch = _WorkerWatch(self, self.worker_timeout)
         try:
-            futures = self.client.map(fn, list(jobs), pure=False)
+            # a cluster runs one job per core: each job's kernels stay on one thread (amronet.threads)
+            futures = self.client.map(functools.partial(on_one_thread, fn), list(jobs), pure=False)
             index = {fut.key: k for k, fut in enumerate(futures)}
             for fut in watch.as_completed(distributed.as_completed(futures)):
                 k = index[fut.key]

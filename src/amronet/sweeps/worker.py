@@ -18,6 +18,7 @@ import socket
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from amronet import __version__
@@ -27,8 +28,16 @@ from amronet.sim import Simulation
 from amronet.sim.batch import run_seeds
 from amronet.threads import serial_only
 
-__all__ = ["SUMMARY_EXTRAS", "execute_batch", "execute_job", "guard_worker", "one_line_error", "pid_alive",
-           "start_worker"]
+__all__ = [
+    "SUMMARY_EXTRAS",
+    "execute_batch",
+    "execute_job",
+    "guard_worker",
+    "on_one_thread",
+    "one_line_error",
+    "pid_alive",
+    "start_worker",
+]
 
 SUMMARY_EXTRAS = ("wall_time_s", "amronet_version", "scenario")
 """Summary fields the store keeps in their own columns rather than in the summary JSON (in this order, last)."""
@@ -117,6 +126,15 @@ def start_worker(parent_pid: int, death_signal: bool = True) -> str:
     """
     serial_only()
     return guard_worker(parent_pid, death_signal)
+
+
+def on_one_thread(fn: Callable[[Any], Any], job: Any) -> Any:
+    """``fn(job)`` with this process's kernels on one thread: a cluster's workers run one job per core each.
+
+    (:func:`amronet.threads.serial_only`; a Dask worker is a long-lived process that runs only amronet's jobs.)
+    """
+    serial_only()
+    return fn(job)
 
 
 def one_line_error(exc: BaseException) -> str:
