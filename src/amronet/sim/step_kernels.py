@@ -119,8 +119,8 @@ def decide_one(i, w, state, heading, xy, max_speed, refused, normal, uniform, tu
     """Mover ``i``'s decision from its ring ``scan``, and the length of its step.
 
     A walker (the ``w``-th) walks, a triangle router steers to its goal (and settles when it cannot go on): the
-    operations of :func:`sense_steer_drive`'s decide loop, which keeps them written out (called from there, this
-    function made the one-thread step about 15 % slower at N = 3 000).
+    operations of :func:`sense_steer_drive`'s decide loop, which keeps them (and its sense loop) written out: calling
+    this function and :func:`sense_one` from there made the one-thread step 15-20 % slower at N = 3 000.
     """
     if state[i] == _EXPLORE:
         noise = turn_sigma * normal[w]
