@@ -152,7 +152,7 @@ def test_the_search_leaves_its_scratch_buffers_as_it_found_them():
 def test_the_navigation_kernel_unpacks_its_named_inputs_in_the_order_of_their_fields():
     # navigate() hands the kernel its named tuples as plain tuples, which the kernel unpacks by position
     kernel = next(node for node in ast.parse(inspect.getsource(navigation)).body
-                  if isinstance(node, ast.FunctionDef) and node.name == "_navigate")
+                  if isinstance(node, ast.FunctionDef) and node.name == "navigate_kernel")
     unpacked = {stmt.value.id: [name.id for name in stmt.targets[0].elts] for stmt in kernel.body
                 if isinstance(stmt, ast.Assign) and isinstance(stmt.targets[0], ast.Tuple)
                 and isinstance(stmt.value, ast.Name)}

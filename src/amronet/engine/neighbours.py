@@ -53,7 +53,7 @@ from numba import uint64 as _u  # unsigned indices: numba then skips its negativ
 
 from amronet.threads import LOCK, use_threads
 
-__all__ = ["GroupIds", "neighbour_csr", "neighbour_csr_checked", "pairs_from_csr"]
+__all__ = ["GroupIds", "neighbour_csr", "neighbour_csr_checked", "pairs_from_csr", "search_kernel"]
 
 _EPS = 2.0**-52
 _MIN_CELL = 1e-150  # below this r * r is subnormal and loses relative precision; cells never get smaller
@@ -277,7 +277,12 @@ def _distances(xy, indptr, indices):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _neighbour_csr(xy, r, group, n_groups):  # pragma: no cover - numba
+def search_kernel(xy, r, group, n_groups):  # pragma: no cover - numba
+    """The one-thread search, for other kernels: ``(ok, indptr, indices, dist)``, ``ok`` false on non-finite ``xy``.
+
+    ``group``: every point's group id (``n_groups`` of them, ids ``0 .. n_groups - 1``); what
+    :func:`neighbour_csr_checked` runs below :data:`~amronet.threads.MIN_ITEMS` points.
+    """
     ok, xmin, ymin, inv_h, nx, ny = _grid(xy, r, n_groups)
     if not ok:
         return False, np.zeros(1, np.int64), np.empty(0, np.int32), np.empty(0)
@@ -452,7 +457,7 @@ def neighbour_csr_checked(xy: np.ndarray, r: float, groups: GroupIds) -> tuple[n
             with LOCK:
                 return _rows_threaded(qp, qi, sidx, sx, sy)
     else:
-        ok, indptr, indices, dist = _neighbour_csr(xy, r, groups.ids, groups.count)
+        ok, indptr, indices, dist = search_kernel(xy, r, groups.ids, groups.count)
         if ok:
             return indptr, indices, dist
     raise ValueError("xy has non-finite coordinates")

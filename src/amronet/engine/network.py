@@ -12,7 +12,15 @@ from typing import Protocol
 import numpy as np
 from numba import njit
 
-__all__ = ["CSRGraph", "agents_connected", "component_counts", "components", "connected_to", "hop_counts"]
+__all__ = [
+    "CSRGraph",
+    "agents_connected",
+    "agents_linked_kernel",
+    "component_counts",
+    "components",
+    "connected_to",
+    "hop_counts",
+]
 
 
 class CSRGraph(Protocol):
@@ -125,7 +133,7 @@ def hop_counts(graph: CSRGraph, sources: np.ndarray, nodes: np.ndarray | None = 
 
 
 @njit(cache=True)
-def _agents_linked(indptr, indices, agents, bases, network, out):  # pragma: no cover - numba
+def agents_linked_kernel(indptr, indices, agents, bases, network, out):  # pragma: no cover - numba
     """``out[m]``: agent ``agents[m]`` hears a node of ``network`` that has a path to a base through ``network``."""
     n = indptr.shape[0] - 1
     labels = np.full(n, -1, dtype=np.int64)
@@ -158,6 +166,6 @@ def agents_connected(graph: CSRGraph, agents: np.ndarray, bases: np.ndarray, net
         Boolean mask ``(A,)``.
     """
     out = np.empty(len(agents), dtype=np.bool_)
-    _agents_linked(graph.indptr, graph.indices, np.asarray(agents, dtype=np.int64),
+    agents_linked_kernel(graph.indptr, graph.indices, np.asarray(agents, dtype=np.int64),
                    np.asarray(bases, dtype=np.int64), np.asarray(network, dtype=np.bool_), out)
     return out

@@ -259,6 +259,25 @@ class RadioMedium:
         return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm, margin, b.exponent,
                               candidates)
 
+    @property
+    def keeps_every_pair(self) -> bool:
+        """Whether a table is every pair the search finds within :attr:`reach`, as it is (the unit disk).
+
+        So it is for a single run without failed nodes when the model has no margins and drops no link by a rule or
+        by loss: :meth:`update` then builds :meth:`plain_table`.
+        """
+        return (type(self).margins is RadioMedium.margins and type(self).keep is RadioMedium.keep
+                and not self.packet_loss)
+
+    def plain_table(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray) -> NeighbourTable:
+        """The table :meth:`update` builds of one run's positions ``xy`` when :attr:`keeps_every_pair` holds.
+
+        For a compiled caller that searched itself (:func:`~amronet.engine.neighbours.search_kernel` within
+        :attr:`reach`) and found this CSR.
+        """
+        b = self.budget
+        return NeighbourTable(xy, self.reach, indptr, indices, dist, None, b.threshold_dbm, None, b.exponent, None)
+
     def _group_ids(self, groups: np.ndarray | None, n: int) -> GroupIds:
         """``groups`` checked for ``n`` points; kept while the same array (a loop's, for all its steps) comes back."""
         known = self._groups

@@ -28,6 +28,7 @@ import numpy as np
 from amronet.algorithms.agent_assisted import AgentAssisted
 from amronet.algorithms.base import Command, Readings, StepInput
 from amronet.algorithms.explorers.frontier import FrontierExplorer, KnowledgeGrid
+from amronet.sim.agent_stretch import QuietStretch
 from amronet.sim.phases import move, sense
 from amronet.sim.step_kernels import drive_movers, sense_track_agents
 from amronet.sim.surroundings import Surroundings
@@ -56,6 +57,8 @@ class CompiledAgents:
         """The grid the compiled call updates (a stand-in of the same types for other explorers: left alone)."""
         self.robot_radius = float(c.explorer.robot_radius) if self.frontier else 0.0
         self.around = Surroundings(loop, sw.models[c.agent_model])
+        self.stretch = QuietStretch(self) if QuietStretch.applies(self) else None
+        """Quiet steps in one compiled call (:mod:`amronet.sim.agent_stretch`), or ``None``."""
 
     @staticmethod
     def applies(loop: Loop) -> bool:
@@ -71,38 +74,58 @@ class CompiledAgents:
 
     def step(self) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
-        loop, c, sw = self.loop, self.controller, self.loop.swarm
-        table = loop.table
+        c = self.controller
         if c.settle_at or c.moving_triangles:  # another robot moves or settles: the phases one by one
             self._phases()
             return
-        agents = c.agents
-        n_before = len(sw)
+        n_before = len(self.loop.swarm)
+        scans, n_cand, n_losing = self._sense_track()
+        if n_cand or n_losing:  # an agent acts: the controller's own rules, then the move phase
+            self.act(n_before, n_cand, n_losing, scans)
+            return
+        if self.frontier:  # the readings are in its grid already
+            self.knowledge.stamp += 1
+        self._steer(scans)
+        self.drive()
+
+    def _sense_track(self) -> tuple[np.ndarray, int, int]:
+        """The agents' rings and reference tracking (and, in a quiet step, their readings in the frontier grid)."""
+        loop, c, sw = self.loop, self.controller, self.loop.swarm
+        table = loop.table
         is_ref, deployed_xy = c.deployed_nodes()
-        explorer, grid, a = self.explorer, self.knowledge, self.around
+        grid, a = self.knowledge, self.around
         several = len(sw.xy) > 1
         s_csr = a.near(sw.xy, table, float(a.sensor_range + a.largest_radius()))
         buf_r, buf_c = grid.buffers(a.sensor_range)
-        scans = np.empty((len(agents), len(a.angles)))  # fresh, as the sense phase's: an explorer may keep it
+        scans = np.empty((len(c.agents), len(a.angles)))  # fresh, as the sense phase's: an explorer may keep it
         n_cand, n_losing = sense_track_agents(
-            *a.grid, sw.xy, sw.heading, sw.radius, agents, a.angles, a.sensor_range, *s_csr, several, scans,
+            *a.grid, sw.xy, sw.heading, sw.radius, c.agents, a.angles, a.sensor_range, *s_csr, several, scans,
             c.current, is_ref, sw.status, table.indptr, table.indices, table.dist, c.wants_other, c.left, c.r_eff,
             c.nearest_d, c.other_ref, self.frontier, grid.score, grid.seen, float(grid.origin[0]),
             float(grid.origin[1]), float(grid.resolution), deployed_xy, self.robot_radius, buf_r, buf_c,
             grid.row_stamp, grid.stamp + 1)
-        if n_cand or n_losing:  # an agent acts: the controller's own rules, then the move phase
-            self._decide_and_move(lambda step: c.decide_tracked(step, n_before, n_cand, n_losing),
-                                  Readings({c.agent_model: (agents, scans)}))
-            return
-        if self.frontier:  # the readings are in its grid already
-            grid.stamp += 1
-        steer = explorer.plan_and_steer if self.frontier else explorer.steer
-        steer(sw.heading, agents, scans, a.sensor_range, c.refused[agents], c.rng, sw.xy, deployed_xy)
-        length = explorer.speed(c.agent_speed) * loop.dt
+        return scans, n_cand, n_losing
+
+    def act(self, n_before: int, n_cand: int, n_losing: int, scans: np.ndarray) -> None:
+        """The rest of a step in which an agent acts: the controller's own rules, then the move phase."""
+        c = self.controller
+        self._decide_and_move(lambda step: c.decide_tracked(step, n_before, n_cand, n_losing),
+                              Readings({c.agent_model: (c.agents, scans)}))
+
+    def _steer(self, scans: np.ndarray) -> None:
+        """The explorer's steering as it is (for the frontier explorer the part after the grid update)."""
+        c, sw, a = self.controller, self.loop.swarm, self.around
+        steer = self.explorer.plan_and_steer if self.frontier else self.explorer.steer
+        steer(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], c.rng, sw.xy, c.deployed_nodes()[1])
+
+    def drive(self) -> None:
+        """The agents' moves (:func:`~amronet.sim.step_kernels.drive_movers`), as the move phase does them."""
+        loop, c, sw, a = self.loop, self.controller, self.loop.swarm, self.around
+        length = self.explorer.speed(c.agent_speed) * loop.dt
         reach = 2.0 * a.largest_radius() + 2.0 * max(length.tolist())  # (ndarray.max costs more on a few agents)
-        d_csr = a.near(sw.xy, table, reach) if a.collisions else a.no_bodies(len(sw))
-        drive_movers(*a.grid, agents, length, sw.xy, sw.heading, sw.radius, a.collisions, *d_csr, reach, sw.distance,
-                     c.refused)
+        d_csr = a.near(sw.xy, loop.table, reach) if a.collisions else a.no_bodies(len(sw))
+        drive_movers(*a.grid, c.agents, length, sw.xy, sw.heading, sw.radius, a.collisions, *d_csr, reach,
+                     sw.distance, c.refused)
 
     def _phases(self) -> None:
         """The loop's sense, decide and move phases for this step (as :meth:`~amronet.sim.loop.Loop.step` runs them)."""

@@ -186,13 +186,8 @@ class Loop:
         if self.compiled is not None:
             t0 = clock()
             self.compiled.step()
-            t3 = clock()
-            self.table = self.medium.update(sw.xy, self.groups)
-            self.steps += 1
-            self.phase_seconds["sense+decide+move"] += t3 - t0
-            self.phase_seconds["radio"] += clock() - t3
-            for run in self._with_agents:
-                run.observe_agents()
+            self.phase_seconds["sense+decide+move"] += clock() - t0
+            self.after_compiled_step()
             return
         if self._faulty is not None:
             self._fail_nodes(self._faulty)
@@ -219,6 +214,15 @@ class Loop:
             self._faulty.fault_book.observe(self._faulty)
         for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
             self.phase_seconds[name] += dt
+
+    def after_compiled_step(self) -> None:
+        """The end of a compiled step, once the robots have moved: the radio's table, then the agents' connection."""
+        t3 = time.perf_counter()
+        self.table = self.medium.update(self.swarm.xy, self.groups)
+        self.steps += 1
+        self.phase_seconds["radio"] += time.perf_counter() - t3
+        for run in self._with_agents:
+            run.observe_agents()
 
     def _silent(self) -> np.ndarray | None:
         """Nodes that send nothing (failed ones), or ``None`` when none can have failed."""
@@ -276,8 +280,13 @@ class Loop:
             else:
                 active.append(run)
         max_steps = round(sim.time_limit / self.dt)
+        stretch = getattr(self.compiled, "stretch", None) if recorders == [None] else None
         while active:
-            self.step()
+            # the steps before the next recorded one in one go where the compiled step can (quiet stretches of
+            # agent-assisted runs: no run settles in them, so the books below are what each step would leave)
+            ahead = min(sim.record_every - self.steps % sim.record_every, max_steps - self.steps) - 1
+            if stretch is None or ahead <= 0 or not stretch.run(ahead):
+                self.step()
             now_settled = self._settled_runs()
             at_limit = self.steps >= max_steps
             on_record = self.steps % sim.record_every == 0 or at_limit

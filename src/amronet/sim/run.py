@@ -291,6 +291,33 @@ class Run:
         self.agents_connected_window = min(self.agents_connected_window, frac)
         self.agents_connected_min = min(self.agents_connected_min, frac)
 
+    def connection_books(self) -> tuple[np.ndarray, ...]:
+        """The books :meth:`observe_agents` keeps, as arrays for a compiled caller to keep them in place.
+
+        Returns:
+            ``(connected_steps, outages, longest, current, counts, sums)``: the
+            :class:`OutageTracker`'s per-agent arrays themselves, then its and this run's numbers,
+            ``counts = [steps, all_connected_steps, outage going on, agents_connected_steps]`` and
+            ``sums = [agents_connected_sum, agents_connected_window, agents_connected_min]``; hand the last two
+            back to :meth:`close_connection_books`. Runs with agents only.
+        """
+        links = self.agent_links
+        assert links is not None
+        counts = np.array([links.steps, links.all_connected_steps, int(links._any_current),
+                           self.agents_connected_steps], dtype=np.int64)
+        sums = np.array([self.agents_connected_sum, self.agents_connected_window, self.agents_connected_min])
+        return links.connected_steps, links._outages, links._longest, links._current, counts, sums
+
+    def close_connection_books(self, counts: np.ndarray, sums: np.ndarray) -> None:
+        """Take back the numbers of :meth:`connection_books` after the steps a compiled caller observed."""
+        links = self.agent_links
+        assert links is not None
+        links.steps, links.all_connected_steps = int(counts[0]), int(counts[1])
+        links._any_current = bool(counts[2])
+        self.agents_connected_steps = int(counts[3])
+        self.agents_connected_sum, self.agents_connected_window, self.agents_connected_min = (
+            float(sums[0]), float(sums[1]), float(sums[2]))
+
     @property
     def agents_connected_fraction(self) -> float | None:
         """Mean over all steps of the fraction of agents connected to a base station (``None`` without agents)."""

@@ -143,11 +143,37 @@ class FrontierExplorer(Explorer):
                            self.covered, self.gap, self.visited)
         navigate(step, layers, settings, self.plans, self._work)
         self.steps += 1
-        active = self.plans.active
-        if np.count_nonzero(active) < m:  # (a tenth of ndarray.all's cost on a few agents)
-            idle = ~active
-            self._fallback.steer(heading, who[idle], scans[idle], sensor_range, step.refused[idle], rng, xy,
-                                 deployed_xy)
+        if np.count_nonzero(self.plans.active) < m:  # (a tenth of ndarray.all's cost on a few agents)
+            self.steer_idle(heading, who, scans, sensor_range, step.refused, rng, xy, deployed_xy)
+
+    def navigation_inputs(self, sensor_range: float, m: int, deployed_xy: np.ndarray) -> tuple | None:
+        """What :meth:`plan_and_steer` hands its navigation kernel that stays the same from step to step.
+
+        For a compiled caller that plans and steers ``m`` agents for several steps in a row
+        (:mod:`amronet.sim.stretch_kernels`), each step as :meth:`plan_and_steer` would: ``(avoid, layers, settings,
+        plans, buffers)`` (the last four as plain tuples; ``layers`` as in
+        :class:`~amronet.algorithms.explorers.frontier.state.MapLayers` from ``robots`` on), or ``None`` when the next
+        call would not be such a step: the deployed nodes are not those last painted, or the agents changed.
+        """
+        if m != len(self.plans.goal):
+            return None
+        if np.ascontiguousarray(deployed_xy, dtype=float).tobytes() != self._nodes_key:
+            return None
+        settings, avoid = self._settings(sensor_range)
+        cells_r, cells_c = self.grid.buffers(max(sensor_range, (self.lookahead + 2) * self.grid.resolution * 1.5))
+        if cells_r is not self._work.cells_r:
+            self._work = self._work._replace(cells_r=cells_r, cells_c=cells_c)
+        layers = (self.robots, self._no_robots, self.covered, self.gap, self.visited)
+        return avoid, layers, tuple(settings), tuple(self.plans), tuple(self._work)
+
+    def steer_idle(self, heading: np.ndarray, who: np.ndarray, scans: np.ndarray, sensor_range: float,
+                   refused: np.ndarray, rng: np.random.Generator, xy: np.ndarray, deployed_xy: np.ndarray) -> None:
+        """The end of :meth:`plan_and_steer`: the agents its plans left idle (``plans.active`` false) walk at random.
+
+        The arguments are :meth:`plan_and_steer`'s (``refused`` of the agents ``who``, boolean).
+        """
+        idle = ~self.plans.active
+        self._fallback.steer(heading, who[idle], scans[idle], sensor_range, refused[idle], rng, xy, deployed_xy)
 
     def _paint(self, nodes: np.ndarray) -> None:
         """Paint :attr:`covered` and :attr:`robots` for the deployed ``nodes`` ``(D, 2)``.

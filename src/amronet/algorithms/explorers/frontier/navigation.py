@@ -38,7 +38,7 @@ from amronet.algorithms.explorers.frontier.state import (
 )
 from amronet.engine.motion import escape_one
 
-__all__ = ["navigate"]
+__all__ = ["navigate", "navigate_kernel"]
 
 
 @njit(cache=True)
@@ -102,12 +102,15 @@ def navigate(step: StepInputs, layers: MapLayers, cfg: NavSettings, plans: Agent
         plans: The agents' plans, updated in place.
         work: Scratch space and the search's views, updated in place.
     """
-    _navigate(tuple(step), tuple(layers), tuple(cfg), tuple(plans), tuple(work))
+    navigate_kernel(tuple(step), tuple(layers), tuple(cfg), tuple(plans), tuple(work))
 
 
 @njit(cache=True)
-def _navigate(step, layers, cfg, plans, work):  # pragma: no cover - numba
-    """The compiled kernel of :func:`navigate`; it unpacks the tuples into their fields' names, in order."""
+def navigate_kernel(step, layers, cfg, plans, work):  # pragma: no cover - numba
+    """The compiled kernel of :func:`navigate` (for other kernels too).
+
+    It unpacks the tuples into their fields' names, in order.
+    """
     now, nodes_changed, xy, heading, who, scans, angles, refused, fresh = step
     score, seen, row_stamp, stamp, robots, no_robots, covered, gap, visited = layers
     (origin_x, origin_y, resolution, off_r, off_c, window, escape, replan_every, stuck_after, lookahead,

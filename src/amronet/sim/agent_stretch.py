@@ -1,0 +1,115 @@
+"""Quiet stretches of an agent-assisted run: the steps between two records in one compiled call while nothing happens.
+
+Most steps of an agent-assisted run with the frontier explorer are *quiet*: no agent has to act, every agent
+follows its plan, and only the agents move. With a few agents such a step is mostly Python between a dozen small
+calls (the compiled step's three kernels, the explorer's inputs, the radio's table, the agents' connection).
+:class:`QuietStretch` hands the loop's steps up to the next recorded one to
+:func:`~amronet.sim.stretch_kernels.quiet_stretch`, which does them one after another with the same compiled
+functions, and finishes in Python the step at which it stopped, if any, the way
+:class:`~amronet.sim.compiled_agents.CompiledAgents` does it. The explorer's fresh headings are drawn for the whole
+stretch at once and the generator is put back to where the steps done leave it, so every run's numbers stay the same
+bit for bit (``tests/test_agent_stretch.py``).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amronet.algorithms.explorers.frontier import FrontierExplorer
+from amronet.sim.stretch_kernels import ACTS, IDLE, NON_FINITE, quiet_stretch
+from amronet.threads import use_threads
+
+if TYPE_CHECKING:
+    from amronet.sim.compiled_agents import CompiledAgents
+
+__all__ = ["QuietStretch"]
+
+
+class QuietStretch:
+    """Steps of a :class:`~amronet.sim.compiled_agents.CompiledAgents` loop done in one compiled call.
+
+    Args:
+        compiled: The loop's compiled step; :meth:`applies` must hold.
+    """
+
+    def __init__(self, compiled: CompiledAgents) -> None:
+        self.compiled = compiled
+        self.ends = {"quiet": 0, "acts": 0, "idle": 0}
+        """How many stretches ended each way: all steps quiet, an agent acting, an agent without a plan."""
+
+    @staticmethod
+    def applies(compiled: CompiledAgents) -> bool:
+        """Whether the loop's steps can be taken in stretches: the frontier explorer, a radio that keeps every pair."""
+        return compiled.frontier and type(compiled.explorer) is FrontierExplorer and \
+            compiled.loop.medium.keeps_every_pair
+
+    def run(self, limit: int) -> int:
+        """Take up to ``limit`` steps (at least one), none of them recorded; how many were taken (0: none could be).
+
+        A stretch starts only where a quiet step may: no router settling or driving to a goal, the agents' readings
+        and moves within the radio's table, the explorer's deployed nodes painted. The step at which the kernel
+        stops (an agent acts or has no plan) is finished here and counts.
+
+        Raises:
+            ValueError: A robot's position became non-finite (what the radio's table refuses).
+        """
+        comp = self.compiled
+        loop, c, explorer, a = comp.loop, comp.controller, comp.explorer, comp.around
+        sw, table = loop.swarm, loop.table
+        n = len(sw)
+        if c.settle_at or c.moving_triangles or n < 2 or use_threads(n) or table.candidates is not None:
+            return 0
+        length = explorer.speed(c.agent_speed) * loop.dt
+        biggest = a.largest_radius()
+        reach = 2.0 * biggest + 2.0 * max(length.tolist())
+        if a.sensor_range + biggest > table.r or (a.collisions and reach > table.r):
+            return 0
+        m = len(c.agents)
+        is_ref, deployed_xy = c.deployed_nodes()
+        inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)
+        if inputs is None:
+            return 0
+        avoid, layers, settings, plans, buffers = inputs
+        grid = comp.knowledge
+        buf_r, buf_c = grid.buffers(a.sensor_range)
+        run = loop.runs[0]
+        *books, counts, sums = run.connection_books()
+        rng = c.rng
+        state = rng.bit_generator.state
+        uniform = rng.random(limit * m)
+        start = time.perf_counter()
+        done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps = quiet_stretch(
+            a.grid, sw.xy, sw.heading, sw.radius, sw.status, sw.distance, c.agents, a.angles, a.sensor_range, length,
+            a.collisions, float(loop.medium.reach), (table.indptr, table.indices, table.dist),
+            (c.current, is_ref, c.wants_other, c.left, c.r_eff, c.nearest_d, c.other_ref, c.refused),
+            (grid.score, grid.seen, float(grid.origin[0]), float(grid.origin[1]), float(grid.resolution),
+             grid.row_stamp, grid.stamp), deployed_xy, comp.robot_radius, buf_r, buf_c, explorer.steps, avoid, uniform,
+            layers, settings, plans, buffers, explorer.plans.active, run.bases, run.relay_mask,
+            (np.empty(len(run.agents), dtype=np.bool_), *books, counts, sums), limit)
+        run.close_connection_books(counts, sums)
+        loop.steps += done
+        if how == NON_FINITE:
+            raise ValueError("xy has non-finite coordinates")
+        if done:
+            loop.table = loop.medium.plain_table(sw.xy.copy(), *csr)
+        if how not in (ACTS, IDLE):
+            loop.phase_seconds["sense+decide+move"] += time.perf_counter() - start
+            self.ends["quiet"] += 1
+            return done
+        # stopped part-way through a step: the generator as those steps leave it, then the step's rest
+        rng.bit_generator.state = state
+        rng.random((done + (how == IDLE)) * m)
+        if how == ACTS:
+            self.ends["acts"] += 1
+            comp.act(n, n_cand, n_losing, scans)
+        else:
+            self.ends["idle"] += 1
+            explorer.steer_idle(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], rng, sw.xy,
+                                deployed_xy)
+            comp.drive()
+        loop.phase_seconds["sense+decide+move"] += time.perf_counter() - start
+        loop.after_compiled_step()
+        return done + 1

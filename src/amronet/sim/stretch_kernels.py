@@ -1,0 +1,158 @@
+"""The kernel of an agent-assisted run's quiet stretch: many whole steps in one compiled call.
+
+A *quiet* step of an agent-assisted run with the frontier explorer is one in which no agent has to act (release a
+router, turn back) and every agent follows a plan: the agents sense, track their references, put their readings
+into the shared grid, plan and steer, and drive; the radio builds the next neighbour table; the agents' connection
+is accounted. Most steps are quiet, and each is a dozen small calls with Python in between, most of a step's time
+when there are a few agents. :func:`quiet_stretch` does up to ``limit`` such steps in a row, each with the same
+compiled functions the step-by-step path calls, in the same order, on the same numbers, so the result is the same
+bit for bit (:mod:`amronet.sim.agent_stretch` drives it; ``tests/test_agent_stretch.py`` compares).
+
+It stops at the first step that is not quiet, part-way through it, and says where: the Python path finishes that
+step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from amronet.algorithms.explorers.frontier.navigation import navigate_kernel
+from amronet.engine.neighbours import search_kernel
+from amronet.engine.network import agents_linked_kernel
+from amronet.sim.step_kernels import drive_movers, sense_track_agents
+
+__all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "quiet_stretch"]
+
+QUIET = 0
+"""Every step asked for was done."""
+ACTS = 1
+"""The step after the last one done: an agent must act. Sensed and tracked; nothing else done."""
+IDLE = 2
+"""The step after the last one done: an agent has no plan. Sensed, tracked, in the grid and steered by the plans;
+the idle agents' random steering, the move and the radio are left."""
+NON_FINITE = 3
+"""A robot's position became non-finite in the last step done (its radio table was not built)."""
+
+
+@njit(cache=True)
+def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, sensor_range, length, collisions,
+                  r, table, tracking, knowledge, nodes, robot_r, buf_r, buf_c, now, avoid, uniform, layers, cfg, plans,
+                  work, active, bases, network, links, limit):  # pragma: no cover - numba
+    """Up to ``limit`` quiet steps; see the module docstring.
+
+    The arguments, in order: ``grid`` = ``(blocked, clear, ox, oy, res)``, the map's grid for the rings and the
+    moves; the robots' ``xy``, ``heading``, ``radius``, ``status`` and ``distance`` (updated in place); the
+    ``agents``, their ring (``angles``, ``sensor_range``), each one's move per step (``length``) and whether bodies
+    stop moves (``collisions``); the radio's search radius ``r`` and this step's ``table`` ``(indptr, indices,
+    dist)`` (every sensing and driving reach is within ``r``); the controller's ``tracking`` arrays ``(current,
+    is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused)``; the shared grid's ``knowledge``
+    ``(score, seen, origin_x, origin_y, resolution, row_stamp, stamp)`` and what its update reads (the deployed
+    ``nodes``, fixed in a quiet stretch, ``robot_r``, the scratch ``buf_r`` and ``buf_c``); the explorer's step
+    count ``now``, avoidance reach ``avoid`` and ``uniform``, ``limit`` times as many uniform draws as there are
+    agents (the fresh headings, step by step); its ``layers`` ``(robots, no_robots, covered, gap, visited)``, the
+    navigation kernel's ``cfg``, ``plans`` and ``work`` as plain tuples and the plans' ``active``; the run's
+    ``bases`` and relaying nodes (``network``), and the agents' connection books ``links`` = ``(linked,
+    connected_steps, outages, longest, current, counts, sums)`` with ``counts`` = ``[steps observed, steps all
+    connected, outage going on, connected steps of the fraction]`` and ``sums`` = ``[sum of fractions, window
+    minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`); ``limit``, the most steps to do.
+
+    Returns:
+        ``(steps done, QUIET/ACTS/IDLE/NON_FINITE, triangle candidates, losing, table, scans, grid stamp,
+        explorer steps)``: after ``ACTS`` or ``IDLE`` ``scans`` are that step's readings, the counts its tracking's.
+    """
+    blocked, clear, ox, oy, res = grid
+    current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused = tracking
+    score, seen, g_ox, g_oy, g_res, row_stamp, stamp = knowledge
+    robots, no_robots, covered, gap, visited = layers
+    linked, connected_steps, outages, longest, down_for, counts, sums = links
+    indptr, indices, dist = table
+    m = agents.shape[0]
+    n = xy.shape[0]
+    group = np.zeros(n, np.int64)
+    refused_m = np.empty(m, np.bool_)
+    fresh = np.empty(m)
+    longest_move = 0.0
+    for j in range(m):
+        if j == 0 or length[j] > longest_move:
+            longest_move = length[j]
+    reach = 2.0 * radius.max() + 2.0 * longest_move
+    no_ptr = np.zeros(n + 1, np.int64)
+    no_idx = np.zeros(0, np.int32)
+    no_dist = np.zeros(0)
+    done = 0
+    while done < limit:
+        scans = np.empty((m, angles.shape[0]))
+        n_cand, n_losing = sense_track_agents(
+            blocked, clear, ox, oy, res, xy, heading, radius, agents, angles, sensor_range, indptr, indices, dist,
+            True, scans, current, is_ref, status, indptr, indices, dist, wants_other, left, r_eff, nearest_d, other_ref,
+            True, score, seen, g_ox, g_oy, g_res, nodes, robot_r, buf_r, buf_c, row_stamp, stamp + 1)
+        if n_cand or n_losing:
+            return done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now
+        stamp += 1
+        # the frontier explorer's plan_and_steer
+        for j in range(m):
+            fresh[j] = -np.pi + (2.0 * np.pi) * uniform[done * m + j]
+            refused_m[j] = refused[agents[j]]
+        avoided = np.empty((m, angles.shape[0]))
+        for j in range(m):
+            for k in range(angles.shape[0]):
+                avoided[j, k] = min(scans[j, k], avoid)
+        navigate_kernel((now, False, xy, heading, agents, avoided, angles, refused_m, fresh),
+                        (score, seen, row_stamp, stamp, robots, no_robots, covered, gap, visited), cfg, plans, work)
+        now += 1
+        for j in range(m):
+            if not active[j]:
+                return done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now
+        # the move, then the radio's next table and the agents' connection
+        if collisions:
+            drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, True, indptr, indices, dist,
+                         reach, distance, refused)
+        else:
+            drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, False, no_ptr, no_idx,
+                         no_dist, reach, distance, refused)
+        ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, 1)
+        done += 1
+        if not ok:
+            return done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now
+        _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
+                 sums)
+    return done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now
+
+
+@njit(cache=True)
+def _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
+             sums):  # pragma: no cover - numba
+    """What :meth:`amronet.sim.run.Run.observe_agents` and its :class:`~amronet.sim.run.OutageTracker` do."""
+    agents_linked_kernel(indptr, indices, agents, bases, network, linked)
+    a = linked.shape[0]
+    up = 0
+    for j in range(a):
+        if linked[j]:
+            up += 1
+    counts[0] += 1
+    if up == a:
+        counts[1] += 1
+        for j in range(a):
+            connected_steps[j] += 1
+        if counts[2]:
+            for j in range(a):
+                down_for[j] = 0
+            counts[2] = 0
+    else:
+        for j in range(a):
+            if linked[j]:
+                connected_steps[j] += 1
+                down_for[j] = 0
+            else:
+                if down_for[j] == 0:
+                    outages[j] += 1
+                down_for[j] += 1
+                if down_for[j] > longest[j]:
+                    longest[j] = down_for[j]
+        counts[2] = 1
+    frac = up / a
+    counts[3] += 1
+    sums[0] += frac
+    sums[1] = min(sums[1], frac)
+    sums[2] = min(sums[2], frac)

@@ -1,0 +1,91 @@
+"""Quiet stretches of agent-assisted runs (amronet.sim.agent_stretch) against the same runs step by step."""
+
+import json
+
+import numpy as np
+import pytest
+
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.sim.agent_stretch import QuietStretch
+
+FRONTIER = {"algorithm.params.explorer": "frontier"}
+CASES = {
+    "office, r_c 4 m": ("agent-assisted-office", 2, {**FRONTIER, "sim.time_limit": 300, "radio.r_c": 4.0}),
+    "open floor, four agents": ("agent-assisted-office", 3, {**FRONTIER, "sim.time_limit": 200, "map": "open-32x32",
+                                                             "agents.per_base": 4, "radio.r_c": 8.0}),
+    "four bases, triangles": ("agent-assisted-office-4bs", 4, {**FRONTIER, "sim.time_limit": 150,
+                                                               "agents.per_base": 1}),
+    "no body collisions": ("agent-assisted-office", 5, {**FRONTIER, "sim.time_limit": 200,
+                                                        "sim.robot_collisions": False}),
+    "hospital floor plan, base by two walls": ("agent-assisted-office", 6, {
+        **FRONTIER, "sim.time_limit": 200, "map": "hospital_section", "radio.r_c": 3.0,
+        "base_stations": [{"x": 24.8555, "y": 3.4865, "region": [1.6, 1.6]}]}),
+}
+
+
+def _books(sim):
+    sw, c, run = sim.swarm, sim.controller, sim.books
+    ex = c.explorer
+    links = run.agent_links
+    return {"xy": sw.xy, "heading": sw.heading, "state": sw.state, "status": sw.status, "distance": sw.distance,
+            "current": c.current, "left": c.left, "refused": c.refused, "nearest": c.nearest_d, "score": ex.grid.score,
+            "seen": ex.grid.seen, "visited": ex.visited, "goal": ex.plans.goal, "path": ex.plans.path,
+            "connected": links.connected_steps, "outages": links.outages, "longest": links.longest_outage_steps,
+            "rng": np.frombuffer(json.dumps(c.rng.bit_generator.state).encode(), dtype=np.uint8),
+            "table": sim.table.indices, "table_dist": sim.table.dist,
+            "numbers": np.array([sim.steps, ex.steps, ex.grid.stamp, run.agents_connected_steps,
+                                 run.agents_connected_sum, run.agents_connected_min, links.steps,
+                                 links.all_connected_steps])}
+
+
+def _summary(result):
+    return json.dumps({k: v for k, v in result.summary.items() if k != "wall_time_s"}, sort_keys=True, default=float)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_stretches_give_the_step_by_step_run_bit_for_bit(name):
+    preset, seed, overrides = CASES[name]
+    sc = load_scenario(preset, overrides)
+    fast, slow = Simulation(sc, seed), Simulation(sc, seed)
+    assert isinstance(fast.compiled.stretch, QuietStretch)
+    slow.compiled.stretch = None
+    a, b = fast.run(), slow.run()
+    for key, value in _books(slow).items():
+        np.testing.assert_array_equal(_books(fast)[key], value, err_msg=key)
+    assert fast.rows == slow.rows
+    assert _summary(a) == _summary(b)
+    ends = fast.compiled.stretch.ends
+    assert sum(ends.values()) > 0  # stretches ran
+    if name == "office, r_c 4 m":  # whole stretches, and stretches that stopped where an agent acted
+        assert ends["quiet"] > 0 and ends["acts"] > 0
+    if name.startswith("hospital"):  # here the agents soon run out of plans: stretches stop where one walks at random
+        assert ends["idle"] > 0
+
+
+def test_steps_stepped_one_by_one_take_no_stretch():
+    sim = Simulation(load_scenario("agent-assisted-office", {**FRONTIER, "sim.time_limit": 30}), 1)
+    for _ in range(20):
+        sim.step()
+    assert sum(sim.compiled.stretch.ends.values()) == 0
+
+
+@pytest.mark.parametrize("overrides", [
+    {"algorithm.params.explorer": "random"},  # the paper's explorer steers in Python
+    {**FRONTIER, "radio.model": "multi-wall"},  # walls drop links: the radio's own update
+])
+def test_runs_it_cannot_take_in_stretches_have_none(overrides):
+    sim = Simulation(load_scenario("agent-assisted-office", overrides), 1)
+    assert sim.compiled is not None and sim.compiled.stretch is None
+
+
+def test_a_recorded_run_is_stepped_one_by_one_to_the_same_end():
+    from amronet.outputs.recording import Recorder
+
+    sc = load_scenario("agent-assisted-office", {**FRONTIER, "sim.time_limit": 60})
+    recorded, plain = Simulation(sc, 1), Simulation(sc, 1)
+    recorded.run(recorder=Recorder(every=10))
+    plain.run()
+    assert sum(recorded.compiled.stretch.ends.values()) == 0 and sum(plain.compiled.stretch.ends.values()) > 0
+    for key, value in _books(plain).items():
+        np.testing.assert_array_equal(_books(recorded)[key], value, err_msg=key)
