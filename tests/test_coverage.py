@@ -297,3 +297,32 @@ def test_mask_is_copied_and_read_only():
     area = CoverageArea(omap, mask)
     mask[:] = False
     assert area.n_cells == 100 and not area.mask.flags.writeable
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(sizes=st.lists(st.integers(0, 12), min_size=1, max_size=5), seed=st.integers(0, 2**32 - 1),
+       r=st.floats(0.05, 2.5))
+def test_run_fractions_are_each_runs_fraction(sizes, seed, r):
+    # runs of a batch, each a block of rows: per run, the coverage of its network nodes and of its linked ones
+    rng = np.random.default_rng(seed)
+    omap = open_map(rows=150, cols=150, res=0.04)
+    area = CoverageArea(omap, rng.random(omap.shape) < 0.8)
+    n = sum(sizes)
+    xy = rng.uniform(-1.0, 7.0, (n, 2))
+    network = rng.random(n) < 0.8
+    linked = network & (rng.random(n) < 0.7)
+    if seed % 3 == 0:
+        linked = network.copy()  # every node linked: both numbers from one count
+    stops = np.cumsum(sizes)
+    blocks = np.stack([stops - sizes, stops], axis=1).astype(np.int64)
+    got = area.run_fractions(xy, network, linked, blocks, r)
+    for (a, b), (coverage, connected) in zip(blocks, got, strict=True):
+        assert coverage == area.fraction(xy[a:b][network[a:b]], r)
+        assert connected == area.fraction(xy[a:b][linked[a:b]], r)
+
+
+def test_run_fractions_refuse_non_finite_positions():
+    area = CoverageArea(open_map(), np.ones((300, 300), dtype=bool))
+    xy = np.array([[1.0, 1.0], [np.nan, 2.0]])
+    with pytest.raises(ValueError, match="finite"):
+        area.run_fractions(xy, np.ones(2, bool), np.ones(2, bool), np.array([[0, 2]]), 1.0)

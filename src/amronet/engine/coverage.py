@@ -244,6 +244,42 @@ def _row_runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return r0, c0, c1
 
 
+@njit(cache=True)
+def _scan_runs(xy, network, linked, starts, stops, r, ox, oy, res, prefix, out, counts):  # pragma: no cover - numba
+    """Per run ``k`` (rows ``starts[k]:stops[k]``), the cells its ``network`` and its ``linked`` nodes cover.
+
+    Into ``counts[k]``, as :func:`_scan` counts them; ``False`` when a position is not finite.
+    """
+    for k in range(starts.shape[0]):
+        a = starts[k]
+        b = stops[k]
+        same = True
+        for i in range(a, b):
+            if linked[i] != network[i]:
+                same = False
+        for kind in range(2):
+            if kind == 1 and same:
+                counts[k, 1] = counts[k, 0]
+                break
+            mask = network if kind == 0 else linked
+            m = 0
+            for i in range(a, b):
+                if mask[i]:
+                    m += 1
+            nodes = np.empty((m, 2))
+            m = 0
+            for i in range(a, b):
+                if mask[i]:
+                    nodes[m, 0] = xy[i, 0]
+                    nodes[m, 1] = xy[i, 1]
+                    m += 1
+            c = _scan(nodes, r, ox, oy, res, prefix, out, False) if m else 0
+            if c < 0:
+                return False
+            counts[k, kind] = c
+    return True
+
+
 class CoverageArea:
     """The area that counts, prepared once per map (and per mask) for fast repeated coverage queries.
 
@@ -364,6 +400,36 @@ class CoverageArea:
         xmin, ymin, xmax, ymax = union.bounds
         clipped = shapely.clip_by_rect(poly, xmin, ymin, xmax, ymax)
         return float(shapely.intersection(union, clipped).area)
+
+    def run_fractions(self, xy: np.ndarray, network: np.ndarray, linked: np.ndarray, blocks: np.ndarray, r: float
+                      ) -> list[tuple[float, float]]:
+        """Raster coverage of several runs' nodes in one compiled call.
+
+        Per run, :meth:`fraction` of its ``network`` nodes and of its ``linked`` ones: a batch's record, without a
+        Python call per run.
+
+        Args:
+            xy: The positions of every run's robots ``(N, 2)``, a run's in a block of rows.
+            network: Mask ``(N,)`` of the nodes that cover.
+            linked: Mask ``(N,)`` of the covering nodes linked to a base station.
+            blocks: ``(runs, 2)`` first and past-the-last row of each run.
+            r: Disk radius in metres.
+
+        Returns:
+            Per run, ``(coverage, linked coverage)``, each what :meth:`fraction` gives for those nodes.
+
+        Raises:
+            ValueError: As :meth:`fraction`.
+        """
+        xy = self._check(xy, r)
+        counts = np.zeros((len(blocks), 2), dtype=np.int64)
+        ok = _scan_runs(xy, np.ascontiguousarray(network, dtype=np.bool_), np.ascontiguousarray(linked, dtype=np.bool_),
+                        blocks[:, 0], blocks[:, 1], float(r), self._ox, self._oy, self._res, self._prefix,
+                        self._no_paint, counts)
+        if not ok:
+            raise ValueError("xy must be finite")
+        n = self.n_cells
+        return [(int(a) / n, int(b) / n) for a, b in counts.tolist()]
 
     def covered_mask(self, xy: np.ndarray, r: float) -> np.ndarray:
         """Boolean ``(rows, cols)`` array of the mask cells whose centre lies within ``r`` of some node.

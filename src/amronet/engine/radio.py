@@ -297,6 +297,24 @@ class RadioMedium:
         return lost
 
     # -- where the nodes are heard ---------------------------------------------------------------------------
+    def run_coverages(self, area: CoverageArea, xy: np.ndarray, network: np.ndarray, linked: np.ndarray,
+                      blocks: np.ndarray, method: str = "raster") -> list[tuple[float, float]] | None:
+        """Per run of a batch, :meth:`coverage` of its ``network`` nodes and of its ``linked`` ones, or ``None``.
+
+        Args:
+            area: The area.
+            xy: Every run's robots ``(N, 2)``, a run's in a block of rows.
+            network: Mask ``(N,)`` of the covering nodes.
+            linked: Mask ``(N,)`` of the covering nodes with a path to a base station.
+            blocks: ``(runs, 2)`` first and past-the-last row of each run.
+            method: The coverage method.
+
+        Returns:
+            ``(coverage, linked coverage)`` per run, the same numbers as :meth:`coverage`; ``None`` where the model
+            has no faster way than run by run (the caller then asks :meth:`coverage` run by run).
+        """
+        return None
+
     def coverage(self, area: CoverageArea, xy: np.ndarray, method: str = "raster") -> float:
         """Coverage under this radio: the fraction of ``area`` where a receiver would hear a node of ``xy``.
 
@@ -394,6 +412,11 @@ class UnitDisk(RadioMedium):
     def covered_mask(self, area: CoverageArea, xy: np.ndarray) -> np.ndarray:
         """The cells whose centre lies within ``r_c`` of a node (:meth:`CoverageArea.covered_mask`)."""
         return area.covered_mask(xy, self.r_c)
+
+    def run_coverages(self, area: CoverageArea, xy: np.ndarray, network: np.ndarray, linked: np.ndarray,
+                      blocks: np.ndarray, method: str = "raster") -> list[tuple[float, float]] | None:
+        """The raster method in one compiled call for all runs (:meth:`CoverageArea.run_fractions`)."""
+        return area.run_fractions(xy, network, linked, blocks, self.r_c) if method == "raster" else None
 
 
 _NO_PREVIOUS = (np.zeros((0, 2)), np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0))

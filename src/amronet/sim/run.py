@@ -381,10 +381,15 @@ def metrics_of(runs: Sequence[Run]) -> list[Metrics]:
     deployed = sw.deployed
     n_components = component_counts(table, deployed, groups, len(loop.runs))
     routers = np.bincount(groups[deployed & (sw.role == Role.ROUTER)], minlength=len(loop.runs))
+    blocks = np.array([(run.robots.start, run.robots.stop) for run in runs], dtype=np.int64)
+    fractions = loop.medium.run_coverages(loop.world.coverage, sw.xy, network, linked, blocks, method)
     out = []
-    for run in runs:
+    for k, run in enumerate(runs):
         block = run.robots
-        coverage, connected = run._coverages(sw.xy[block], network[block], linked[block], method)
+        if fractions is not None:
+            coverage, connected = fractions[k]
+        else:
+            coverage, connected = run._coverages(sw.xy[block], network[block], linked[block], method)
         out.append(Metrics(coverage=coverage, connected_coverage=connected, routers_deployed=int(routers[run.index]),
                            components=int(n_components[run.index])))
     return out
