@@ -40,6 +40,7 @@ def assert_same_run(alone, batched) -> None:
 @pytest.mark.parametrize(("algorithm", "map_name"), [
     ("self-spreading", "open-6x6"), ("self-spreading", "obstacles-6x6"),
     ("potential-field", "open-6x6"), ("potential-field", "obstacles-6x6"),
+    ("dssa", "open-6x6"), ("dssa", "obstacles-6x6"),
 ])
 def test_a_batched_run_is_the_run_alone(algorithm, map_name):
     sc = load_scenario(small_scenario(algorithm, map_name))
@@ -73,11 +74,21 @@ def test_the_potential_field_reports_its_own_wakeups_per_run():
     assert sum(alone) > 0  # else the test shows nothing
 
 
+def test_dssa_reports_how_its_routers_stopped_per_run():
+    sc = load_scenario(small_scenario("dssa", "obstacles-6x6", routers=20))
+    seeds = [1, 2, 3]
+    batched = [r.summary for r in BatchSimulation(sc, seeds).run()]
+    alone = [Simulation(sc, s).run().summary for s in seeds]
+    for key in ("stopped_by_oscillation", "stopped_by_stability", "expected_density_mu"):
+        assert [b[key] for b in batched] == [a[key] for a in alone]
+    assert len({a["stopped_by_stability"] for a in alone}) > 1  # the runs differ: a sum over them would show
+
+
 def test_what_cannot_be_batched_is_refused_in_one_line():
-    dssa = load_scenario(small_scenario("dssa"))
-    assert not batchable(dssa)
+    agents = load_scenario("agent-assisted-office")
+    assert not batchable(agents)
     with pytest.raises(ScenarioError, match="cannot be stepped in batches; run them one by one"):
-        BatchSimulation(dssa, [0, 1])
+        BatchSimulation(agents, [0, 1])
     with pytest.raises(ScenarioError, match="seeds: a batch needs at least one seed"):
         BatchSimulation(load_scenario(small_scenario("self-spreading")), [])
 
@@ -123,8 +134,8 @@ def test_swarm_blocks_and_table_blocks_are_the_runs_own():
 
 def test_plan_batches_groups_runs_of_one_batchable_scenario():
     ss = small_scenario("self-spreading")
-    dssa = small_scenario("dssa")
-    pending = [("a", s, ss) for s in range(5)] + [("b", s, dssa) for s in range(3)] + [("c", 0, ss)]
+    alone = load_scenario("agent-assisted-office").model_dump(mode="json")
+    pending = [("a", s, ss) for s in range(5)] + [("b", s, alone) for s in range(3)] + [("c", 0, ss)]
     jobs = plan_batches(pending, slots=2, max_size=2)
     assert sorted(k for ks in jobs for k in ks) == list(range(9))
     assert sorted(map(len, jobs), reverse=True) == [len(ks) for ks in jobs]  # larger first

@@ -43,6 +43,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
 from amronet.engine.robots import Role, State
+from amronet.engine.streams import RunStreams
 from amronet.errors import ScenarioError
 
 __all__ = ["DSSA", "DSSAParams"]
@@ -101,6 +102,7 @@ class DSSA(Controller):
 
     Params = DSSAParams
     params: DSSAParams
+    batchable = True
 
     def __init__(self, params: DSSAParams, setup: Setup) -> None:
         super().__init__(params, setup)
@@ -108,7 +110,9 @@ class DSSA(Controller):
         n = len(sw)
         self.routers = np.flatnonzero(sw.role == Role.ROUTER)
         area = p.field_area if p.field_area is not None else self.area.free_area_m2
-        nodes = int(np.count_nonzero(sw.role != Role.AGENT))
+        # N of one run (the runs of a batch are runs of one scenario: each has as many nodes)
+        one_run = slice(*setup.rng.starts[:2]) if isinstance(setup.rng, RunStreams) else slice(None)
+        nodes = int(np.count_nonzero(sw.role[one_run] != Role.AGENT))
         r_s = p.sensing_radius_factor * self.r_c
         self.mu = _expected_density(nodes, r_s, area, self.r_c, "algorithm.params.field_area"
                                     if p.field_area is not None else "radio.r_c")
@@ -121,7 +125,8 @@ class DSSA(Controller):
         self.finishing = np.zeros(n, dtype=bool)
         self.goal = sw.xy.copy()
         self.before = sw.xy.copy()
-        self.stopped_by = {"oscillation": 0, "stability": 0}
+        self.stops = np.zeros((2, n), dtype=np.int64)
+        """Per robot, how often the oscillation rule (row 0) and the stability rule (row 1) stopped it."""
 
     @property
     def needs_range_readings(self) -> bool:  # noqa: D102
@@ -181,15 +186,25 @@ class DSSA(Controller):
         oscillating = movers[~fin & ~left & (self.reversals[movers] >= p.oscillation_limit)]
         self.finishing[oscillating] = True
         self.goal[oscillating] = self.visit_sum[oscillating] / self.visit_count[oscillating, None]
-        self.stopped_by["oscillation"] += len(oscillating)
+        self.stops[0, oscillating] += 1
         # stability: standing still for stable_steps steps in a row
         still = np.hypot(moved[:, 0], moved[:, 1]) < p.stable_fraction * sw.max_speed[movers] * self.dt
         self.still_steps[movers] = np.where(still, self.still_steps[movers] + 1, 0)
         stable = ~fin & (self.still_steps[movers] >= p.stable_steps)
-        self.stopped_by["stability"] += int(np.count_nonzero(stable))
+        self.stops[1, movers[stable]] += 1
         sw.state[movers[arrived | stable]] = State.REFERENCE
+
+    @property
+    def stopped_by(self) -> dict[str, int]:
+        """How many routers each rule stopped (of every run of a batch)."""
+        oscillation, stability = self.stops.sum(axis=1).tolist()
+        return {"oscillation": oscillation, "stability": stability}
 
     def report(self) -> dict[str, object]:
         """How the routers stopped: by the oscillation rule or the stability rule."""
-        return {"stopped_by_oscillation": self.stopped_by["oscillation"],
-                "stopped_by_stability": self.stopped_by["stability"], "expected_density_mu": self.mu}
+        return self.report_run(slice(None))
+
+    def report_run(self, robots: slice) -> dict[str, object]:  # noqa: D102
+        oscillation, stability = self.stops[:, robots].sum(axis=1).tolist()
+        return {"stopped_by_oscillation": oscillation, "stopped_by_stability": stability,
+                "expected_density_mu": self.mu}

@@ -12,8 +12,8 @@ seed: it starts from the same positions (drawn from its own generator), no robot
 neighbour table, its random numbers come from its own generator in its own order, and its metrics and stop rules
 are evaluated on its own block.
 
-Only controllers that declare :attr:`~amronet.algorithms.base.Controller.batchable` (self-spreading and the
-potential field) are batched, and only scenarios without agents; :func:`batchable` says which.
+Only controllers that declare :attr:`~amronet.algorithms.base.Controller.batchable` (self-spreading, DSSA and
+the potential field) are batched, and only scenarios without agents; :func:`batchable` says which.
 """
 
 from __future__ import annotations
