@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from PIL import Image
 
 from amronet.cli.patterns import add_parser
@@ -238,3 +240,55 @@ def test_cli_errors_are_one_line(argv, option):
         _run(*argv)
     message = str(info.value)
     assert message.startswith(option) and "\n" not in message
+
+
+def _strip_connectors_by_dictionary(p, u, j, ok):
+    """The r-strip's connectors as first written, with a dictionary and a Python union-find (the reference)."""
+    n = len(p)
+    index = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(u, j, strict=True))}
+    parent = list(range(n))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for (a, b), k in index.items():
+        q = index.get((a + 2, b))
+        if q is not None:
+            parent[find(q)] = find(k)
+    cand = sorted((b, 2 * a + du, k, q) for (a, b), k in index.items() for du in (-1, 1)
+                  if (q := index.get((a + du, b + 1))) is not None)
+    if not cand:
+        return np.empty((0, 2))
+    ks = np.array([c[2] for c in cand])
+    qs = np.array([c[3] for c in cand])
+    mids = (p[ks] + p[qs]) / 2
+    good = ok(mids)
+    out = []
+    for m, k, q in zip(range(len(cand)), ks, qs, strict=True):
+        if good[m]:
+            a, b = find(int(k)), find(int(q))
+            if a != b:
+                parent[b] = a
+                out.append(m)
+    return mids[out]
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 60), spread=st.integers(1, 12), keep=st.floats(0.2, 1.0))
+def test_strip_connectors_are_the_dictionary_versions(seed, n, spread, keep):
+    # nodes on a half-step grid (some sharing a column and row: the last one stands for it), a mask of free points
+    from amronet.patterns.lattices import _strip_connectors
+
+    rng = np.random.default_rng(seed)
+    j = rng.integers(-3, 3, n)
+    u = 2 * rng.integers(-spread, spread, n) + j
+    p = np.stack([0.5 * u + rng.random(n) * 1e-3, j * 0.9], axis=1)
+    free = rng.random(4 * n) < keep
+
+    def ok(q):
+        return free[np.arange(len(q)) % len(free)]
+
+    np.testing.assert_array_equal(_strip_connectors(p, u, j, ok), _strip_connectors_by_dictionary(p, u, j, ok))

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from amronet import limits
 from amronet.errors import AmronetError
@@ -120,6 +121,11 @@ def _strip_connectors(
 ) -> np.ndarray:
     """Connectors of r-strip rows (pattern frame): a spanning forest of row runs, leftmost candidates first.
 
+    The candidates are the midpoints between a node and a node of the next row half a step to its left or right,
+    taken by row, then by half-step column; one joins two runs not yet joined (rows are runs of nodes a step
+    apart) where ``ok`` allows a node. Compiled (:func:`_strip_candidates`, :func:`_strip_join`): the pattern search
+    calls this for thousands of candidate offsets.
+
     Args:
         p: Row nodes ``(n, 2)``.
         u: Their half-step columns.
@@ -129,40 +135,93 @@ def _strip_connectors(
     Returns:
         Connector positions ``(m, 2)``; on a rectangle exactly one per pair of adjacent non-empty rows.
     """
-    n = len(p)
-    index = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(u, j, strict=True))}
-    parent = list(range(n))
-
-    def find(a: int) -> int:
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for (a, b), k in index.items():
-        q = index.get((a + 2, b))
-        if q is not None:
-            parent[find(q)] = find(k)
-    cand = sorted(
-        (b, 2 * a + du, k, q)
-        for (a, b), k in index.items()
-        for du in (-1, 1)
-        if (q := index.get((a + du, b + 1))) is not None
-    )
-    if not cand:
+    if len(p) == 0:
         return np.empty((0, 2))
-    ks = np.array([c[2] for c in cand])
-    qs = np.array([c[3] for c in cand])
+    ks, qs, parent = _strip_candidates(np.asarray(u, dtype=np.int64), np.asarray(j, dtype=np.int64))
+    if len(ks) == 0:
+        return np.empty((0, 2))
     mids = (p[ks] + p[qs]) / 2
-    good = ok(mids)
-    out = []
-    for m, k, q in zip(range(len(cand)), ks, qs, strict=True):
-        if good[m]:
-            a, b = find(int(k)), find(int(q))
+    return mids[_strip_join(ks, qs, np.asarray(ok(mids), dtype=np.bool_), parent)]
+
+
+@njit(cache=True)
+def _root(parent, a):  # pragma: no cover - numba
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+@njit(cache=True)
+def _strip_candidates(u, j):  # pragma: no cover - numba
+    """The rows' runs (``parent``, a union-find forest) and the candidate pairs ``(ks, qs)`` in their order.
+
+    Nodes are told apart by ``(u, j)``; a repeated one stands for the last node with it, as a dictionary keyed
+    by ``(u, j)`` would have it.
+    """
+    n = u.shape[0]
+    umin, umax, jmin, jmax = u.min(), u.max(), j.min(), j.max()
+    width = umax - umin + 1
+    cell = np.full((jmax - jmin + 1, width), -1, np.int64)
+    for k in range(n):
+        cell[j[k] - jmin, u[k] - umin] = k
+    parent = np.arange(n)
+    first = np.zeros(n, np.bool_)  # the nodes that stand for their (u, j), once each, in order of first sight
+    seen = np.zeros((jmax - jmin + 1, width), np.bool_)
+    for k in range(n):
+        if not seen[j[k] - jmin, u[k] - umin]:
+            seen[j[k] - jmin, u[k] - umin] = True
+            first[k] = True
+    order = np.empty(n, np.int64)
+    m = 0
+    for k in range(n):
+        if first[k]:
+            order[m] = cell[j[k] - jmin, u[k] - umin]
+            m += 1
+    order = order[:m]
+    for k in order:  # runs: a node joins the node a step to its right
+        a = u[k] - umin + 2
+        if a < width:
+            q = cell[j[k] - jmin, a]
+            if q >= 0:
+                parent[_root(parent, q)] = _root(parent, k)
+    ks = np.empty(2 * m, np.int64)
+    qs = np.empty(2 * m, np.int64)
+    key = np.empty(2 * m, np.int64)
+    c = 0
+    span = 2 * width + 4
+    for k in order:
+        row = j[k] - jmin + 1
+        if row > jmax - jmin:
+            continue
+        for du in (-1, 1):
+            a = u[k] - umin + du
+            if 0 <= a < width:
+                q = cell[row, a]
+                if q >= 0:
+                    ks[c] = k
+                    qs[c] = q
+                    # by row, then half-step column 2 u + du, then node: the order of sorting (j, 2 u + du, k, q)
+                    key[(c)] = ((j[k] - jmin) * span + (2 * (u[k] - umin) + du + 1)) * n + k
+                    c += 1
+    by = np.argsort(key[:c], kind="mergesort")
+    return ks[:c][by], qs[:c][by], parent
+
+
+@njit(cache=True)
+def _strip_join(ks, qs, good, parent):  # pragma: no cover - numba
+    """The candidates that join two runs not yet joined, taken in order (``parent`` is updated)."""
+    out = np.empty(ks.shape[0], np.int64)
+    m = 0
+    for c in range(ks.shape[0]):
+        if good[c]:
+            a = _root(parent, ks[c])
+            b = _root(parent, qs[c])
             if a != b:
                 parent[b] = a
-                out.append(m)
-    return mids[out]
+                out[m] = c
+                m += 1
+    return out[:m]
 
 
 def lattice_nodes(
