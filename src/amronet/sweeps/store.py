@@ -44,6 +44,7 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
+from itertools import repeat
 from pathlib import Path
 from typing import Any
 
@@ -476,7 +477,7 @@ class ResultStore:
                 cols = ", ".join(f'"{x}"' for x in names)
                 c.executemany(
                     f"INSERT INTO timeseries (scenario_hash, seed, k, {cols}) VALUES (?, ?, ?{', ?' * len(names)})",
-                    [(scenario_hash, int(seed), k, *(ts[x][k] for x in names)) for k in range(n)])
+                    zip(repeat(scenario_hash, n), repeat(int(seed), n), range(n), *(ts[x] for x in names), strict=True))
 
     def load(self, scenario_hash: str, seed: int, timeseries: bool = True) -> dict[str, Any] | None:
         """A stored run as ``{"status", "error", "summary", "timeseries"}``; ``None`` when it is not stored.
