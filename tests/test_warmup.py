@@ -40,6 +40,9 @@ class Listener(event.Listener):
         pass
 
 event.register("numba:compile", Listener())
+from amronet.patterns import place
+for pattern in ("r-strip", "hexagonal"):  # Fig. 5's placed counts, amronet patterns
+    place(pattern, (10.0, 6.0), 1.5)
 for name in list_presets():
     Simulation(load_scenario(name, {"sim.time_limit": 3.0}), 1).run()
 with threads_from(0):  # what a run of 30 000 robots or more runs

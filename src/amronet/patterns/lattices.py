@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from amronet import limits
+import amronet.limits as limits
 from amronet.errors import AmronetError
 from amronet.patterns.area import in_rectangle
 

@@ -280,7 +280,8 @@ class Loop:
             else:
                 active.append(run)
         max_steps = round(sim.time_limit / self.dt)
-        stretch = getattr(self.compiled, "stretch", None) if recorders == [None] else None
+        unrecorded = all(r is None for r in recorders)
+        stretch = getattr(self.compiled, "stretch", None) if unrecorded else None
         while active:
             # the steps before the next recorded one in one go where the compiled step can (quiet stretches of
             # agent-assisted runs: no run settles in them, so the books below are what each step would leave)
@@ -290,6 +291,10 @@ class Loop:
             now_settled = self._settled_runs()
             at_limit = self.steps >= max_steps
             on_record = self.steps % sim.record_every == 0 or at_limit
+            if unrecorded and not on_record and not now_settled.any():  # nothing to record, nobody stops
+                for run in active:
+                    run.settle(False)
+                continue
             recording = active if on_record else [
                 run for run in active if sim.stop_when_settled and now_settled[run.index]]
             metrics = dict(zip((run.index for run in recording), metrics_of(recording), strict=True))

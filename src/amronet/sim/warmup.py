@@ -4,10 +4,10 @@ amronet's hot loops are numba kernels compiled on first use and kept in numba's 
 so the first run in a fresh environment pays the compiling (tens of seconds) and every later one loads the
 machine code in milliseconds. :func:`warm_up` moves that cost to the installation (``make`` calls ``amronet
 compile``): it runs, for a few simulated seconds, one scenario per algorithm, explorer, drop rule, walk rule and
-radio model that amronet registers, a batch of the batchable algorithms, runs with faults and packet loss, and the
-signal map, and one small run with the threaded kernels of large runs (:mod:`amronet.threads`), so that a user's
-first run finds every kernel it uses compiled. The cases are built from the
-registries: a new explorer, drop rule or radio model is warmed up without a change here.
+radio model that amronet registers, a batch of the batchable algorithms, runs with faults and packet loss, the
+signal map and a static pattern's placement, and one small run with the threaded kernels of large runs
+(:mod:`amronet.threads`), so that a user's first run finds every kernel it uses compiled. The cases are built
+from the registries: a new explorer, drop rule or radio model is warmed up without a change here.
 
 The runs' results are thrown away; they change nothing but numba's cache (the same machine code a first run would
 have compiled), so results are bit for bit the same with or without a warm-up.
@@ -31,6 +31,7 @@ from amronet.algorithms.explorers.base import EXPLORERS
 from amronet.algorithms.walks import WALKS
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import MEDIA, make_medium
+from amronet.patterns import place
 from amronet.scenario import load_scenario
 from amronet.sim.batch import run_seeds
 from amronet.sim.loop import Simulation, StepKind
@@ -90,6 +91,11 @@ def _signal_map() -> None:
     medium.signal_dbm(omap, np.array([[3.0, 3.0]]))
 
 
+def _patterns() -> None:
+    """The static patterns' kernels (``amronet patterns``, Fig. 5's placed counts): the r-strip's connectors."""
+    place("r-strip", (8.0, 8.0), 2.0)
+
+
 def warmup_cases() -> list[WarmupCase]:
     """The warm-up runs, built from the registries (every algorithm, explorer, drop rule, walk and radio model)."""
     aa, ss = BASE_PRESETS["agent-assisted"], BASE_PRESETS["self-spreading"]
@@ -123,8 +129,10 @@ def warmup_cases() -> list[WarmupCase]:
 
 def _run_case(k: int) -> float:
     t = time.perf_counter()
-    if k < 0:
+    if k == -1:
         _signal_map()
+    elif k == -2:
+        _patterns()
     else:
         warmup_cases()[k].run()
     return time.perf_counter() - t
@@ -139,8 +147,8 @@ def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None)
         progress: Called with each case's label and its wall time as it finishes.
     """
     cases = warmup_cases()
-    labels = ["signal map", *(c.label for c in cases)]
-    order = [-1, *range(len(cases))]
+    labels = ["signal map", "static patterns", *(c.label for c in cases)]
+    order = [-1, -2, *range(len(cases))]
     t0 = time.perf_counter()
     if jobs <= 1:
         for label, k in zip(labels, order, strict=True):
