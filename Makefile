@@ -10,7 +10,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev,cluster]'
-	@# compile the numba kernels into their on-disk cache now (about a minute), not in the first run; should it
+	@# compile the numba kernels into their on-disk cache now (one to two minutes), not in the first run; should it
 	@# fail, runs still work and compile what they use (tests/test_warmup.py runs the same warm-up and fails)
 	$(BIN)/amronet compile --quiet || echo "amronet compile failed: runs will compile their kernels on first use"
 	touch $(STAMP)
