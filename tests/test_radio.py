@@ -35,3 +35,13 @@ def test_make_medium_registry():
         assert "unit-disk" in str(exc)
     else:
         raise AssertionError("unknown model accepted")
+
+
+def test_the_snr_at_the_threshold_is_the_root_of_the_delivery_curve():
+    from scipy.optimize import brentq
+
+    from amronet.engine import propagation as p
+
+    root = brentq(lambda s: p._pdr_of_snr_db(s) - p.PDR_AT_THRESHOLD, 0.0, 20.0, xtol=1e-12)
+    assert p.SNR_AT_THRESHOLD_DB == float(root)
+    assert abs(float(p.delivery_ratio(0.0)) - p.PDR_AT_THRESHOLD) < 1e-12

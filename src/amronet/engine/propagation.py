@@ -38,7 +38,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 from scipy.special import erfc
 
 __all__ = [
@@ -66,8 +65,13 @@ def _pdr_of_snr_db(snr_db: np.ndarray | float) -> np.ndarray:
     return np.power(1.0 - erfc(np.sqrt(snr)), PACKET_BYTES)
 
 
-SNR_AT_THRESHOLD_DB: float = float(brentq(lambda s: _pdr_of_snr_db(s) - PDR_AT_THRESHOLD, 0.0, 20.0, xtol=1e-12))
-"""Signal-to-noise ratio (dB) at which the curve delivers :data:`PDR_AT_THRESHOLD` (about 7.30 dB)."""
+SNR_AT_THRESHOLD_DB: float = 7.296460777287823
+"""Signal-to-noise ratio (dB) at which the curve delivers :data:`PDR_AT_THRESHOLD` (about 7.30 dB).
+
+The root of ``_pdr_of_snr_db(s) - PDR_AT_THRESHOLD`` on [0, 20] dB that ``scipy.optimize.brentq`` finds with
+``xtol=1e-12``, written out (importing ``scipy.optimize`` cost every command a third of a second);
+``tests/test_radio.py`` solves it again and compares.
+"""
 
 
 def delivery_ratio(margin_db: np.ndarray | float) -> np.ndarray:
