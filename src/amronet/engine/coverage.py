@@ -245,38 +245,43 @@ def _row_runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 @njit(cache=True)
+def _scan_masked(xy, mask, a, b, r, ox, oy, res, prefix, out):  # pragma: no cover - numba
+    """:func:`_scan`'s count of the nodes ``a <= i < b`` with ``mask[i]`` (0 for none, -1 if one is not finite)."""
+    m = 0
+    for i in range(a, b):
+        if mask[i]:
+            m += 1
+    if m == 0:
+        return 0
+    nodes = np.empty((m, 2))
+    m = 0
+    for i in range(a, b):
+        if mask[i]:
+            nodes[m, 0] = xy[i, 0]
+            nodes[m, 1] = xy[i, 1]
+            m += 1
+    return _scan(nodes, r, ox, oy, res, prefix, out, False)
+
+
+@njit(cache=True)
 def _scan_runs(xy, network, linked, starts, stops, r, ox, oy, res, prefix, out, counts):  # pragma: no cover - numba
     """Per run ``k`` (rows ``starts[k]:stops[k]``), the cells its ``network`` and its ``linked`` nodes cover.
 
-    Into ``counts[k]``, as :func:`_scan` counts them; ``False`` when a position is not finite.
+    Into ``counts[k]``, as :func:`_scan` counts them (once when the two sets are the same); ``False`` when a position
+    is not finite.
     """
     for k in range(starts.shape[0]):
         a = starts[k]
         b = stops[k]
+        counts[k, 0] = _scan_masked(xy, network, a, b, r, ox, oy, res, prefix, out)
         same = True
         for i in range(a, b):
             if linked[i] != network[i]:
                 same = False
-        for kind in range(2):
-            if kind == 1 and same:
-                counts[k, 1] = counts[k, 0]
                 break
-            mask = network if kind == 0 else linked
-            m = 0
-            for i in range(a, b):
-                if mask[i]:
-                    m += 1
-            nodes = np.empty((m, 2))
-            m = 0
-            for i in range(a, b):
-                if mask[i]:
-                    nodes[m, 0] = xy[i, 0]
-                    nodes[m, 1] = xy[i, 1]
-                    m += 1
-            c = _scan(nodes, r, ox, oy, res, prefix, out, False) if m else 0
-            if c < 0:
-                return False
-            counts[k, kind] = c
+        counts[k, 1] = counts[k, 0] if same else _scan_masked(xy, linked, a, b, r, ox, oy, res, prefix, out)
+        if counts[k, 0] < 0 or counts[k, 1] < 0:
+            return False
     return True
 
 

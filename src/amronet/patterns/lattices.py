@@ -166,16 +166,12 @@ def _strip_candidates(u, j):  # pragma: no cover - numba
     for k in range(n):
         cell[j[k] - jmin, u[k] - umin] = k
     parent = np.arange(n)
-    first = np.zeros(n, np.bool_)  # the nodes that stand for their (u, j), once each, in order of first sight
     seen = np.zeros((jmax - jmin + 1, width), np.bool_)
+    order = np.empty(n, np.int64)  # the nodes that stand for their (u, j), once each, in order of first sight
+    m = 0
     for k in range(n):
         if not seen[j[k] - jmin, u[k] - umin]:
             seen[j[k] - jmin, u[k] - umin] = True
-            first[k] = True
-    order = np.empty(n, np.int64)
-    m = 0
-    for k in range(n):
-        if first[k]:
             order[m] = cell[j[k] - jmin, u[k] - umin]
             m += 1
     order = order[:m]
@@ -202,7 +198,7 @@ def _strip_candidates(u, j):  # pragma: no cover - numba
                     ks[c] = k
                     qs[c] = q
                     # by row, then half-step column 2 u + du, then node: the order of sorting (j, 2 u + du, k, q)
-                    key[(c)] = ((j[k] - jmin) * span + (2 * (u[k] - umin) + du + 1)) * n + k
+                    key[c] = ((j[k] - jmin) * span + (2 * (u[k] - umin) + du + 1)) * n + k
                     c += 1
     by = np.argsort(key[:c], kind="mergesort")
     return ks[:c][by], qs[:c][by], parent

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amronet.algorithms.explorers.frontier import FrontierExplorer
 from amronet.sim.stretch_kernels import ACTS, IDLE, NON_FINITE, quiet_stretch
 from amronet.threads import use_threads
 
@@ -43,8 +42,7 @@ class QuietStretch:
     @staticmethod
     def applies(compiled: CompiledAgents) -> bool:
         """Whether the loop's steps can be taken in stretches: the frontier explorer, a radio that keeps every pair."""
-        return compiled.frontier and type(compiled.explorer) is FrontierExplorer and \
-            compiled.loop.medium.keeps_every_pair
+        return compiled.frontier and compiled.loop.medium.keeps_every_pair
 
     def run(self, limit: int) -> int:
         """Take up to ``limit`` steps (at least one), none of them recorded; how many were taken (0: none could be).
@@ -62,10 +60,8 @@ class QuietStretch:
         n = len(sw)
         if c.settle_at or c.moving_triangles or n < 2 or use_threads(n) or table.candidates is not None:
             return 0
-        length = explorer.speed(c.agent_speed) * loop.dt
-        biggest = a.largest_radius()
-        reach = 2.0 * biggest + 2.0 * max(length.tolist())
-        if a.sensor_range + biggest > table.r or (a.collisions and reach > table.r):
+        length, reach = comp.moves()
+        if a.sensor_range + a.largest_radius() > table.r or (a.collisions and reach > table.r):
             return 0
         m = len(c.agents)
         is_ref, deployed_xy = c.deployed_nodes()
@@ -83,7 +79,7 @@ class QuietStretch:
         start = time.perf_counter()
         done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps = quiet_stretch(
             a.grid, sw.xy, sw.heading, sw.radius, sw.status, sw.distance, c.agents, a.angles, a.sensor_range, length,
-            a.collisions, float(loop.medium.reach), (table.indptr, table.indices, table.dist),
+            reach, a.collisions, float(loop.medium.reach), (table.indptr, table.indices, table.dist),
             (c.current, is_ref, c.wants_other, c.left, c.r_eff, c.nearest_d, c.other_ref, c.refused),
             (grid.score, grid.seen, float(grid.origin[0]), float(grid.origin[1]), float(grid.resolution),
              grid.row_stamp, grid.stamp), deployed_xy, comp.robot_radius, buf_r, buf_c, explorer.steps, avoid, uniform,
@@ -95,21 +91,18 @@ class QuietStretch:
             raise ValueError("xy has non-finite coordinates")
         if done:
             loop.table = loop.medium.plain_table(sw.xy.copy(), *csr)
-        if how not in (ACTS, IDLE):
-            loop.phase_seconds["sense+decide+move"] += time.perf_counter() - start
-            self.ends["quiet"] += 1
-            return done
-        # stopped part-way through a step: the generator as those steps leave it, then the step's rest
-        rng.bit_generator.state = state
-        rng.random((done + (how == IDLE)) * m)
-        if how == ACTS:
-            self.ends["acts"] += 1
-            comp.act(n, n_cand, n_losing, scans)
-        else:
-            self.ends["idle"] += 1
-            explorer.steer_idle(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], rng, sw.xy,
-                                deployed_xy)
-            comp.drive()
+        self.ends[{ACTS: "acts", IDLE: "idle"}.get(how, "quiet")] += 1
+        if how in (ACTS, IDLE):  # stopped part-way through a step: the generator as those steps leave it, then the rest
+            rng.bit_generator.state = state
+            rng.random((done + (how == IDLE)) * m)
+            if how == ACTS:
+                comp.act(n, n_cand, n_losing, scans)
+            else:
+                explorer.steer_idle(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], rng, sw.xy,
+                                    deployed_xy)
+                comp.drive()
         loop.phase_seconds["sense+decide+move"] += time.perf_counter() - start
+        if how not in (ACTS, IDLE):
+            return done
         loop.after_compiled_step()
         return done + 1

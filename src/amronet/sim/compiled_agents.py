@@ -118,11 +118,16 @@ class CompiledAgents:
         steer = self.explorer.plan_and_steer if self.frontier else self.explorer.steer
         steer(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], c.rng, sw.xy, c.deployed_nodes()[1])
 
+    def moves(self) -> tuple[np.ndarray, float]:
+        """The agents' move lengths this step and the reach of their collision checks, as the move phase has them."""
+        length = self.explorer.speed(self.controller.agent_speed) * self.loop.dt
+        # (ndarray.max costs more on a few agents)
+        return length, 2.0 * self.around.largest_radius() + 2.0 * max(length.tolist())
+
     def drive(self) -> None:
         """The agents' moves (:func:`~amronet.sim.step_kernels.drive_movers`), as the move phase does them."""
         loop, c, sw, a = self.loop, self.controller, self.loop.swarm, self.around
-        length = self.explorer.speed(c.agent_speed) * loop.dt
-        reach = 2.0 * a.largest_radius() + 2.0 * max(length.tolist())  # (ndarray.max costs more on a few agents)
+        length, reach = self.moves()
         d_csr = a.near(sw.xy, loop.table, reach) if a.collisions else a.no_bodies(len(sw))
         drive_movers(*a.grid, c.agents, length, sw.xy, sw.heading, sw.radius, a.collisions, *d_csr, reach,
                      sw.distance, c.refused)

@@ -36,26 +36,26 @@ NON_FINITE = 3
 
 
 @njit(cache=True)
-def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, sensor_range, length, collisions,
-                  r, table, tracking, knowledge, nodes, robot_r, buf_r, buf_c, now, avoid, uniform, layers, cfg, plans,
-                  work, active, bases, network, links, limit):  # pragma: no cover - numba
+def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, sensor_range, length, reach,
+                  collisions, r, table, tracking, knowledge, nodes, robot_r, buf_r, buf_c, now, avoid, uniform,
+                  layers, cfg, plans, work, active, bases, network, links, limit):  # pragma: no cover - numba
     """Up to ``limit`` quiet steps; see the module docstring.
 
     The arguments, in order: ``grid`` = ``(blocked, clear, ox, oy, res)``, the map's grid for the rings and the
     moves; the robots' ``xy``, ``heading``, ``radius``, ``status`` and ``distance`` (updated in place); the
-    ``agents``, their ring (``angles``, ``sensor_range``), each one's move per step (``length``) and whether bodies
-    stop moves (``collisions``); the radio's search radius ``r`` and this step's ``table`` ``(indptr, indices,
-    dist)`` (every sensing and driving reach is within ``r``); the controller's ``tracking`` arrays ``(current,
-    is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused)``; the shared grid's ``knowledge``
-    ``(score, seen, origin_x, origin_y, resolution, row_stamp, stamp)`` and what its update reads (the deployed
-    ``nodes``, fixed in a quiet stretch, ``robot_r``, the scratch ``buf_r`` and ``buf_c``); the explorer's step
-    count ``now``, avoidance reach ``avoid`` and ``uniform``, ``limit`` times as many uniform draws as there are
-    agents (the fresh headings, step by step); its ``layers`` ``(robots, no_robots, covered, gap, visited)``, the
-    navigation kernel's ``cfg``, ``plans`` and ``work`` as plain tuples and the plans' ``active``; the run's
-    ``bases`` and relaying nodes (``network``), and the agents' connection books ``links`` = ``(linked,
-    connected_steps, outages, longest, current, counts, sums)`` with ``counts`` = ``[steps observed, steps all
-    connected, outage going on, connected steps of the fraction]`` and ``sums`` = ``[sum of fractions, window
-    minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`); ``limit``, the most steps to do.
+    ``agents``, their ring (``angles``, ``sensor_range``), each one's move per step (``length``), the reach of the
+    moves' collision checks (``reach``) and whether bodies stop moves (``collisions``); the radio's search radius
+    ``r`` and this step's ``table`` ``(indptr, indices, dist)`` (every sensing and driving reach is within ``r``);
+    the controller's ``tracking`` arrays ``(current, is_ref, wants_other, left, r_eff, nearest_d, other_ref,
+    refused)``; the shared grid's ``knowledge`` ``(score, seen, origin_x, origin_y, resolution, row_stamp, stamp)``
+    and what its update reads (the deployed ``nodes``, fixed in a quiet stretch, ``robot_r``, the scratch ``buf_r``
+    and ``buf_c``); the explorer's step count ``now``, avoidance reach ``avoid`` and ``uniform``, ``limit`` times as
+    many uniform draws as there are agents (the fresh headings, step by step); its ``layers`` ``(robots, no_robots,
+    covered, gap, visited)``, the navigation kernel's ``cfg``, ``plans`` and ``work`` as plain tuples and the plans'
+    ``active``; the run's ``bases`` and relaying nodes (``network``), and the agents' connection books ``links`` =
+    ``(linked, connected_steps, outages, longest, current, counts, sums)`` with ``counts`` = ``[steps observed,
+    steps all connected, outage going on, connected steps of the fraction]`` and ``sums`` = ``[sum of fractions,
+    window minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`); ``limit``, the most steps to do.
 
     Returns:
         ``(steps done, QUIET/ACTS/IDLE/NON_FINITE, triangle candidates, losing, table, scans, grid stamp,
@@ -72,14 +72,7 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
     group = np.zeros(n, np.int64)
     refused_m = np.empty(m, np.bool_)
     fresh = np.empty(m)
-    longest_move = 0.0
-    for j in range(m):
-        if j == 0 or length[j] > longest_move:
-            longest_move = length[j]
-    reach = 2.0 * radius.max() + 2.0 * longest_move
-    no_ptr = np.zeros(n + 1, np.int64)
-    no_idx = np.zeros(0, np.int32)
-    no_dist = np.zeros(0)
+    no_bodies = (np.zeros(n + 1, np.int64), np.zeros(0, np.int32), np.zeros(0))
     done = 0
     while done < limit:
         scans = np.empty((m, angles.shape[0]))
@@ -105,12 +98,9 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
             if not active[j]:
                 return done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now
         # the move, then the radio's next table and the agents' connection
-        if collisions:
-            drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, True, indptr, indices, dist,
-                         reach, distance, refused)
-        else:
-            drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, False, no_ptr, no_idx,
-                         no_dist, reach, distance, refused)
+        b_ptr, b_idx, b_dist = (indptr, indices, dist) if collisions else no_bodies
+        drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, collisions, b_ptr, b_idx, b_dist,
+                     reach, distance, refused)
         ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, 1)
         done += 1
         if not ok:
