@@ -7,7 +7,7 @@ from amronet.cli import main
 from amronet.experiments.fig5 import run_fig5
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.sweeps.stats import mean_ci
+from amronet.sweeps.stats import mean_ci, mean_ci_columns
 
 
 def test_mean_ci_matches_t_interval():
@@ -15,6 +15,19 @@ def test_mean_ci_matches_t_interval():
     assert mean == 2.5 and abs(half - 2.0540) < 1e-3  # t(0.975, 3) * s / sqrt(4)
     assert mean_ci(np.array([5.0])) == (5.0, 0.0)
     assert np.isnan(mean_ci(np.array([]))[0])
+
+
+def test_mean_ci_uses_the_same_t_quantile_as_scipy_stats():
+    from scipy import stats
+
+    rng = np.random.default_rng(3)
+    for n in (2, 3, 5, 13, 50, 51, 280):
+        x = rng.normal(size=(n, 4))
+        for confidence in (0.9, 0.95, 0.99):
+            expected = stats.t.ppf(0.5 + confidence / 2, n - 1) * x[:, 0].std(ddof=1) / np.sqrt(n)
+            assert mean_ci(x[:, 0], confidence)[1] == float(expected)  # bit for bit: the figures' tables stay
+            columns = stats.t.ppf(0.5 + confidence / 2, n - 1) * x.std(axis=0, ddof=1) / np.sqrt(n)
+            assert np.array_equal(mean_ci_columns(x, confidence)[1], columns)
 
 
 def test_jobs_are_deterministic_and_ordered():

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from amronet.outputs.files import write_files_atomically
 
-__all__ = ["STORE_FILES", "Claim", "agent_scenario", "claims_markdown", "csv_text", "write_outputs"]
+__all__ = ["STORE_FILES", "Claim", "agent_scenario", "claims_markdown", "csv_table_text", "csv_text", "write_outputs"]
 
 CORNERS = ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))
 """Base-station positions at the corners of the 32 m x 32 m floors (paper 5.1: 'located at the corner')."""
@@ -76,11 +77,15 @@ def claims_markdown(title: str, claims: list[Claim]) -> str:
 
 def csv_text(rows: list[dict[str, Any]]) -> str:
     """Rows of dicts as CSV text (columns from the first row)."""
+    return csv_table_text(list(rows[0]), (row.values() for row in rows)) if rows else ""
+
+
+def csv_table_text(columns: Sequence[str], rows: Iterable[Iterable[Any]]) -> str:
+    """A header and rows of values in that order as CSV text (a long table without a dict per row)."""
     buf = io.StringIO()
-    if rows:
-        writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(rows)
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
+    writer.writerows(rows)
     return buf.getvalue()
 
 

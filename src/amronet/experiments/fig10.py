@@ -14,12 +14,13 @@ the area covered by nodes with a path to the base station, the part an agent can
 from __future__ import annotations
 
 import io
+from itertools import chain, repeat
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from amronet.experiments.common import Claim, claims_markdown, csv_text, write_outputs
+from amronet.experiments.common import Claim, claims_markdown, csv_table_text, csv_text, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
 from amronet.sweeps.stats import mean_ci, mean_ci_columns
@@ -29,6 +30,7 @@ __all__ = ["ALGORITHMS", "run_coverage_over_time"]
 ALGORITHMS = ("self-spreading", "dssa", "potential-field")
 """The three algorithms of Figs. 10 and 11, in the paper's order of presentation."""
 MAPS = {"fig10": "open-6x6", "fig11": "obstacles-6x6"}
+TIMESERIES_COLUMNS = ("algorithm", "run", "seed", "t", "coverage", "connected_coverage")
 LABELS = {"self-spreading": "self-spreading", "dssa": "DSSA", "potential-field": "potential field (K = 1)"}
 DEFAULT_HORIZON_S = 900.0
 """Simulated seconds per run (the paper does not print its horizon; self-spreading has levelled off by then)."""
@@ -108,9 +110,10 @@ def run_coverage_over_time(
                      "routers_connected_fraction": round(s["routers_connected_fraction"], 4),
                      "components": s["components"], "settled_at_s": s["settled_at_s"],
                      "stop_reason": s["stop_reason"], "wall_time_s": round(s["wall_time_s"], 3)})
-        ts_rows += [{"algorithm": lab["algorithm"], "run": lab["run"], "seed": res["seed"], "t": float(tk),
-                     "coverage": round(float(c), 6), "connected_coverage": round(float(cc), 6)}
-                    for tk, c, cc in zip(t, ts["coverage"], ts["connected_coverage"], strict=True)]
+        n = len(t)
+        ts_rows.append(zip(repeat(lab["algorithm"], n), repeat(lab["run"], n), repeat(res["seed"], n), t.tolist(),
+                           [round(float(c), 6) for c in ts["coverage"]],
+                           [round(float(c), 6) for c in ts["connected_coverage"]], strict=True))
     curves = {a: {col: np.array(v) for col, v in d.items()} for a, d in series.items()}
     table = [{**_table_row(a, [r for r in rows if r["algorithm"] == a]), "horizon_s": time_limit} for a in algorithms]
     baseline, why_not = None, ""
@@ -119,7 +122,8 @@ def run_coverage_over_time(
         baseline, why_not = _load_baseline(folder, runs, time_limit)
     claims = _claims(figure, table, baseline, why_not)
     markdown = _markdown(figure, map_name, runs, time_limit, table, claims)
-    files = {f"{figure}_timeseries.csv": csv_text(ts_rows), f"{figure}_runs.csv": csv_text(rows),
+    files = {f"{figure}_timeseries.csv": csv_table_text(TIMESERIES_COLUMNS, chain.from_iterable(ts_rows)),
+             f"{figure}_runs.csv": csv_text(rows),
              f"{figure}_table.csv": csv_text(table), f"{figure}_claims.md": markdown,
              f"{figure}.png": _figure(figure, map_name, grid, curves, runs)}
     write_outputs(out_dir, files)
