@@ -40,6 +40,22 @@ def test_jobs_are_deterministic_and_ordered():
     assert [r["summary"]["coverage"] for r in a] == [r["summary"]["coverage"] for r in b]
 
 
+def test_meanwhile_runs_once_as_the_first_result_arrives(tmp_path):
+    sc = {"map": "open-6x6", "base_stations": [{"x": 0, "y": 0}], "routers": {"count": 5},
+          "sim": {"time_limit": 2.0}}
+    jobs = [{"scenario": sc, "seed": s} for s in range(3)]
+    arrived: list[int] = []
+    calls: list[int] = []
+    for options in ({"workers": 2}, {"workers": 1}, {"workers": 2, "store": tmp_path / "s.sqlite"}):
+        arrived.clear()
+        run_jobs(jobs, show_progress=False, on_result=lambda k, _: arrived.append(k),
+                 meanwhile=lambda: calls.append(len(arrived)), **options)
+        assert calls == [1] and len(arrived) == 3  # once, right after the first result
+        calls.clear()
+    run_jobs([], workers=1, show_progress=False, meanwhile=lambda: calls.append(0))
+    assert calls == [0]  # no result: at the end
+
+
 def test_fig5_small_writes_runs_table_figure_and_claims(tmp_path):
     report = run_fig5(tmp_path / "f5", maps=("open-32x32",), radii=(10,), agents=(1, 2), starts=1,
                       options=RunOptions(explorer="random", time_limit=2000.0, workers=1, show_progress=False))

@@ -11,7 +11,8 @@ from typing import Any
 
 from amronet.outputs.files import write_files_atomically
 
-__all__ = ["STORE_FILES", "Claim", "agent_scenario", "claims_markdown", "csv_table_text", "csv_text", "write_outputs"]
+__all__ = ["STORE_FILES", "Claim", "agent_scenario", "claims_markdown", "csv_table_text", "csv_text", "load_plotting",
+           "write_outputs"]
 
 CORNERS = ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))
 """Base-station positions at the corners of the 32 m x 32 m floors (paper 5.1: 'located at the corner')."""
@@ -73,6 +74,12 @@ def claims_markdown(title: str, claims: list[Claim]) -> str:
     lines = [f"## {title}", "", "| claim (paper) | paper | amronet | verdict |", "|---|---|---|---|"]
     lines += [f"| {c.claim} | {c.paper} | {c.ours} | {c.verdict} |" for c in claims]
     return "\n".join(lines) + "\n"
+
+
+def load_plotting() -> None:
+    """Import matplotlib's figure and Agg canvas (most of a second the first time): work for while the runs go."""
+    import matplotlib.backends.backend_agg
+    import matplotlib.figure  # noqa: F401
 
 
 def csv_text(rows: list[dict[str, Any]]) -> str:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from amronet.experiments.common import Claim, claims_markdown, csv_table_text, csv_text, write_outputs
+from amronet.experiments.common import Claim, claims_markdown, csv_table_text, csv_text, load_plotting, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
 from amronet.sweeps.stats import mean_ci, mean_ci_columns
@@ -91,7 +91,7 @@ def run_coverage_over_time(
         for k in range(runs):
             jobs.append({"scenario": scenario, "seed": options.seed * 100_000 + k, "timeseries": True,
                          "labels": {"figure": figure, "map": map_name, "algorithm": algorithm, "run": k}})
-    results = run_jobs(jobs, options, description=figure)
+    results = run_jobs(jobs, options, description=figure, meanwhile=load_plotting)
 
     grid = np.arange(0.0, time_limit + 1e-9, 1.0)
     series: dict[str, dict[str, np.ndarray]] = {a: {"coverage": [], "connected_coverage": []} for a in algorithms}

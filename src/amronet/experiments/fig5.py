@@ -15,7 +15,15 @@ from typing import Any
 
 import numpy as np
 
-from amronet.experiments.common import START_LOCATIONS, Claim, agent_scenario, claims_markdown, csv_text, write_outputs
+from amronet.experiments.common import (
+    START_LOCATIONS,
+    Claim,
+    agent_scenario,
+    claims_markdown,
+    csv_text,
+    load_plotting,
+    write_outputs,
+)
 from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 from amronet.experiments.runner import run_jobs
 from amronet.patterns import estimate, place
@@ -72,7 +80,13 @@ def run_fig5(
                     labels = {"map": map_name, "r_c": float(r), "agents": n_a, "start": s}
                     scenario = agent_scenario(map_name, r, (loc,), n_a, options.explorer, time_limit)
                     jobs.append({"scenario": scenario, "seed": options.seed * 100_000 + len(jobs), "labels": labels})
-    results = run_jobs(jobs, options, description="fig5")
+    patterns: dict[str, dict[float, dict[str, float]]] = {}
+
+    def meanwhile() -> None:  # while the workers run
+        patterns.update(_pattern_counts([float(r) for r in radii]))
+        load_plotting()
+
+    results = run_jobs(jobs, options, description="fig5", meanwhile=meanwhile)
     rows = []
     for res in results:
         s = res["summary"]
@@ -81,7 +95,6 @@ def run_fig5(
                      "stop_reason": s["stop_reason"], "sim_time_s": s["sim_time_s"],
                      "agents_connected_fraction": s["agents_connected_fraction"],
                      "reachable_area_m2": round(s["reachable_area_m2"], 3), "wall_time_s": round(s["wall_time_s"], 3)})
-    patterns = _pattern_counts([float(r) for r in radii])
     table = []
     for map_name in maps:
         for r in radii:

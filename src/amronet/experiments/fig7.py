@@ -14,7 +14,15 @@ from typing import Any
 
 import numpy as np
 
-from amronet.experiments.common import CORNERS, Claim, agent_scenario, claims_markdown, csv_text, write_outputs
+from amronet.experiments.common import (
+    CORNERS,
+    Claim,
+    agent_scenario,
+    claims_markdown,
+    csv_text,
+    load_plotting,
+    write_outputs,
+)
 from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 from amronet.experiments.runner import run_jobs
 from amronet.sweeps.stats import mean_ci
@@ -57,7 +65,7 @@ def run_fig7(
                 scenario = agent_scenario(map_name, r_c, CORNERS[:n], n_a, options.explorer, time_limit)
                 jobs.append({"scenario": scenario, "seed": options.seed * 100_000 + 50_000 + len(jobs),
                              "labels": labels})
-    results = run_jobs(jobs, options, description="fig7")
+    results = run_jobs(jobs, options, description="fig7", meanwhile=load_plotting)
     rows = []
     for res in results:
         s = res["summary"]

@@ -58,6 +58,7 @@ def run_jobs(
     *,
     description: str = "runs",
     on_result: Callable[[int, dict[str, Any]], None] | None = None,
+    meanwhile: Callable[[], None] | None = None,
     **changes: Any,
 ) -> list[dict[str, Any]]:
     """Run jobs, in parallel when there is more than one worker; results in job order.
@@ -71,6 +72,10 @@ def run_jobs(
             Its ``explorer``, ``time_limit`` and ``seed`` shape the jobs, which the caller has built.
         description: Label of the progress bar (and the sweep's name in the store).
         on_result: Called with ``(index, result)`` as each job finishes (or is loaded from the store).
+        meanwhile: Work of this process that needs no result (a figure's static patterns, loading the plotting
+            library), called once, in this thread, as the first result arrives: the workers are busy with the
+            other jobs by then, so it does not wait for them nor they for it (the results that arrive meanwhile
+            are recorded when it returns). Called at the end if no result arrived before.
         **changes: Those five fields of ``options`` to change, for short: ``run_jobs(jobs, workers=1)`` is
             ``run_jobs(jobs, RunOptions(workers=1))``.
 
@@ -85,16 +90,28 @@ def run_jobs(
     options = dataclasses.replace(options or RunOptions(), **changes)
     if jobs:  # fail fast, in this process, on a scenario that cannot start
         Simulation(load_scenario(jobs[0]["scenario"]), jobs[0]["seed"])
+    todo = [meanwhile] if meanwhile is not None else []
+
+    def arrived(k: int, result: dict[str, Any]) -> None:
+        if on_result is not None:
+            on_result(k, result)
+        if todo:
+            todo.pop()()
+
     own = options.executor is None
     executor: Executor = options.executor or LocalExecutor(options.workers or default_workers())
     try:
         if options.store is not None:
-            return _run_with_store(jobs, Path(options.store), executor, description, options.show_progress,
-                                   on_result, options.retry_failed)
-        return _run_plain(jobs, executor, description, options.show_progress, on_result)
+            results = _run_with_store(jobs, Path(options.store), executor, description, options.show_progress,
+                                      arrived, options.retry_failed)
+        else:
+            results = _run_plain(jobs, executor, description, options.show_progress, arrived)
     finally:
         if own:
             executor.close()
+    if todo:
+        todo.pop()()
+    return results
 
 
 def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_progress: bool,
