@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 # In a fresh process: warm up (loads the kernels from numba's cache, or compiles them if the cache is cold), then
 # listen for numba compiling anything while runs that the warm-up did not list run: every built-in preset, and
 # random scenarios of the soak (tools/soak.py: any map, algorithm and parameters, radio model, faults, robots), and
-# the threaded kernels of large runs.
+# the threaded kernels of large runs. Then list the kernels compiled for a literal argument.
 _PROBE = """
 import importlib.util, json, sys
 from numba.core import event
@@ -57,7 +57,11 @@ for index in range(int(sys.argv[2])):
         Simulation(load_scenario(scenario), seed).run()
     except Exception:
         pass  # a scenario the tool refuses (the soak counts those): what ran until then still counts
-print(json.dumps(sorted(set(compiled))))
+from numba.core.registry import CPUDispatcher
+literal = sorted(f"{module}.{name}{sig}" for module, m in list(sys.modules.items()) if module.startswith("amronet")
+                 for name, d in vars(m).items() if isinstance(d, CPUDispatcher) for sig in d.signatures
+                 if "Literal" in str(sig))
+print(json.dumps({"compiled": sorted(set(compiled)), "literal": literal}))
 """
 
 
@@ -74,8 +78,11 @@ def test_after_the_warm_up_runs_compile_nothing():
     proc = subprocess.run([sys.executable, "-c", _PROBE, str(ROOT / "tools" / "soak.py"), "30"], cwd=ROOT,
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
-    compiled = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert compiled == [], f"kernels the warm-up does not reach: {compiled}"
+    found = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert found["compiled"] == [], f"kernels the warm-up does not reach: {found['compiled']}"
+    # a kernel calling another with a constant (True, 1) compiles it once more for that literal: pass np.bool_(True),
+    # np.int64(1), which share the version the Python callers compile (each copy costs seconds of `amronet compile`)
+    assert found["literal"] == [], f"kernels compiled for literal arguments: {found['literal']}"
 
 
 def test_compile_command_refuses_bad_jobs(capsys):

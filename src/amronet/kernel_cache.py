@@ -16,6 +16,10 @@ with ``cache=True`` finds their cache in the same folder (still correct: numba c
 they are compiled again when a new amronet version starts a new folder). Set ``NUMBA_CACHE_DIR`` to keep them
 elsewhere.
 
+A kernel that calls another with a constant (``f(x, True)``, ``g(a, 1)``) makes numba compile the callee once more
+for that literal value, a copy of seconds each: kernels pass ``np.bool_(True)``, ``np.int64(1)`` instead, which
+share the version the Python callers use (``tests/test_warmup.py`` finds any literal version left).
+
 This module must run before any module with kernels is imported: ``amronet/__init__.py`` calls
 :func:`configure` first.
 """

@@ -260,7 +260,7 @@ def _scan_masked(xy, mask, a, b, r, ox, oy, res, prefix, out):  # pragma: no cov
             nodes[m, 0] = xy[i, 0]
             nodes[m, 1] = xy[i, 1]
             m += 1
-    return _scan(nodes, r, ox, oy, res, prefix, out, False)
+    return _scan(nodes, r, ox, oy, res, prefix, out, np.bool_(False))
 
 
 @njit(cache=True)

@@ -63,7 +63,7 @@ def _bfs_labels(indptr, indices, allowed, sources, labels, hops):  # pragma: no 
                 hops[s] = 0
                 queue[tail] = s
                 tail += 1
-        return 1 if _spread(indptr, indices, allowed, queue, tail, 0, labels, hops) > 0 else 0
+        return 1 if _spread(indptr, indices, allowed, queue, np.int64(tail), np.int64(0), labels, hops) > 0 else 0
     count = 0
     for s in range(labels.shape[0]):
         if not allowed[s] or labels[s] >= 0:
@@ -71,7 +71,7 @@ def _bfs_labels(indptr, indices, allowed, sources, labels, hops):  # pragma: no 
         labels[s] = count
         hops[s] = 0
         queue[0] = s
-        _spread(indptr, indices, allowed, queue, 1, count, labels, hops)
+        _spread(indptr, indices, allowed, queue, np.int64(1), np.int64(count), labels, hops)
         count += 1
     return count
 

@@ -98,11 +98,11 @@ def count_walls(walls, jump, ox, oy, res, x0, y0, x1, y1, limit):  # pragma: no 
     if y0 == y1:
         v = (y0 - oy) / res
         if v == math.floor(v):
-            return _count_on_border(walls, ox, oy, res, x0, y0, x1, y1, limit, True)
+            return _count_on_border(walls, ox, oy, res, x0, y0, x1, y1, limit, np.bool_(True))
     if x0 == x1:
         v = (x0 - ox) / res
         if v == math.floor(v):
-            return _count_on_border(walls, ox, oy, res, x0, y0, x1, y1, limit, False)
+            return _count_on_border(walls, ox, oy, res, x0, y0, x1, y1, limit, np.bool_(False))
     length = math.sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0))
     if length == 0.0:  # a point: inside a wall or not
         return 1 if _wall(walls, int(math.floor((y0 - oy) / res)), int(math.floor((x0 - ox) / res))) else 0

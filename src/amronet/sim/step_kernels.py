@@ -327,7 +327,7 @@ def sense_track_agents(blocked, clear, ox, oy, res, xy, heading, radius, agents,
         pos[m, 1] = xy[i, 1]
         facing[m] = heading[i]
     integrate_readings(score, seen, g_ox, g_oy, g_res, pos, facing, scans, angles, sensor_range, nodes, robot_r,
-                       HIT_GAIN, OCCUPIED_CAP, FREE_FLOOR, buf_r, buf_c, row_stamp, stamp)
+                       np.int64(HIT_GAIN), np.int64(OCCUPIED_CAP), np.int64(FREE_FLOOR), buf_r, buf_c, row_stamp, stamp)
     return 0, 0
 
 

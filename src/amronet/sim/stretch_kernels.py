@@ -78,8 +78,9 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         scans = np.empty((m, angles.shape[0]))
         n_cand, n_losing = sense_track_agents(
             blocked, clear, ox, oy, res, xy, heading, radius, agents, angles, sensor_range, indptr, indices, dist,
-            True, scans, current, is_ref, status, indptr, indices, dist, wants_other, left, r_eff, nearest_d, other_ref,
-            True, score, seen, g_ox, g_oy, g_res, nodes, robot_r, buf_r, buf_c, row_stamp, stamp + 1)
+            np.bool_(True), scans, current, is_ref, status, indptr, indices, dist, wants_other, left, r_eff, nearest_d,
+            other_ref, np.bool_(True), score, seen, g_ox, g_oy, g_res, nodes, robot_r, buf_r, buf_c, row_stamp,
+            stamp + 1)
         if n_cand or n_losing:
             return done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now
         stamp += 1
@@ -91,7 +92,7 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         for j in range(m):
             for k in range(angles.shape[0]):
                 avoided[j, k] = min(scans[j, k], avoid)
-        navigate_kernel((now, False, xy, heading, agents, avoided, angles, refused_m, fresh),
+        navigate_kernel((now, np.bool_(False), xy, heading, agents, avoided, angles, refused_m, fresh),
                         (score, seen, row_stamp, stamp, robots, no_robots, covered, gap, visited), cfg, plans, work)
         now += 1
         for j in range(m):
@@ -101,7 +102,7 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         b_ptr, b_idx, b_dist = (indptr, indices, dist) if collisions else no_bodies
         drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, collisions, b_ptr, b_idx, b_dist,
                      reach, distance, refused)
-        ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, 1)
+        ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, np.int64(1))
         done += 1
         if not ok:
             return done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now
