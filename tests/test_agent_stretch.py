@@ -4,10 +4,17 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from amronet.algorithms.agent_assisted import _pair_key
+from amronet.algorithms.triangular import select_triangles
+from amronet.engine.neighbours import neighbour_csr
+from amronet.engine.radio import NeighbourTable
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.sim.agent_stretch import QuietStretch
+from amronet.sim.stretch_kernels import TRIANGLES_LOCAL, TRIANGLES_NONE, _triangle_goes
 
 FRONTIER = {"algorithm.params.explorer": "frontier"}
 CASES = {
@@ -61,6 +68,39 @@ def test_stretches_give_the_step_by_step_run_bit_for_bit(name):
         assert ends["quiet"] > 0 and ends["acts"] > 0
     if name.startswith("hospital"):  # here the agents soon run out of plans: stretches stop where one walks at random
         assert ends["idle"] > 0
+    if name.startswith("four bases"):  # steps where an agent heard another network and the local rule said no
+        assert fast.compiled.stretch.triangles_looked_at > 0
+        assert fast.controller.triangles_released  # and triangles that went ahead, in Python
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["none", "local"]))
+def test_the_kernels_triangle_rule_is_select_triangles(seed, rule):
+    # what AgentAssisted.decide_tracked does with the candidates, against the stretch kernel's yes/no
+    rng = np.random.default_rng(seed)
+    n, m = int(rng.integers(4, 12)), int(rng.integers(1, 4))
+    xy = rng.uniform(0.0, 10.0, (n + m, 2))
+    if rng.random() < 0.5:  # references exactly r_c apart
+        xy[1] = xy[0] + np.array([3.0, 0.0])
+    agents = np.arange(n, n + m)
+    current = np.full(n + m, -1, dtype=np.int64)
+    current[agents] = rng.integers(0, n, m)
+    other = rng.integers(-1, n, m)
+    other[other == current[agents]] = -1
+    left = rng.integers(0, 3, n + m)
+    disabled = rng.random(n + m) < 0.5
+    served = {_pair_key(int(agents[k]), int(current[agents[k]]), int(other[k])) for k in range(m)
+              if other[k] >= 0 and rng.random() < 0.3}
+    cand = np.flatnonzero((other >= 0) & (left[agents] >= 1))
+    cand = cand[np.array([_pair_key(int(agents[k]), int(current[agents[k]]), int(other[k])) not in served
+                          for k in cand], dtype=bool)]
+    indptr, indices, dist = neighbour_csr(xy, 3.0)
+    table = NeighbourTable(xy=xy, r=3.0, indptr=indptr, indices=indices, dist=dist)  # (read by the global rule only)
+    expected = select_triangles(rule, agents[cand], current[agents][cand], other[cand], xy, 3.0, disabled, table,
+                                np.ones(n + m, dtype=bool)).any()
+    code = TRIANGLES_NONE if rule == "none" else TRIANGLES_LOCAL
+    served_rows = np.array(sorted(served), dtype=np.int64).reshape(-1, 3)
+    assert _triangle_goes(code, 3.0, disabled, served_rows, agents, current, other, left, xy) == expected
 
 
 def test_steps_stepped_one_by_one_take_no_stretch():

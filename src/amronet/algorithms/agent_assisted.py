@@ -294,6 +294,10 @@ class AgentAssisted(Controller):
                                         self.other_ref)
         return self.decide_tracked(step, n_before, n_cand, n_losing)
 
+    def served_pairs(self) -> np.ndarray:
+        """The triangles served so far as rows ``(agent, lower reference, higher reference)`` ``(k, 3)`` int64."""
+        return np.array(sorted(self._served), dtype=np.int64).reshape(-1, 3)
+
     @property
     def wants_other(self) -> bool:
         """Whether the reference tracking looks for a reference of another status (a triangle may start)."""

@@ -18,13 +18,24 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amronet.sim.stretch_kernels import ACTS, IDLE, NON_FINITE, quiet_stretch
+from amronet.sim.stretch_kernels import (
+    ACTS,
+    IDLE,
+    NON_FINITE,
+    TRIANGLES_ACT,
+    TRIANGLES_LOCAL,
+    TRIANGLES_NONE,
+    quiet_stretch,
+)
 from amronet.threads import use_threads
 
 if TYPE_CHECKING:
     from amronet.sim.compiled_agents import CompiledAgents
 
 __all__ = ["QuietStretch"]
+
+_RULES = {"none": TRIANGLES_NONE, "local": TRIANGLES_LOCAL}
+"""The triangle rules the kernel decides itself; under the others a triangle candidate ends a stretch."""
 
 
 class QuietStretch:
@@ -38,6 +49,8 @@ class QuietStretch:
         self.compiled = compiled
         self.ends = {"quiet": 0, "acts": 0, "idle": 0}
         """How many stretches ended each way: all steps quiet, an agent acting, an agent without a plan."""
+        self.triangles_looked_at = 0
+        """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
 
     @staticmethod
     def applies(compiled: CompiledAgents) -> bool:
@@ -77,10 +90,11 @@ class QuietStretch:
         state = rng.bit_generator.state
         uniform = rng.random(limit * m)
         start = time.perf_counter()
-        done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps = quiet_stretch(
+        done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps, looked = quiet_stretch(
             a.grid, sw.xy, sw.heading, sw.radius, sw.status, sw.distance, c.agents, a.angles, a.sensor_range, length,
             reach, a.collisions, float(loop.medium.reach), (table.indptr, table.indices, table.dist),
             (c.current, is_ref, c.wants_other, c.left, c.r_eff, c.nearest_d, c.other_ref, c.refused),
+            (_RULES.get(c.params.triangular, TRIANGLES_ACT), float(c.r_c), c.disabled, c.served_pairs()),
             (grid.score, grid.seen, float(grid.origin[0]), float(grid.origin[1]), float(grid.resolution),
              grid.row_stamp, grid.stamp), deployed_xy, comp.robot_radius, buf_r, buf_c, explorer.steps, avoid, uniform,
             layers, settings, plans, buffers, explorer.plans.active, run.bases, run.relay_mask,
@@ -92,6 +106,7 @@ class QuietStretch:
         if done:
             loop.table = loop.medium.plain_table(sw.xy.copy(), *csr)
         self.ends[{ACTS: "acts", IDLE: "idle"}.get(how, "quiet")] += 1
+        self.triangles_looked_at += looked
         if how in (ACTS, IDLE):  # stopped part-way through a step: the generator as those steps leave it, then the rest
             rng.bit_generator.state = state
             rng.random((done + (how == IDLE)) * m)

@@ -319,6 +319,16 @@ def sense_track_agents(blocked, clear, ox, oy, res, xy, heading, radius, agents,
                                     nearest, other)
     if n_cand or n_losing or not integrate:
         return n_cand, n_losing
+    integrate_agents(xy, heading, agents, angles, sensor_range, scans, score, seen, g_ox, g_oy, g_res, nodes, robot_r,
+                     buf_r, buf_c, row_stamp, stamp)
+    return 0, 0
+
+
+@njit(cache=True)
+def integrate_agents(xy, heading, agents, angles, sensor_range, scans, score, seen, g_ox, g_oy, g_res, nodes, robot_r,
+                     buf_r, buf_c, row_stamp, stamp):  # pragma: no cover - numba
+    """The agents' readings in the frontier explorer's shared grid, as its ``KnowledgeGrid.integrate`` puts them."""
+    n = agents.shape[0]
     pos = np.empty((n, 2))
     facing = np.empty(n)
     for m in range(n):
@@ -328,7 +338,6 @@ def sense_track_agents(blocked, clear, ox, oy, res, xy, heading, radius, agents,
         facing[m] = heading[i]
     integrate_readings(score, seen, g_ox, g_oy, g_res, pos, facing, scans, angles, sensor_range, nodes, robot_r,
                        np.int64(HIT_GAIN), np.int64(OCCUPIED_CAP), np.int64(FREE_FLOOR), buf_r, buf_c, row_stamp, stamp)
-    return 0, 0
 
 
 @njit(cache=True)

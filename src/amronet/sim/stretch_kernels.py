@@ -8,11 +8,17 @@ when there are a few agents. :func:`quiet_stretch` does up to ``limit`` such ste
 compiled functions the step-by-step path calls, in the same order, on the same numbers, so the result is the same
 bit for bit (:mod:`amronet.sim.agent_stretch` drives it; ``tests/test_agent_stretch.py`` compares).
 
+A step in which an agent hears a reference of another network (a triangle candidate) is quiet too when no triangle
+would go ahead by the local rule or none (:func:`~amronet.algorithms.triangular.select_triangles`): the controller
+then does nothing but what a quiet step does. Under the global rule such a step ends the stretch.
+
 It stops at the first step that is not quiet, part-way through it, and says where: the Python path finishes that
 step.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -20,9 +26,9 @@ from numba import njit
 from amronet.algorithms.explorers.frontier.navigation import navigate_kernel
 from amronet.engine.neighbours import search_kernel
 from amronet.engine.network import agents_linked_kernel
-from amronet.sim.step_kernels import drive_movers, sense_track_agents
+from amronet.sim.step_kernels import drive_movers, integrate_agents, sense_track_agents
 
-__all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "quiet_stretch"]
+__all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_LOCAL", "TRIANGLES_NONE", "quiet_stretch"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -34,35 +40,46 @@ the idle agents' random steering, the move and the radio are left."""
 NON_FINITE = 3
 """A robot's position became non-finite in the last step done (its radio table was not built)."""
 
+TRIANGLES_NONE = 0
+"""Triangle rule ``none``: a candidate whose references are farther apart than ``r_c`` goes ahead."""
+TRIANGLES_LOCAL = 1
+"""Triangle rule ``local``: and its references are not both disabled."""
+TRIANGLES_ACT = 2
+"""Any other rule: a triangle candidate ends the stretch (the controller decides)."""
+
 
 @njit(cache=True)
 def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, sensor_range, length, reach,
-                  collisions, r, table, tracking, knowledge, nodes, robot_r, buf_r, buf_c, now, avoid, uniform,
-                  layers, cfg, plans, work, active, bases, network, links, limit):  # pragma: no cover - numba
+                  collisions, r, table, tracking, triangles, knowledge, nodes, robot_r, buf_r, buf_c, now, avoid,
+                  uniform, layers, cfg, plans, work, active, bases, network, links, limit):  # pragma: no cover - numba
     """Up to ``limit`` quiet steps; see the module docstring.
 
-    The arguments, in order: ``grid`` = ``(blocked, clear, ox, oy, res)``, the map's grid for the rings and the
-    moves; the robots' ``xy``, ``heading``, ``radius``, ``status`` and ``distance`` (updated in place); the
-    ``agents``, their ring (``angles``, ``sensor_range``), each one's move per step (``length``), the reach of the
-    moves' collision checks (``reach``) and whether bodies stop moves (``collisions``); the radio's search radius
-    ``r`` and this step's ``table`` ``(indptr, indices, dist)`` (every sensing and driving reach is within ``r``);
-    the controller's ``tracking`` arrays ``(current, is_ref, wants_other, left, r_eff, nearest_d, other_ref,
-    refused)``; the shared grid's ``knowledge`` ``(score, seen, origin_x, origin_y, resolution, row_stamp, stamp)``
-    and what its update reads (the deployed ``nodes``, fixed in a quiet stretch, ``robot_r``, the scratch ``buf_r``
-    and ``buf_c``); the explorer's step count ``now``, avoidance reach ``avoid`` and ``uniform``, ``limit`` times as
-    many uniform draws as there are agents (the fresh headings, step by step); its ``layers`` ``(robots, no_robots,
-    covered, gap, visited)``, the navigation kernel's ``cfg``, ``plans`` and ``work`` as plain tuples and the plans'
-    ``active``; the run's ``bases`` and relaying nodes (``network``), and the agents' connection books ``links`` =
-    ``(linked, connected_steps, outages, longest, current, counts, sums)`` with ``counts`` = ``[steps observed,
-    steps all connected, outage going on, connected steps of the fraction]`` and ``sums`` = ``[sum of fractions,
-    window minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`); ``limit``, the most steps to do.
+    The arguments, in order: ``grid`` = ``(blocked, clear, ox, oy, res)``, the map's grid for the rings and the moves;
+    the robots' ``xy``, ``heading``, ``radius``, ``status`` and ``distance`` (updated in place); the ``agents``, their
+    ring (``angles``, ``sensor_range``), each one's move per step (``length``), the reach of the moves' collision checks
+    (``reach``) and whether bodies stop moves (``collisions``); the radio's search radius ``r`` and this step's
+    ``table`` ``(indptr, indices, dist)`` (every sensing and driving reach is within ``r``); the controller's
+    ``tracking`` arrays ``(current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused)`` and its
+    ``triangles`` ``(rule, r_c, disabled, served)`` (a ``TRIANGLES_*`` code, the nodes' local-rule flags, the triangles
+    served as rows ``(agent, lower reference, higher reference)``); the shared grid's ``knowledge`` ``(score, seen,
+    origin_x, origin_y, resolution, row_stamp, stamp)`` and what its update reads (the deployed ``nodes``, fixed in a
+    quiet stretch, ``robot_r``, the scratch ``buf_r`` and ``buf_c``); the explorer's step count ``now``, avoidance reach
+    ``avoid`` and ``uniform``, ``limit`` times as many uniform draws as there are agents (the fresh headings, step by
+    step); its ``layers`` ``(robots, no_robots, covered, gap, visited)``, the navigation kernel's ``cfg``, ``plans`` and
+    ``work`` as plain tuples and the plans' ``active``; the run's ``bases`` and relaying nodes (``network``), and the
+    agents' connection books ``links`` = ``(linked, connected_steps, outages, longest, current, counts, sums)`` with
+    ``counts`` = ``[steps observed, steps all connected, outage going on, connected steps of the fraction]`` and
+    ``sums`` = ``[sum of fractions, window minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`);
+    ``limit``, the most steps to do.
 
     Returns:
         ``(steps done, QUIET/ACTS/IDLE/NON_FINITE, triangle candidates, losing, table, scans, grid stamp,
-        explorer steps)``: after ``ACTS`` or ``IDLE`` ``scans`` are that step's readings, the counts its tracking's.
+        explorer steps, steps with a triangle candidate and none going ahead)``: after ``ACTS`` or ``IDLE`` ``scans``
+        are that step's readings, the counts its tracking's.
     """
     blocked, clear, ox, oy, res = grid
     current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused = tracking
+    rule, r_c, disabled, served = triangles
     score, seen, g_ox, g_oy, g_res, row_stamp, stamp = knowledge
     robots, no_robots, covered, gap, visited = layers
     linked, connected_steps, outages, longest, down_for, counts, sums = links
@@ -74,6 +91,7 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
     fresh = np.empty(m)
     no_bodies = (np.zeros(n + 1, np.int64), np.zeros(0, np.int32), np.zeros(0))
     done = 0
+    looked = 0
     while done < limit:
         scans = np.empty((m, angles.shape[0]))
         n_cand, n_losing = sense_track_agents(
@@ -81,8 +99,14 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
             np.bool_(True), scans, current, is_ref, status, indptr, indices, dist, wants_other, left, r_eff, nearest_d,
             other_ref, np.bool_(True), score, seen, g_ox, g_oy, g_res, nodes, robot_r, buf_r, buf_c, row_stamp,
             stamp + 1)
-        if n_cand or n_losing:
-            return done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now
+        if n_cand and not n_losing and not _triangle_goes(rule, r_c, disabled, served, agents, current, other_ref, left,
+                                                          xy):
+            # the controller would only look: the rest of sense_track_agents, as in a quiet step
+            looked += 1
+            integrate_agents(xy, heading, agents, angles, sensor_range, scans, score, seen, g_ox, g_oy, g_res, nodes,
+                             robot_r, buf_r, buf_c, row_stamp, stamp + 1)
+        elif n_cand or n_losing:
+            return done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now, looked
         stamp += 1
         # the frontier explorer's plan_and_steer
         for j in range(m):
@@ -97,7 +121,7 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         now += 1
         for j in range(m):
             if not active[j]:
-                return done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now
+                return done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
         # the move, then the radio's next table and the agents' connection
         b_ptr, b_idx, b_dist = (indptr, indices, dist) if collisions else no_bodies
         drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, collisions, b_ptr, b_idx, b_dist,
@@ -105,10 +129,42 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, np.int64(1))
         done += 1
         if not ok:
-            return done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now
+            return done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
         _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
                  sums)
-    return done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now
+    return done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now, looked
+
+
+@njit(cache=True)
+def _triangle_goes(rule, r_c, disabled, served, agents, current, other, left, xy):  # pragma: no cover - numba
+    """Would a triangle go ahead this step? What ``AgentAssisted.decide_tracked`` asks ``select_triangles``.
+
+    The candidates are the agents that hear a reference of another status (``other[m]``) and carry a router, less
+    the triangles they served already; one goes ahead when its references are farther apart than ``r_c`` (the
+    distance as ``numpy.linalg.norm`` computes it) and, by the local rule, not both disabled.
+    """
+    if rule == TRIANGLES_ACT:
+        return True
+    for m in range(agents.shape[0]):
+        a = agents[m]
+        o = other[m]
+        if o < 0 or left[a] < 1:
+            continue
+        cur = current[a]
+        lo = min(cur, o)
+        hi = max(cur, o)
+        fresh = True
+        for k in range(served.shape[0]):
+            if served[k, 0] == a and served[k, 1] == lo and served[k, 2] == hi:
+                fresh = False
+                break
+        if not fresh:
+            continue
+        dx = xy[cur, 0] - xy[o, 0]
+        dy = xy[cur, 1] - xy[o, 1]
+        if math.sqrt(dx * dx + dy * dy) > r_c and (rule == TRIANGLES_NONE or not (disabled[cur] and disabled[o])):
+            return True
+    return False
 
 
 @njit(cache=True)
