@@ -71,6 +71,8 @@ def test_stretches_give_the_step_by_step_run_bit_for_bit(name):
     if name.startswith("four bases"):  # steps where an agent heard another network and the local rule said no
         assert fast.compiled.stretch.triangles_looked_at > 0
         assert fast.controller.triangles_released  # and triangles that went ahead, in Python
+        # triangle routers driving to their goals in stretches, and stretches that stopped where one arrived
+        assert fast.compiled.stretch.triangle_steps > 0 and ends["triangle"] > 0
 
 
 @settings(max_examples=200, deadline=None)

@@ -379,6 +379,16 @@ class AgentAssisted(Controller):
                     sw.heading[agents[m]] = np.arctan2(back[1], back[0])
         if self.trails is not None:
             self._back_up(view)
+        return self.movers_command(step, n_before)
+
+    def movers_command(self, step: StepInput, n_before: int) -> Command:
+        """The end of :meth:`decide` once the agents are steered: the other movers steer; the command for them all.
+
+        The triangle, strip and relocating routers steer; the command moves them with the agents. A compiled step
+        that steers the agents itself (:mod:`amronet.sim.agent_stretch`) finishes a step here.
+        """
+        sw = self.swarm
+        agents = self.agents
         speed = self.explorer.speed(self.agent_speed)
         movers, speeds = [agents], [speed]
 

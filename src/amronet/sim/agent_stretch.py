@@ -18,11 +18,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amronet.engine.robots import State
+from amronet.engine.sensing import beam_angles
 from amronet.sim.stretch_kernels import (
     ACTS,
     IDLE,
     NON_FINITE,
     TRIANGLES_ACT,
+    TRIANGLES_END,
     TRIANGLES_LOCAL,
     TRIANGLES_NONE,
     quiet_stretch,
@@ -33,6 +36,9 @@ if TYPE_CHECKING:
     from amronet.sim.compiled_agents import CompiledAgents
 
 __all__ = ["QuietStretch"]
+
+_NO_ROBOTS = np.zeros(0, dtype=np.int64)
+_NO_STEPS = np.zeros(0)
 
 _RULES = {"none": TRIANGLES_NONE, "local": TRIANGLES_LOCAL}
 """The triangle rules the kernel decides itself; under the others a triangle candidate ends a stretch."""
@@ -47,10 +53,41 @@ class QuietStretch:
 
     def __init__(self, compiled: CompiledAgents) -> None:
         self.compiled = compiled
-        self.ends = {"quiet": 0, "acts": 0, "idle": 0}
-        """How many stretches ended each way: all steps quiet, an agent acting, an agent without a plan."""
+        self.ends = {"quiet": 0, "acts": 0, "idle": 0, "triangle": 0}
+        """How many stretches ended each way: all steps quiet, an agent acting, an agent without a plan, a triangle
+        router arriving or giving up."""
         self.triangles_looked_at = 0
+        self.triangle_steps = 0
+        """Steps taken in stretches with triangle routers driving to their goals."""
         """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
+
+    def _moving(self, length: np.ndarray, r: float) -> tuple | None:
+        """The kernel's ``moving`` tuple: the triangle routers driving to their goals and how they steer.
+
+        ``None`` when their steps cannot be taken in the stretch: routers of several models, or of the agents' model,
+        or whose rings or moves reach beyond the radio's table (the sense and move phases would search anew).
+        """
+        comp = self.compiled
+        c, sw, a = comp.controller, comp.loop.swarm, comp.around
+        steering = c.steering
+        tri = np.flatnonzero(sw.state == State.TRIANGLE) if c.moving_triangles else _NO_ROBOTS
+        largest = a.largest_radius()
+        if len(tri) == 0:
+            return (_NO_ROBOTS, beam_angles(1), 0.0, _NO_STEPS, steering.goal, steering.anchors, steering.last_to_goal,
+                    steering.blocked_steps, int(steering.give_up_steps), float(steering.min_progress), float(c.r_eff),
+                    float(c.dt), largest)
+        model = int(sw.model[tri[0]])
+        if model == c.agent_model or (sw.model[tri] != model).any():
+            return None
+        spec = sw.models[model]
+        max_step = sw.max_speed[tri] * c.dt
+        # (the step a router takes, turned into the command's speed and back, may exceed max_step by a rounding)
+        reach = 2.0 * largest + 2.0 * max(max(length.tolist()), float(max_step.max()) * (1.0 + 1e-9))
+        if spec.sensor_range + largest > r or (a.collisions and reach > r):
+            return None
+        return (tri, beam_angles(spec.sensor_beams), float(spec.sensor_range), max_step, steering.goal,
+                steering.anchors, steering.last_to_goal, steering.blocked_steps, int(steering.give_up_steps),
+                float(steering.min_progress), float(c.r_eff), float(c.dt), largest)
 
     @staticmethod
     def applies(compiled: CompiledAgents) -> bool:
@@ -60,9 +97,9 @@ class QuietStretch:
     def run(self, limit: int) -> int:
         """Take up to ``limit`` steps (at least one), none of them recorded; how many were taken (0: none could be).
 
-        A stretch starts only where a quiet step may: no router settling or driving to a goal, the agents' readings
-        and moves within the radio's table, the explorer's deployed nodes painted. The step at which the kernel
-        stops (an agent acts or has no plan) is finished here and counts.
+        A stretch starts only where a quiet step may: no router settling, the agents' and the triangle routers'
+        readings and moves within the radio's table, the explorer's deployed nodes painted. The step at which the
+        kernel stops (an agent acts or has no plan, a triangle router arrives or gives up) is finished here and counts.
 
         Raises:
             ValueError: A robot's position became non-finite (what the radio's table refuses).
@@ -71,11 +108,15 @@ class QuietStretch:
         loop, c, explorer, a = comp.loop, comp.controller, comp.explorer, comp.around
         sw, table = loop.swarm, loop.table
         n = len(sw)
-        if c.settle_at or c.moving_triangles or n < 2 or use_threads(n) or table.candidates is not None:
+        if c.settle_at or n < 2 or use_threads(n) or table.candidates is not None:
             return 0
         length, reach = comp.moves()
         if a.sensor_range + a.largest_radius() > table.r or (a.collisions and reach > table.r):
             return 0
+        moving = self._moving(length, table.r)
+        if moving is None:
+            return 0
+        tri = moving[0]
         m = len(c.agents)
         is_ref, deployed_xy = c.deployed_nodes()
         inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)
@@ -94,7 +135,7 @@ class QuietStretch:
             a.grid, sw.xy, sw.heading, sw.radius, sw.status, sw.distance, c.agents, a.angles, a.sensor_range, length,
             reach, a.collisions, float(loop.medium.reach), (table.indptr, table.indices, table.dist),
             (c.current, is_ref, c.wants_other, c.left, c.r_eff, c.nearest_d, c.other_ref, c.refused),
-            (_RULES.get(c.params.triangular, TRIANGLES_ACT), float(c.r_c), c.disabled, c.served_pairs()),
+            (_RULES.get(c.params.triangular, TRIANGLES_ACT), float(c.r_c), c.disabled, c.served_pairs()), moving,
             (grid.score, grid.seen, float(grid.origin[0]), float(grid.origin[1]), float(grid.resolution),
              grid.row_stamp, grid.stamp), deployed_xy, comp.robot_radius, buf_r, buf_c, explorer.steps, avoid, uniform,
             layers, settings, plans, buffers, explorer.plans.active, run.bases, run.relay_mask,
@@ -105,19 +146,25 @@ class QuietStretch:
             raise ValueError("xy has non-finite coordinates")
         if done:
             loop.table = loop.medium.plain_table(sw.xy.copy(), *csr)
-        self.ends[{ACTS: "acts", IDLE: "idle"}.get(how, "quiet")] += 1
+        self.ends[{ACTS: "acts", IDLE: "idle", TRIANGLES_END: "triangle"}.get(how, "quiet")] += 1
         self.triangles_looked_at += looked
-        if how in (ACTS, IDLE):  # stopped part-way through a step: the generator as those steps leave it, then the rest
-            rng.bit_generator.state = state
-            rng.random((done + (how == IDLE)) * m)
+        self.triangle_steps += done if len(tri) else 0
+        if how in (ACTS, IDLE, TRIANGLES_END):  # stopped part-way through a step: the generator as those steps leave
+            rng.bit_generator.state = state       # it, then the rest of the step
+            rng.random((done + (how != ACTS)) * m)
+            readings = comp.readings(scans, tri)
             if how == ACTS:
-                comp.act(n, n_cand, n_losing, scans)
+                comp.act(n, n_cand, n_losing, scans, readings)
             else:
-                explorer.steer_idle(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], rng, sw.xy,
-                                    deployed_xy)
-                comp.drive()
+                if how == IDLE:
+                    explorer.steer_idle(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], rng, sw.xy,
+                                        deployed_xy)
+                if len(tri):
+                    comp.finish(n, readings)
+                else:
+                    comp.drive()
         loop.phase_seconds["sense+decide+move"] += time.perf_counter() - start
-        if how not in (ACTS, IDLE):
+        if how not in (ACTS, IDLE, TRIANGLES_END):
             return done
         loop.after_compiled_step()
         return done + 1

@@ -28,6 +28,7 @@ import numpy as np
 from amronet.algorithms.agent_assisted import AgentAssisted
 from amronet.algorithms.base import Command, Readings, StepInput
 from amronet.algorithms.explorers.frontier import FrontierExplorer, KnowledgeGrid
+from amronet.engine.sensing import range_scan
 from amronet.sim.agent_stretch import QuietStretch
 from amronet.sim.phases import move, sense
 from amronet.sim.step_kernels import drive_movers, sense_track_agents
@@ -106,11 +107,35 @@ class CompiledAgents:
             grid.row_stamp, grid.stamp + 1)
         return scans, n_cand, n_losing
 
-    def act(self, n_before: int, n_cand: int, n_losing: int, scans: np.ndarray) -> None:
-        """The rest of a step in which an agent acts: the controller's own rules, then the move phase."""
+    def act(self, n_before: int, n_cand: int, n_losing: int, scans: np.ndarray, readings: Readings | None = None
+            ) -> None:
+        """The rest of a step in which an agent acts: the controller's own rules, then the move phase.
+
+        ``readings``: this step's readings when other robots than the agents sense (default: the agents' ``scans``).
+        """
         c = self.controller
         self._decide_and_move(lambda step: c.decide_tracked(step, n_before, n_cand, n_losing),
-                              Readings({c.agent_model: (c.agents, scans)}))
+                              readings or Readings({c.agent_model: (c.agents, scans)}))
+
+    def finish(self, n_before: int, readings: Readings) -> None:
+        """The rest of a step whose agents are steered: the other movers steer, then the move phase (all of them)."""
+        c = self.controller
+        self._decide_and_move(lambda step: c.movers_command(step, n_before), readings)
+
+    def readings(self, scans: np.ndarray, others: np.ndarray) -> Readings:
+        """This step's readings: the agents' ``scans`` and the rings of ``others`` (one model, not the agents').
+
+        The rings of ``others`` as the sense phase casts them (:func:`~amronet.sim.phases.sense`).
+        """
+        c, loop = self.controller, self.loop
+        groups = {c.agent_model: (c.agents, scans)}
+        if len(others):
+            sw = loop.swarm
+            model = int(sw.model[others[0]])
+            spec = sw.models[model]
+            groups[model] = (others, range_scan(loop.world.omap, sw.xy, sw.heading, others, spec.sensor_beams,
+                                                spec.sensor_range, radius=sw.radius, table=loop.table))
+        return Readings(groups)
 
     def _steer(self, scans: np.ndarray) -> None:
         """The explorer's steering as it is (for the frontier explorer the part after the grid update)."""

@@ -10,7 +10,9 @@ bit for bit (:mod:`amronet.sim.agent_stretch` drives it; ``tests/test_agent_stre
 
 A step in which an agent hears a reference of another network (a triangle candidate) is quiet too when no triangle
 would go ahead by the local rule or none (:func:`~amronet.algorithms.triangular.select_triangles`): the controller
-then does nothing but what a quiet step does. Under the global rule such a step ends the stretch.
+then does nothing but what a quiet step does. Under the global rule such a step ends the stretch. Triangle routers
+driving to their goals are steered and moved with the agents, as the controller and the move phase do it, in the
+steps before one of them arrives or gives up.
 
 It stops at the first step that is not quiet, part-way through it, and says where: the Python path finishes that
 step.
@@ -24,11 +26,14 @@ import numpy as np
 from numba import njit
 
 from amronet.algorithms.explorers.frontier.navigation import navigate_kernel
+from amronet.algorithms.goto import steer_one
 from amronet.engine.neighbours import search_kernel
 from amronet.engine.network import agents_linked_kernel
+from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 from amronet.sim.step_kernels import drive_movers, integrate_agents, sense_track_agents
 
-__all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_LOCAL", "TRIANGLES_NONE", "quiet_stretch"]
+__all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL", "TRIANGLES_NONE",
+           "quiet_stretch"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -40,6 +45,10 @@ the idle agents' random steering, the move and the radio are left."""
 NON_FINITE = 3
 """A robot's position became non-finite in the last step done (its radio table was not built)."""
 
+TRIANGLES_END = 4
+"""The step after the last one done: a triangle router driving to its goal arrives or gives up. Sensed, tracked, in
+the grid and steered by the plans; the triangle routers' steering, the move and the radio are left."""
+
 TRIANGLES_NONE = 0
 """Triangle rule ``none``: a candidate whose references are farther apart than ``r_c`` goes ahead."""
 TRIANGLES_LOCAL = 1
@@ -50,8 +59,8 @@ TRIANGLES_ACT = 2
 
 @njit(cache=True)
 def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, sensor_range, length, reach,
-                  collisions, r, table, tracking, triangles, knowledge, nodes, robot_r, buf_r, buf_c, now, avoid,
-                  uniform, layers, cfg, plans, work, active, bases, network, links, limit):  # pragma: no cover - numba
+                  collisions, r, table, tracking, triangles, moving, knowledge, nodes, robot_r, buf_r, buf_c, now,
+                  avoid, uniform, layers, cfg, plans, work, active, bases, network, links, limit):  # pragma: no cover
     """Up to ``limit`` quiet steps; see the module docstring.
 
     The arguments, in order: ``grid`` = ``(blocked, clear, ox, oy, res)``, the map's grid for the rings and the moves;
@@ -61,21 +70,24 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
     ``table`` ``(indptr, indices, dist)`` (every sensing and driving reach is within ``r``); the controller's
     ``tracking`` arrays ``(current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused)`` and its
     ``triangles`` ``(rule, r_c, disabled, served)`` (a ``TRIANGLES_*`` code, the nodes' local-rule flags, the triangles
-    served as rows ``(agent, lower reference, higher reference)``); the shared grid's ``knowledge`` ``(score, seen,
-    origin_x, origin_y, resolution, row_stamp, stamp)`` and what its update reads (the deployed ``nodes``, fixed in a
-    quiet stretch, ``robot_r``, the scratch ``buf_r`` and ``buf_c``); the explorer's step count ``now``, avoidance reach
-    ``avoid`` and ``uniform``, ``limit`` times as many uniform draws as there are agents (the fresh headings, step by
-    step); its ``layers`` ``(robots, no_robots, covered, gap, visited)``, the navigation kernel's ``cfg``, ``plans`` and
-    ``work`` as plain tuples and the plans' ``active``; the run's ``bases`` and relaying nodes (``network``), and the
-    agents' connection books ``links`` = ``(linked, connected_steps, outages, longest, current, counts, sums)`` with
+    served as rows ``(agent, lower reference, higher reference)``); the triangle routers driving to their goals,
+    ``moving`` = ``(tri, angles, sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up,
+    min_progress, r_keep, dt, largest radius)`` (``tri`` empty: none; the rest as
+    :class:`~amronet.algorithms.goto.GoalSteering` keeps and steers them); the shared grid's ``knowledge`` ``(score,
+    seen, origin_x, origin_y, resolution, row_stamp, stamp)`` and what its update reads (the deployed ``nodes``, fixed
+    in a quiet stretch, ``robot_r``, the scratch ``buf_r`` and ``buf_c``); the explorer's step count ``now``, avoidance
+    reach ``avoid`` and ``uniform``, ``limit`` times as many uniform draws as there are agents (the fresh headings, step
+    by step); its ``layers`` ``(robots, no_robots, covered, gap, visited)``, the navigation kernel's ``cfg``, ``plans``
+    and ``work`` as plain tuples and the plans' ``active``; the run's ``bases`` and relaying nodes (``network``), and
+    the agents' connection books ``links`` = ``(linked, connected_steps, outages, longest, current, counts, sums)`` with
     ``counts`` = ``[steps observed, steps all connected, outage going on, connected steps of the fraction]`` and
     ``sums`` = ``[sum of fractions, window minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`);
     ``limit``, the most steps to do.
 
     Returns:
-        ``(steps done, QUIET/ACTS/IDLE/NON_FINITE, triangle candidates, losing, table, scans, grid stamp,
-        explorer steps, steps with a triangle candidate and none going ahead)``: after ``ACTS`` or ``IDLE`` ``scans``
-        are that step's readings, the counts its tracking's.
+        ``(steps done, QUIET/ACTS/IDLE/TRIANGLES_END/NON_FINITE, triangle candidates, losing, table, scans, grid
+        stamp, explorer steps, steps with a triangle candidate and none going ahead)``: after ``ACTS``, ``IDLE`` or
+        ``TRIANGLES_END`` ``scans`` are that step's agents' readings, the counts its tracking's.
     """
     blocked, clear, ox, oy, res = grid
     current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused = tracking
@@ -86,6 +98,17 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
     indptr, indices, dist = table
     m = agents.shape[0]
     n = xy.shape[0]
+    (tri, t_angles, t_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_keep, dt,
+     largest) = moving
+    nt = tri.shape[0]
+    movers = np.empty(m + nt, np.int64)  # the agents, then the triangle routers (the controller's order)
+    lengths = np.empty(m + nt)
+    for j in range(m):
+        movers[j] = agents[j]
+        lengths[j] = length[j]
+    for q in range(nt):
+        movers[m + q] = tri[q]
+    t_scans = np.empty((nt, t_angles.shape[0]))
     group = np.zeros(n, np.int64)
     refused_m = np.empty(m, np.bool_)
     fresh = np.empty(m)
@@ -122,10 +145,31 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         for j in range(m):
             if not active[j]:
                 return done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
+        near = reach
+        if nt:  # the triangle routers' rings, then their steering, unless one of them arrives or gives up now
+            for q in range(nt):
+                if _goal_ends(tri[q], xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step[q]):
+                    return done, TRIANGLES_END, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
+            for q in range(nt):
+                i = tri[q]
+                cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], t_angles, t_range,
+                              t_scans[q])
+                if n > 1:
+                    cast_bodies_one(i, indptr, indices, dist, xy, heading[i], t_angles, t_range, radius, largest,
+                                    t_scans[q])
+            farthest = 0.0
+            for j in range(m):
+                farthest = max(farthest, lengths[j])
+            for q in range(nt):
+                step, _ = steer_one(tri[q], xy, heading, goal, anchors, t_scans[q], t_angles, t_range, max_step[q],
+                                    r_keep, last_to_goal, blocked_steps, give_up, min_progress)
+                lengths[m + q] = (step / dt) * dt  # the command's speed times the step, as the move phase has it
+                farthest = max(farthest, lengths[m + q])
+            near = 2.0 * largest + 2.0 * farthest  # the move phase's reach, over every mover
         # the move, then the radio's next table and the agents' connection
         b_ptr, b_idx, b_dist = (indptr, indices, dist) if collisions else no_bodies
-        drive_movers(blocked, clear, ox, oy, res, agents, length, xy, heading, radius, collisions, b_ptr, b_idx, b_dist,
-                     reach, distance, refused)
+        drive_movers(blocked, clear, ox, oy, res, movers, lengths, xy, heading, radius, collisions, b_ptr, b_idx,
+                     b_dist, near, distance, refused)
         ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, np.int64(1))
         done += 1
         if not ok:
@@ -133,6 +177,16 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
                  sums)
     return done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now, looked
+
+
+@njit(cache=True)
+def _goal_ends(i, xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step):  # pragma: no cover - numba
+    """Would :func:`~amronet.algorithms.goto.steer_one` say robot ``i`` is done (arrived or given up) now?"""
+    to_goal = math.hypot(goal[i, 0] - xy[i, 0], goal[i, 1] - xy[i, 1])
+    if to_goal <= 1e-9:
+        return True
+    blocked = blocked_steps[i] + 1 if last_to_goal[i] - to_goal < min_progress * max_step else 0
+    return blocked >= give_up
 
 
 @njit(cache=True)
