@@ -39,6 +39,22 @@ def test_inside_the_ring_only_the_inside_is_reachable() -> None:
     assert reach[6:14, 6:14].all()
 
 
+@settings(max_examples=60, deadline=None)
+@given(arrays(np.int8, (12, 15), elements=st.sampled_from([FREE, FREE, OCCUPIED])), st.integers(0, 2**32 - 1))
+def test_reachable_free_is_the_components_of_the_seeds(cells, seed) -> None:
+    from scipy import ndimage
+
+    omap = make_map(cells)
+    free = np.argwhere(omap.free)
+    rng = np.random.default_rng(seed)
+    pick = free[rng.integers(0, len(free), min(len(free), int(rng.integers(0, 4))))] if len(free) else free
+    seeds = (pick[:, ::-1] + 0.5) * omap.resolution
+    labels, _ = ndimage.label(omap.free, structure=ndimage.generate_binary_structure(2, 1))
+    expected = np.isin(labels, np.unique(labels[pick[:, 0], pick[:, 1]])) if len(pick) else ~omap.free & omap.free
+    for _ in range(2):  # the components are computed once per map and kept: the second call reads them
+        np.testing.assert_array_equal(reachable_free(omap, seeds), expected)
+
+
 def test_outside_the_ring_does_not_leak_inside_nor_off_the_map() -> None:
     omap = ring_map()
     reach = reachable_free(omap, np.array([[0.05, 0.05]]))
