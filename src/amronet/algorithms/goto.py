@@ -17,24 +17,36 @@ from numba import njit
 from amronet.engine.motion import escape_one
 from amronet.engine.sensing import beam_angles
 
-__all__ = ["GoalSteering", "steer_one"]
+__all__ = ["GoalSteering", "goal_ends", "steer_one"]
+
+
+@njit(cache=True, inline="always")
+def _progress(i, xy, goal, last_to_goal, blocked_steps, min_progress, max_step):  # pragma: no cover - numba
+    """Robot ``i``'s way to its goal ``(gx, gy)``, its distance, and its steps without progress counting this one."""
+    gx = goal[i, 0] - xy[i, 0]
+    gy = goal[i, 1] - xy[i, 1]
+    to_goal = math.hypot(gx, gy)
+    blocked = blocked_steps[i] + 1 if last_to_goal[i] - to_goal < min_progress * max_step else 0
+    return gx, gy, to_goal, blocked
+
+
+@njit(cache=True)
+def goal_ends(i, xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step):  # pragma: no cover - numba
+    """Would :func:`steer_one` say robot ``i`` is done (arrived or given up) now? It changes nothing."""
+    _, _, to_goal, blocked = _progress(i, xy, goal, last_to_goal, blocked_steps, min_progress, max_step)
+    return to_goal <= 1e-9 or blocked >= give_up
 
 
 @njit(cache=True, inline="always")
 def steer_one(i, xy, heading, goal, anchors, scans, angles, sensor_range, max_step, r_keep, last_to_goal,
               blocked_steps, give_up, min_progress):  # pragma: no cover - numba
     """One go-to-goal step of robot ``i`` (heading set in place): ``(step_length, done)``."""
-    gx = goal[i, 0] - xy[i, 0]
-    gy = goal[i, 1] - xy[i, 1]
-    to_goal = math.hypot(gx, gy)
+    gx, gy, to_goal, blocked = _progress(i, xy, goal, last_to_goal, blocked_steps, min_progress, max_step)
     if to_goal <= 1e-9:
         return 0.0, True
-    if last_to_goal[i] - to_goal < min_progress * max_step:
-        blocked_steps[i] += 1
-    else:
-        blocked_steps[i] = 0
+    blocked_steps[i] = blocked
     last_to_goal[i] = to_goal
-    if blocked_steps[i] >= give_up:
+    if blocked >= give_up:
         return 0.0, True
     want = math.atan2(gy, gx)
     escape, alarm = escape_one(heading[i], scans, angles, sensor_range)

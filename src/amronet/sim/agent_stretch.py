@@ -57,9 +57,9 @@ class QuietStretch:
         """How many stretches ended each way: all steps quiet, an agent acting, an agent without a plan, a triangle
         router arriving or giving up."""
         self.triangles_looked_at = 0
+        """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
         self.triangle_steps = 0
         """Steps taken in stretches with triangle routers driving to their goals."""
-        """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
 
     def _moving(self, length: np.ndarray, r: float) -> tuple | None:
         """The kernel's ``moving`` tuple: the triangle routers driving to their goals and how they steer.
@@ -72,10 +72,10 @@ class QuietStretch:
         steering = c.steering
         tri = np.flatnonzero(sw.state == State.TRIANGLE) if c.moving_triangles else _NO_ROBOTS
         largest = a.largest_radius()
+        steer = (steering.goal, steering.anchors, steering.last_to_goal, steering.blocked_steps,
+                 int(steering.give_up_steps), float(steering.min_progress), float(c.r_eff), float(c.dt), largest)
         if len(tri) == 0:
-            return (_NO_ROBOTS, beam_angles(1), 0.0, _NO_STEPS, steering.goal, steering.anchors, steering.last_to_goal,
-                    steering.blocked_steps, int(steering.give_up_steps), float(steering.min_progress), float(c.r_eff),
-                    float(c.dt), largest)
+            return (_NO_ROBOTS, beam_angles(1), 0.0, _NO_STEPS, *steer)
         model = int(sw.model[tri[0]])
         if model == c.agent_model or (sw.model[tri] != model).any():
             return None
@@ -85,9 +85,7 @@ class QuietStretch:
         reach = 2.0 * largest + 2.0 * max(max(length.tolist()), float(max_step.max()) * (1.0 + 1e-9))
         if spec.sensor_range + largest > r or (a.collisions and reach > r):
             return None
-        return (tri, beam_angles(spec.sensor_beams), float(spec.sensor_range), max_step, steering.goal,
-                steering.anchors, steering.last_to_goal, steering.blocked_steps, int(steering.give_up_steps),
-                float(steering.min_progress), float(c.r_eff), float(c.dt), largest)
+        return (tri, beam_angles(spec.sensor_beams), float(spec.sensor_range), max_step, *steer)
 
     @staticmethod
     def applies(compiled: CompiledAgents) -> bool:

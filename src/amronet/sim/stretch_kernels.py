@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from amronet.algorithms.explorers.frontier.navigation import navigate_kernel
-from amronet.algorithms.goto import steer_one
+from amronet.algorithms.goto import goal_ends, steer_one
 from amronet.engine.neighbours import search_kernel
 from amronet.engine.network import agents_linked_kernel
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
@@ -148,7 +148,7 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         near = reach
         if nt:  # the triangle routers' rings, then their steering, unless one of them arrives or gives up now
             for q in range(nt):
-                if _goal_ends(tri[q], xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step[q]):
+                if goal_ends(tri[q], xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step[q]):
                     return done, TRIANGLES_END, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
             for q in range(nt):
                 i = tri[q]
@@ -177,16 +177,6 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
         _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
                  sums)
     return done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now, looked
-
-
-@njit(cache=True)
-def _goal_ends(i, xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step):  # pragma: no cover - numba
-    """Would :func:`~amronet.algorithms.goto.steer_one` say robot ``i`` is done (arrived or given up) now?"""
-    to_goal = math.hypot(goal[i, 0] - xy[i, 0], goal[i, 1] - xy[i, 1])
-    if to_goal <= 1e-9:
-        return True
-    blocked = blocked_steps[i] + 1 if last_to_goal[i] - to_goal < min_progress * max_step else 0
-    return blocked >= give_up
 
 
 @njit(cache=True)
