@@ -10,6 +10,7 @@ correction, one step each side), sorted by ``np.lexsort`` and merged and counted
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -56,6 +57,14 @@ def _merge_sorted(rows, starts, ends, prefix):
     return total
 
 
+@functools.cache
+def _row_prefix(area: CoverageArea) -> np.ndarray:
+    """Per-row prefix sums of the mask ``(rows, cols + 1)``: the mask cells of a row's column interval."""
+    prefix = np.zeros((area.mask.shape[0], area.mask.shape[1] + 1), dtype=np.int64)
+    np.cumsum(area.mask, axis=1, out=prefix[:, 1:])
+    return prefix
+
+
 def raster_numpy_intervals(area: CoverageArea, xy: np.ndarray, r: float) -> float:
     """Raster coverage with the intervals made in numpy, then sorted and merged (see module docstring)."""
     omap = area.omap
@@ -87,7 +96,7 @@ def raster_numpy_intervals(area: CoverageArea, xy: np.ndarray, r: float) -> floa
     keep = (dy2 <= r2) & (jlo < jhi)
     rows, jlo, jhi = rows[keep], jlo[keep], jhi[keep]
     order = np.lexsort((jlo, rows))
-    return _merge_sorted(rows[order], jlo[order], jhi[order], area._prefix) / area.n_cells
+    return _merge_sorted(rows[order], jlo[order], jhi[order], _row_prefix(area)) / area.n_cells
 
 
 def main() -> None:

@@ -313,6 +313,8 @@ def test_run_fractions_are_each_runs_fraction(sizes, seed, r):
     linked = network & (rng.random(n) < 0.7)
     if seed % 3 == 0:
         linked = network.copy()  # every node linked: both numbers from one count
+    elif seed % 3 == 1:
+        linked = rng.random(n) < 0.5  # not among the network's nodes (no loop gives that): counted apart
     stops = np.cumsum(sizes)
     blocks = np.stack([stops - sizes, stops], axis=1).astype(np.int64)
     got = area.run_fractions(xy, network, linked, blocks, r)

@@ -7,12 +7,10 @@ Two methods, one class that prepares the mask once:
 
 * ``"raster"`` (the default) counts the mask cells whose **centre** lies within ``r`` of some node, i.e. cell
   ``(i, j)`` with centre ``(cx, cy) = (ox + (j + 0.5) * res, oy + (i + 0.5) * res)`` is covered when
-  ``(cx - x)**2 + (cy - y)**2 <= r**2`` (evaluated exactly this way in float64). It runs a scanline in
-  numba: nodes are bucketed by row; for every grid row the half-open column interval of cell centres inside
-  each disk that spans the row is computed in closed form (and checked against the test above only when an
-  end falls within rounding error of a cell centre), the row's intervals are sorted by start (insertion sort,
-  or a counting sort when there are many), merged, and the mask cells under each merged interval are read
-  from a per-row prefix sum of the mask. No cell is ever painted.
+  ``(cx - x)**2 + (cy - y)**2 <= r**2`` (evaluated exactly this way in float64). In numba
+  (:mod:`amronet.engine.coverage_kernels`): every disk's column interval in each row it spans, in closed form (the
+  test above decides an end within rounding error of a cell centre), painted into a bitset of the rows and counted
+  under the mask's bits.
 * ``"exact"`` intersects the polygonal union of the disks with the polygon of the mask cells (shapely 2).
   Each disk is a regular ``4 * QUAD_SEGS``-gon with the **area-preserving** circumradius
   ``r' = r * sqrt(2 pi / (n sin(2 pi / n)))``, so a lone disk has exactly the area ``pi r**2``.
@@ -46,8 +44,8 @@ import math
 
 import numpy as np
 import shapely
-from numba import njit
 
+from amronet.engine.coverage_kernels import mask_words, scan, scan_runs
 from amronet.world.occupancy import OccupancyMap
 
 __all__ = ["METHODS", "QUAD_SEGS", "CoverageArea", "disk_radius_area_preserving"]
@@ -73,163 +71,6 @@ def disk_radius_area_preserving(r: float, n: int) -> float:
 
 
 # --------------------------------------------------------------------------------------------------------
-# raster: the numba scanline
-# --------------------------------------------------------------------------------------------------------
-
-
-@njit(cache=True, inline="always")
-def _inside(j, x, dy2, r2, ox, res):
-    dx = ox + (j + 0.5) * res - x
-    return dx * dx + dy2 <= r2
-
-
-@njit(cache=True)
-def _scan(xy, r, ox, oy, res, prefix, out, paint):
-    """Count (and, if ``paint``, mark in ``out``) the mask cells the disks cover; -1 if xy is not finite."""
-    n = xy.shape[0]
-    nrows = prefix.shape[0]
-    ncols = prefix.shape[1] - 1
-    for k in range(n):
-        if not (np.isfinite(xy[k, 0]) and np.isfinite(xy[k, 1])):
-            return -1
-    r2 = r * r
-    rc = r / res
-    # counting sort of the nodes by the row of their centre, clipped to -1 (below the map) .. nrows (above);
-    # a disk spans rows within w of its centre's row, so nodes further out than that cannot reach the map
-    w = int(min(math.ceil(rc) + 1.0, nrows + 2.0))
-    wf = rc + 2.0
-    bucket = np.empty(n, np.int64)
-    counts = np.zeros(nrows + 3, np.int64)
-    for k in range(n):
-        v = (xy[k, 1] - oy) / res
-        if v < -wf or v > nrows + wf:
-            bucket[k] = -1
-        else:
-            b = math.floor(min(max(v, -1.0), float(nrows))) + 1
-            bucket[k] = b
-            counts[b + 1] += 1
-    for b in range(nrows + 2):
-        counts[b + 1] += counts[b]
-    fill = counts[:-1].copy()
-    order = np.empty(counts[nrows + 2], np.int64)
-    for k in range(n):
-        b = bucket[k]
-        if b >= 0:
-            order[fill[b]] = k
-            fill[b] += 1
-
-    no = order.shape[0]
-    xs = np.empty(no)
-    ys = np.empty(no)
-    us = np.empty(no)
-    t0 = np.empty(no)
-    inv = 1.0 / res
-    for p in range(no):
-        k = order[p]
-        xs[p] = xy[k, 0]
-        ys[p] = xy[k, 1]
-        us[p] = (xy[k, 0] - ox) * inv - 0.5
-        t0[p] = 1e-9 * (1.0 + (abs(xy[k, 0]) + abs(ox) + r) * inv)
-    # the cell-centre test decides ties; it is only evaluated when an interval end computed in closed form
-    # lies within a generous tolerance (1e6 times the float64 rounding error) of a cell centre
-    t1 = 1e-9 * rc * r
-    starts = np.empty(no, np.int64)
-    ends = np.empty(no, np.int64)
-    reach = np.zeros(ncols + 1, np.int64)
-    total = 0
-    for i in range(nrows):
-        cy = oy + (i + 0.5) * res
-        lo = counts[max(i - w, -1) + 1]  # nodes whose centre row is in i - w .. i + w
-        hi = counts[min(i + w, nrows) + 2]
-        m = 0
-        smin = ncols
-        emax = 0
-        for p in range(lo, hi):
-            dy = cy - ys[p]
-            dy2 = dy * dy
-            if dy2 > r2:
-                continue
-            hw = math.sqrt(r2 - dy2)
-            hwc = hw * inv
-            flo = us[p] - hwc
-            fhi = us[p] + hwc
-            if flo > ncols or fhi < -1.0:
-                continue
-            jlo = math.ceil(max(flo, 0.0))
-            jhi = math.floor(min(fhi, ncols - 1.0))
-            tol = t0[p] * hw + t1
-            x = xs[p]
-            if min(jlo - flo, flo - jlo + 1.0) * hw < tol:
-                while jlo > 0 and _inside(jlo - 1, x, dy2, r2, ox, res):
-                    jlo -= 1
-                while jlo <= jhi and not _inside(jlo, x, dy2, r2, ox, res):
-                    jlo += 1
-            if min(fhi - jhi, jhi + 1.0 - fhi) * hw < tol:
-                while jhi < ncols - 1 and _inside(jhi + 1, x, dy2, r2, ox, res):
-                    jhi += 1
-                while jhi >= jlo and not _inside(jhi, x, dy2, r2, ox, res):
-                    jhi -= 1
-            if jlo > jhi:
-                continue
-            starts[m] = jlo
-            ends[m] = jhi + 1
-            m += 1
-            smin = min(smin, jlo)
-            emax = max(emax, jhi + 1)
-        if m == 0:
-            continue
-        row = prefix[i]
-        if m * m < 4 * (emax - smin):  # few intervals in a wide span: sort them
-            for a in range(1, m):  # insertion sort by start
-                s = starts[a]
-                e = ends[a]
-                b = a - 1
-                while b >= 0 and starts[b] > s:
-                    starts[b + 1] = starts[b]
-                    ends[b + 1] = ends[b]
-                    b -= 1
-                starts[b + 1] = s
-                ends[b + 1] = e
-            cs = starts[0]
-            ce = ends[0]
-            for a in range(1, m):
-                if starts[a] > ce:
-                    total += row[ce] - row[cs]
-                    if paint:
-                        out[i, cs:ce] = True
-                    cs = starts[a]
-                    ce = ends[a]
-                elif ends[a] > ce:
-                    ce = ends[a]
-            total += row[ce] - row[cs]
-            if paint:
-                out[i, cs:ce] = True
-        else:
-            # counting sort by start: the furthest end of the intervals starting at each column, then a sweep
-            for a in range(m):
-                if ends[a] > reach[starts[a]]:
-                    reach[starts[a]] = ends[a]
-            cs = smin
-            ce = smin
-            for j in range(smin, emax):
-                e = reach[j]
-                if e > 0:
-                    reach[j] = 0
-                    if j > ce:
-                        total += row[ce] - row[cs]
-                        if paint:
-                            out[i, cs:ce] = True
-                        cs = j
-                        ce = e
-                    elif e > ce:
-                        ce = e
-            total += row[ce] - row[cs]
-            if paint:
-                out[i, cs:ce] = True
-    return total
-
-
-# --------------------------------------------------------------------------------------------------------
 # the area that counts
 # --------------------------------------------------------------------------------------------------------
 
@@ -242,47 +83,6 @@ def _row_runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     r0, c0 = np.nonzero(d == 1)
     _, c1 = np.nonzero(d == -1)  # same row-major order, so starts and ends pair up
     return r0, c0, c1
-
-
-@njit(cache=True)
-def _scan_masked(xy, mask, a, b, r, ox, oy, res, prefix, out):  # pragma: no cover - numba
-    """:func:`_scan`'s count of the nodes ``a <= i < b`` with ``mask[i]`` (0 for none, -1 if one is not finite)."""
-    m = 0
-    for i in range(a, b):
-        if mask[i]:
-            m += 1
-    if m == 0:
-        return 0
-    nodes = np.empty((m, 2))
-    m = 0
-    for i in range(a, b):
-        if mask[i]:
-            nodes[m, 0] = xy[i, 0]
-            nodes[m, 1] = xy[i, 1]
-            m += 1
-    return _scan(nodes, r, ox, oy, res, prefix, out, np.bool_(False))
-
-
-@njit(cache=True)
-def _scan_runs(xy, network, linked, starts, stops, r, ox, oy, res, prefix, out, counts):  # pragma: no cover - numba
-    """Per run ``k`` (rows ``starts[k]:stops[k]``), the cells its ``network`` and its ``linked`` nodes cover.
-
-    Into ``counts[k]``, as :func:`_scan` counts them (once when the two sets are the same); ``False`` when a position
-    is not finite.
-    """
-    for k in range(starts.shape[0]):
-        a = starts[k]
-        b = stops[k]
-        counts[k, 0] = _scan_masked(xy, network, a, b, r, ox, oy, res, prefix, out)
-        same = True
-        for i in range(a, b):
-            if linked[i] != network[i]:
-                same = False
-                break
-        counts[k, 1] = counts[k, 0] if same else _scan_masked(xy, linked, a, b, r, ox, oy, res, prefix, out)
-        if counts[k, 0] < 0 or counts[k, 1] < 0:
-            return False
-    return True
 
 
 class CoverageArea:
@@ -316,9 +116,8 @@ class CoverageArea:
         self._res = float(omap.resolution)
         self._ox = float(omap.origin[0])
         self._oy = float(omap.origin[1])
-        prefix = np.zeros((mask.shape[0], mask.shape[1] + 1), dtype=np.int64)
-        np.cumsum(mask, axis=1, out=prefix[:, 1:])
-        self._prefix = prefix
+        self._words = mask_words(mask)
+        self._ncols = int(mask.shape[1])
         self._no_paint = np.zeros((1, 1), dtype=bool)
         rows = np.flatnonzero(mask.any(axis=1))
         cols = np.flatnonzero(mask.any(axis=0))
@@ -353,7 +152,7 @@ class CoverageArea:
         return xy
 
     def _raster(self, xy: np.ndarray, r: float, out: np.ndarray, paint: bool) -> int:
-        count = _scan(xy, float(r), self._ox, self._oy, self._res, self._prefix, out, paint)
+        count = scan(xy, float(r), self._ox, self._oy, self._res, self._words, self._ncols, out, paint)
         if count < 0:
             raise ValueError("xy must be finite")
         return count
@@ -428,9 +227,9 @@ class CoverageArea:
         """
         xy = self._check(xy, r)
         counts = np.zeros((len(blocks), 2), dtype=np.int64)
-        ok = _scan_runs(xy, np.ascontiguousarray(network, dtype=np.bool_), np.ascontiguousarray(linked, dtype=np.bool_),
-                        blocks[:, 0], blocks[:, 1], float(r), self._ox, self._oy, self._res, self._prefix,
-                        self._no_paint, counts)
+        ok = scan_runs(xy, np.ascontiguousarray(network, dtype=np.bool_), np.ascontiguousarray(linked, dtype=np.bool_),
+                       blocks[:, 0], blocks[:, 1], float(r), self._ox, self._oy, self._res, self._words, self._ncols,
+                       counts)
         if not ok:
             raise ValueError("xy must be finite")
         n = self.n_cells
