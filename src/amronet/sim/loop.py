@@ -282,6 +282,8 @@ class Loop:
         max_steps = round(sim.time_limit / self.dt)
         unrecorded = all(r is None for r in recorders)
         stretch = getattr(self.compiled, "stretch", None) if unrecorded else None
+        ids = np.array([run.index for run in active], dtype=np.int64)  # of the active runs
+        unsettled = False  # every active run's books say "not settled" (the last step left them so)
         while active:
             # the steps before the next recorded one in one go where the compiled step can (quiet stretches of
             # agent-assisted runs: no run settles in them, so the books below are what each step would leave)
@@ -291,10 +293,13 @@ class Loop:
             now_settled = self._settled_runs()
             at_limit = self.steps >= max_steps
             on_record = self.steps % sim.record_every == 0 or at_limit
-            if unrecorded and not on_record and not now_settled.any():  # nothing to record, nobody stops
-                for run in active:
-                    run.settle(False)
+            if unrecorded and not on_record and not now_settled[ids].any():  # nothing to record, nobody stops
+                if not unsettled:
+                    for run in active:
+                        run.settle(False)
+                    unsettled = True
                 continue
+            unsettled = False
             recording = active if on_record else [
                 run for run in active if sim.stop_when_settled and now_settled[run.index]]
             metrics = dict(zip((run.index for run in recording), metrics_of(recording), strict=True))
@@ -316,6 +321,8 @@ class Loop:
                     still.append(run)
                 else:
                     finish(run, reason, metrics[run.index])
+            if len(still) < len(active):
+                ids = np.array([run.index for run in still], dtype=np.int64)
             active = still
         return [r for r in results if r is not None]
 
