@@ -14,7 +14,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["RunStreams", "draw_per_run", "normal_then_uniform"]
+from amronet.engine.bitgen import addresses
+
+__all__ = ["RunStreams", "compiled_streams", "draw_per_run", "normal_then_uniform"]
 
 Draw = Callable[[np.random.Generator, int], tuple[np.ndarray, ...]]
 """``draw(generator, m)`` returns arrays of ``m`` numbers each, drawn in a fixed order."""
@@ -100,3 +102,14 @@ def draw_per_run(rng: np.random.Generator | RunStreams, who: np.ndarray, draw: D
     if isinstance(rng, RunStreams):
         return rng.draw(who, draw)
     return draw(rng, len(who))
+
+
+def compiled_streams(rng: np.random.Generator | RunStreams, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(bitgens, starts)`` of :func:`amronet.engine.bitgen.draw_normal_uniform` for ``n`` robots drawing from ``rng``.
+
+    One run's generator owns all ``n`` robots; a batch's streams, each run its block. The generators must outlive the
+    arrays' use (the controller holding ``rng`` keeps them).
+    """
+    if isinstance(rng, RunStreams):
+        return addresses(rng.generators), rng.starts.copy()
+    return addresses([rng]), np.array([0, n], dtype=np.int64)

@@ -11,8 +11,9 @@ kernels are in :mod:`amronet.sim.step_kernels`):
   triangular deployment may start this step (a router met a reference of another status, the two references are
   more than ``r_c`` apart and the local rule does not rule it out: then the controller's own Python code settles
   the explorers, :meth:`~amronet.algorithms.self_spreading.SelfSpreading.settle_explorers`), the routers about to
-  lose their last reference stop. Python then draws the walkers' random numbers from the run's generator (or a
-  batch's streams), in the order and number the controller draws them. Second, the routers still moving read
+  lose their last reference stop. A kernel then draws the walkers' random numbers from the run's generator (or each
+  from its run's generator in a batch) through the generators' C interface (:mod:`amronet.engine.bitgen`), in the
+  order and number the controller draws them. Second, the routers still moving read
   their range rings (grid and bodies), steer (the random walk, :func:`~amronet.engine.motion.walk_one`, or the
   triangle router's go-to-goal, :func:`~amronet.algorithms.goto.steer_one`) and drive one after another with the
   collision checks (:func:`~amronet.engine.motion.drive_one`). With tens of thousands of movers
@@ -40,8 +41,9 @@ import numpy as np
 from amronet.algorithms.base import Readings, StepInput
 from amronet.algorithms.potential_field import PotentialField
 from amronet.algorithms.self_spreading import SelfSpreading
+from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
-from amronet.engine.streams import normal_then_uniform
+from amronet.engine.streams import compiled_streams, normal_then_uniform
 from amronet.sim.compiled_agents import CompiledAgents
 from amronet.sim.step_kernels import (
     commit_moves,
@@ -98,6 +100,9 @@ class CompiledSpreading:
         self.slot = np.zeros(n, dtype=np.int64)  # the threaded step's (large runs: amronet.threads)
         self.free = np.zeros(n, dtype=np.bool_)
         self.planned = np.zeros((n, 2))
+        self.bitgens, self.run_starts = compiled_streams(c.rng, n)
+        self.normal = np.zeros(n)
+        self.uniform = np.zeros(n)
 
     @staticmethod
     def applies(loop: Loop) -> bool:
@@ -127,7 +132,9 @@ class CompiledSpreading:
         if n_movers == 0:
             c.refused[:] = False
             return
-        normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
+        normal, uniform = self.normal[:n_walkers], self.uniform[:n_walkers]
+        if not draw_normal_uniform(self.bitgens, self.run_starts, self.walkers[:n_walkers], normal, uniform):
+            normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
         several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
         movers = self.movers[:n_movers]
         s = c.steering
