@@ -269,14 +269,15 @@ class RadioMedium:
         return (type(self).margins is RadioMedium.margins and type(self).keep is RadioMedium.keep
                 and not self.packet_loss)
 
-    def plain_table(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray) -> NeighbourTable:
-        """The table :meth:`update` builds of one run's positions ``xy`` when :attr:`keeps_every_pair` holds.
+    def plain_table(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray,
+                    groups: np.ndarray | None = None) -> NeighbourTable:
+        """The table :meth:`update` builds of ``xy`` (of runs ``groups``) under :attr:`keeps_every_pair`, none silent.
 
         For a compiled caller that searched itself (:func:`~amronet.engine.neighbours.search_kernel` within
-        :attr:`reach`) and found this CSR.
+        :attr:`reach`, of these groups) and found this CSR.
         """
         b = self.budget
-        return NeighbourTable(xy, self.reach, indptr, indices, dist, None, b.threshold_dbm, None, b.exponent, None)
+        return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm, None, b.exponent, None)
 
     def _group_ids(self, groups: np.ndarray | None, n: int) -> GroupIds:
         """``groups`` checked for ``n`` points; kept while the same array (a loop's, for all its steps) comes back."""

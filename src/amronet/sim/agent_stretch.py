@@ -92,8 +92,11 @@ class QuietStretch:
         """Whether the loop's steps can be taken in stretches: the frontier explorer, a radio that keeps every pair."""
         return compiled.frontier and compiled.loop.medium.keeps_every_pair
 
-    def run(self, limit: int) -> int:
+    def run(self, limit: int, active: np.ndarray | None = None, settled: np.ndarray | None = None) -> int:
         """Take up to ``limit`` steps (at least one), none of them recorded; how many were taken (0: none could be).
+
+        ``active`` and ``settled`` (the loop's books, as :class:`~amronet.sim.swarm_stretch.SwarmStretch` takes them)
+        are not needed: the single run cannot settle in a quiet stretch.
 
         A stretch starts only where a quiet step may: no router settling, the agents' and the triangle routers'
         readings and moves within the radio's table, the explorer's deployed nodes painted. The step at which the

@@ -54,6 +54,7 @@ from amronet.sim.step_kernels import (
     track_explorers,
 )
 from amronet.sim.surroundings import Surroundings
+from amronet.sim.swarm_stretch import SwarmStretch
 from amronet.threads import LOCK, use_threads
 
 if TYPE_CHECKING:
@@ -103,6 +104,8 @@ class CompiledSpreading:
         self.bitgens, self.run_starts = compiled_streams(c.rng, n)
         self.normal = np.zeros(n)
         self.uniform = np.zeros(n)
+        self.stretch = SwarmStretch(self) if SwarmStretch.applies(self) else None
+        """The steps between records in one compiled call (:mod:`amronet.sim.swarm_stretch`), or ``None``."""
 
     @staticmethod
     def applies(loop: Loop) -> bool:
@@ -177,6 +180,8 @@ class CompiledField:
         self.movers = np.zeros(len(routers), dtype=np.int64)
         self.speed = np.zeros(len(routers))
         self.refused = np.zeros(len(routers), dtype=np.bool_)
+        self.stretch = SwarmStretch(self) if SwarmStretch.applies(self) else None
+        """The steps between records in one compiled call (:mod:`amronet.sim.swarm_stretch`), or ``None``."""
 
     @staticmethod
     def applies(loop: Loop) -> bool:

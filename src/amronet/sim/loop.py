@@ -284,11 +284,12 @@ class Loop:
         stretch = getattr(self.compiled, "stretch", None) if unrecorded else None
         ids = np.array([run.index for run in active], dtype=np.int64)  # of the active runs
         unsettled = False  # every active run's books say "not settled" (the last step left them so)
+        now_settled = self._settled_runs()
         while active:
-            # the steps before the next recorded one in one go where the compiled step can (quiet stretches of
-            # agent-assisted runs: no run settles in them, so the books below are what each step would leave)
+            # the steps before the next recorded one in one go where the compiled step can: a stretch stops after a
+            # step that changed an active run's settled state, so the books below are what each step would leave
             ahead = min(sim.record_every - self.steps % sim.record_every, max_steps - self.steps) - 1
-            if stretch is None or ahead <= 0 or not stretch.run(ahead):
+            if stretch is None or ahead <= 0 or not stretch.run(ahead, ids, now_settled):
                 self.step()
             now_settled = self._settled_runs()
             at_limit = self.steps >= max_steps

@@ -1,0 +1,70 @@
+"""Stretches of self-spreading and potential-field loops (amronet.sim.swarm_stretch) against step-by-step runs."""
+
+import numpy as np
+import pytest
+
+from amronet.scenario import load_scenario
+from amronet.sim import BatchSimulation, Simulation
+from amronet.sim.swarm_stretch import SwarmStretch
+
+CASES = {
+    # runs that settle at different times and leave the batch (each stretch stops after a run settles)
+    "self-spreading, runs settle": ("self-spreading-6x6", (1, 2, 3, 4), {"sim.time_limit": 750}),
+    # two bases: steps in which a triangle may start end the stretches before them
+    "self-spreading, two bases, no optimization": ("self-spreading-office", (1, 2),
+                                                  {"sim.time_limit": 150, "algorithm.params.triangular": "none"}),
+    "self-spreading, global rule, without collisions": ("self-spreading-office", (3, 4), {
+        "sim.time_limit": 100, "algorithm.params.triangular": "global", "sim.robot_collisions": False}),
+    # routers at rest wake up again: runs that stay in the books while settled, unsettle and settle again
+    "potential field, settled runs go on": ("potential-field-6x6", (1, 2, 3), {
+        "sim.time_limit": 300, "sim.stop_when_settled": False, "routers.count": 10}),
+    "potential field, obstacle forces": ("potential-field-obstacles-6x6", (1, 2), {"sim.time_limit": 60}),
+    "potential field without obstacle forces": ("potential-field-6x6", (4, 5),
+                                                {"sim.time_limit": 60, "algorithm.params.obstacle_forces": False}),
+}
+
+
+def _run(preset, seeds, overrides, stretch):
+    sim = BatchSimulation(load_scenario(preset, overrides), seeds)
+    if not stretch:
+        sim.compiled.stretch = None
+    return sim, sim.run()
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_a_batch_in_stretches_is_the_batch_step_by_step(name):
+    preset, seeds, overrides = CASES[name]
+    fast, fast_results = _run(preset, seeds, overrides, True)
+    slow, slow_results = _run(preset, seeds, overrides, False)
+    stretch = fast.compiled.stretch
+    assert isinstance(stretch, SwarmStretch) and stretch.steps > fast.steps // 2
+    for field in ("xy", "heading", "state", "status", "distance"):
+        np.testing.assert_array_equal(getattr(fast.swarm, field), getattr(slow.swarm, field))
+    assert fast.steps == slow.steps
+    for a, b in zip(fast_results, slow_results, strict=True):
+        assert a.network == b.network
+        for k in a.timeseries:
+            np.testing.assert_array_equal(a.timeseries[k], b.timeseries[k])
+        assert {k: v for k, v in a.summary.items() if k != "wall_time_s"} == \
+            {k: v for k, v in b.summary.items() if k != "wall_time_s"}
+
+
+def test_stretches_end_where_runs_settle_and_before_triangles():
+    settle, _ = _run(*CASES["self-spreading, runs settle"], True)
+    assert settle.compiled.stretch.ends["settling"] > 0
+    assert sum(r.stop_reason == "settled" for r in settle.runs) > 1
+    triangles, _ = _run(*CASES["self-spreading, two bases, no optimization"], True)
+    assert triangles.compiled.stretch.ends["candidates"] > 0
+    woken, _ = _run(*CASES["potential field, settled runs go on"], True)
+    assert woken.compiled.stretch.ends["settling"] > 0 and woken.controller.wakeups.sum() > 0
+
+
+def test_a_single_run_takes_stretches_too():
+    sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 60}), 3)
+    sim.run()
+    assert sim.compiled.stretch is not None and sim.compiled.stretch.steps > 0
+
+
+def test_no_stretch_where_the_table_does_not_hold_every_pair():
+    sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 5, "radio.model": "log-distance"}), 3)
+    assert sim.compiled is not None and sim.compiled.stretch is None
