@@ -36,27 +36,29 @@ _BITGEN = ir.LiteralStructType([
 """numpy's ``bitgen_t``: the state, then ``next_uint64``, ``next_uint32``, ``next_double``, ``next_raw``."""
 
 
-def _call_field(field: int, result: types.Type):
-    def typer(typingctx, address):
-        if address != types.int64:
-            return None
-
-        def codegen(context, builder, signature, args):
-            struct = builder.inttoptr(args[0], _BITGEN.as_pointer())
-            zero = ir.Constant(ir.IntType(32), 0)
-            state = builder.load(builder.gep(struct, [zero, zero]))
-            fn = builder.load(builder.gep(struct, [zero, ir.Constant(ir.IntType(32), field)]))
-            return builder.call(fn, [state])
-
-        return result(types.int64), codegen
-
-    return intrinsic(typer)
+def _call(builder: ir.IRBuilder, address: ir.Value, field: int) -> ir.Value:
+    """Call the bitgen_t function in ``field`` of the struct at ``address`` with the struct's state."""
+    struct = builder.inttoptr(address, _BITGEN.as_pointer())
+    zero = ir.Constant(ir.IntType(32), 0)
+    state = builder.load(builder.gep(struct, [zero, zero]))
+    fn = builder.load(builder.gep(struct, [zero, ir.Constant(ir.IntType(32), field)]))
+    return builder.call(fn, [state])
 
 
-next_uint64 = _call_field(1, types.uint64)
-next_uint64.__doc__ = "The next 64 random bits of the bit generator at ``address`` (its ``next_uint64``)."
-next_double = _call_field(3, types.float64)
-next_double.__doc__ = "The next double in [0, 1) of the bit generator at ``address``: what ``Generator.random`` draws."
+@intrinsic
+def next_uint64(typingctx, address):  # pragma: no cover - numba
+    """The next 64 random bits of the bit generator whose ``bitgen_t`` is at ``address`` (its ``next_uint64``)."""
+    if address != types.int64:
+        return None
+    return types.uint64(types.int64), lambda context, builder, signature, args: _call(builder, args[0], 1)
+
+
+@intrinsic
+def next_double(typingctx, address):  # pragma: no cover - numba
+    """The next double in [0, 1) of the bit generator at ``address``: what ``Generator.random`` draws."""
+    if address != types.int64:
+        return None
+    return types.float64(types.int64), lambda context, builder, signature, args: _call(builder, args[0], 3)
 
 
 def addresses(generators: Sequence[np.random.Generator]) -> np.ndarray:

@@ -44,6 +44,23 @@ def _settling_changed(state, lookup, eligible, groups, active, settled, counts):
     return False
 
 
+@njit(cache=True, inline="always")
+def _after_step(xy, state, radio, watch):  # pragma: no cover - numba
+    """The radio's next table and the books after a step: ``(how, indptr, indices, dist)``.
+
+    ``how``: :data:`NON_FINITE` (no table), :data:`SETTLING` (an active run's settled state changed: the stretch ends
+    there) or :data:`QUIET`.
+    """
+    reach, group_ids, n_groups = radio
+    lookup, eligible, groups, active, settled, counts = watch
+    ok, indptr, indices, dist = search_kernel(xy, reach, group_ids, n_groups)
+    if not ok:
+        return NON_FINITE, indptr, indices, dist
+    if _settling_changed(state, lookup, eligible, groups, active, settled, counts):
+        return SETTLING, indptr, indices, dist
+    return QUIET, indptr, indices, dist
+
+
 @njit(cache=True)
 def spreading_stretch(limit, grid, robots, track, draws, steer, radio, csr, watch):  # pragma: no cover - numba
     """Up to ``limit`` steps of a self-spreading loop; ``(steps done, how it ended, indptr, indices, dist)``.
@@ -61,9 +78,7 @@ def spreading_stretch(limit, grid, robots, track, draws, steer, radio, csr, watc
     bitgens, starts, normal, uniform = draws
     refused, turn_sigma, angles, sensor_range, sense_bodies, goal, anchors, last_to_goal, blocked_steps, give_up, \
         min_progress, dt, drive_bodies, none_indptr, none_indices, none_dist, scans, length = steer
-    reach, group_ids, n_groups = radio
     indptr, indices, dist = csr
-    lookup, eligible, groups, active, settled, counts = watch
     for s in range(limit):
         _, candidates, n_movers, n_walkers = track_explorers(
             state, status, current, deployed, is_ref, indptr, indices, dist, want_other, r_eff, xy, r_c, local,
@@ -84,32 +99,28 @@ def spreading_stretch(limit, grid, robots, track, draws, steer, radio, csr, watc
                               sensor_range, indptr, indices, dist, sense_bodies, goal, anchors, last_to_goal,
                               blocked_steps, give_up, min_progress, r_eff, dt, drive_bodies, d_indptr, d_indices,
                               d_dist, scans, length)
-        ok, indptr, indices, dist = search_kernel(xy, reach, group_ids, n_groups)
-        if not ok:
-            return s + 1, NON_FINITE, indptr, indices, dist
-        if _settling_changed(state, lookup, eligible, groups, active, settled, counts):
-            return s + 1, SETTLING, indptr, indices, dist
+        how, indptr, indices, dist = _after_step(xy, state, radio, watch)
+        if how != QUIET:
+            return s + 1, how, indptr, indices, dist
     return limit, QUIET, indptr, indices, dist
 
 
 @njit(cache=True)
-def field_stretch(limit, head, middle, tail, sense_table, drive_table, radio, csr, watch):  # pragma: no cover - numba
+def field_stretch(limit, head, ring, tail, sense_table, drive_table, radio, csr, watch):  # pragma: no cover - numba
     """Up to ``limit`` steps of a potential-field loop; ``(steps done, how it ended, indptr, indices, dist)``.
 
     :func:`~amronet.sim.step_kernels.field_step`'s arguments as :class:`~amronet.sim.compiled_step.CompiledField`
-    passes them, in three parts around the neighbour table (``head``, then the table, ``middle``, the bodies the rings
-    meet, ``tail`` up to the bodies the moves meet, which are the last three arguments but the movers' buffers: see
-    the code); ``sense_table`` / ``drive_table``: whether those bodies are the table's (else the empty lists at the
-    start of ``tail``); then the radio's search, the table and the books as for :func:`spreading_stretch`.
+    passes them but the neighbour tables: ``head`` (the map's grid to the distances), ``ring`` (beam angles, sensor
+    range) and ``tail`` (an empty neighbour list, then the arguments from ``sense`` on); the bodies the rings and the
+    moves meet are the table's when ``sense_table`` / ``drive_table``, else the empty list. Then the radio's search,
+    the table and the books as for :func:`spreading_stretch`.
     """
     none_indptr, none_indices, none_dist, sense, sense_bodies, k_obstacle, cap, obstacle_force, scan, velocity, \
         rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, k_conn, damping, mass, dt, \
         rest_fraction, wakeups, rest_steps, bodies, movers, speed, refused = tail
     blocked, clear, ox, oy, res, routers, state, xy, heading, max_speed, radius, distance = head
-    angles, sensor_range = middle
-    reach, group_ids, n_groups = radio
+    angles, sensor_range = ring
     indptr, indices, dist = csr
-    lookup, eligible, groups, active, settled, counts = watch
     for s in range(limit):
         if sense_table:
             s_indptr, s_indices, s_dist = indptr, indices, dist
@@ -124,10 +135,8 @@ def field_stretch(limit, head, middle, tail, sense_table, drive_table, radio, cs
                    cap, obstacle_force, scan, velocity, rest_count, window_start, force, held_force, k_cover,
                    k_degree, q_rc, k_conn, damping, mass, dt, rest_fraction, wakeups, rest_steps, bodies, d_indptr,
                    d_indices, d_dist, movers, speed, refused)
-        ok, indptr, indices, dist = search_kernel(xy, reach, group_ids, n_groups)
-        if not ok:
-            return s + 1, NON_FINITE, indptr, indices, dist
-        if _settling_changed(state, lookup, eligible, groups, active, settled, counts):
-            return s + 1, SETTLING, indptr, indices, dist
+        how, indptr, indices, dist = _after_step(xy, state, radio, watch)
+        if how != QUIET:
+            return s + 1, how, indptr, indices, dist
     return limit, QUIET, indptr, indices, dist
 
