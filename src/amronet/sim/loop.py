@@ -144,7 +144,8 @@ class Loop:
         """The compiled sense-decide-move of this loop, or ``None`` (the phases one by one)."""
         self.phase_seconds = ({"sense+decide+move": 0.0, "radio": 0.0} if self.compiled is not None
                               else {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0})
-        """Wall time spent in each phase (the compiled step's three phases are one)."""
+        """Wall time spent in each phase (the compiled step's three phases are one; a stretch's steps, radio included,
+        count there too: :mod:`amronet.sim.agent_stretch`, :mod:`amronet.sim.swarm_stretch`)."""
         target = sc.sim.coverage_target
         if target is None:  # a replayed mission (agents.trajectories) runs to the end of its paths
             target = None if self.paths is not None else controller_cls.default_coverage_target
