@@ -165,6 +165,26 @@ def test_raster_equals_brute_force_cell_centre_test(case):
     assert area.fraction(xy, r) == want.sum() / mask.sum()
 
 
+@pytest.mark.parametrize("r", [1e3, 1e100, 1e150])
+def test_disks_far_larger_than_the_map_or_far_away_from_it(r):
+    # the rows a disk spans are clipped to the map before they become integers, and a row a disk misses (however far
+    # outside the map its ends are) is never painted
+    omap = open_map(rows=40, cols=70, res=0.05)
+    area = CoverageArea(omap, omap.free)
+    assert area.fraction(np.array([[1.0, 1.0]]), r) == 1.0
+    assert area.covered_mask(np.array([[-10.0, 500.0]]), r).all()
+    for far in ([1e200, 0.0], [0.0, -1e200], [-1e200, 1e200], [1e308, 1.0], [1.0, -1e308]):
+        assert area.fraction(np.array([far]), r) == 0.0
+        assert area.run_fractions(np.array([far, far]), np.ones(2, bool), np.ones(2, bool), np.array([[0, 2]]), r) == \
+            [(0.0, 0.0)]
+
+
+def test_a_radius_whose_square_overflows_is_refused():
+    area = CoverageArea(open_map(rows=10, cols=10), np.ones((10, 10), dtype=bool))
+    with pytest.raises(ValueError, match="at most 1e150"):
+        area.fraction(np.array([[1.0, 1.0]]), 1e300)
+
+
 def test_raster_ties_on_a_unit_grid():
     omap = open_map(rows=21, cols=21, res=1.0)  # cell centres on the half-integers
     area = CoverageArea(omap, omap.free)

@@ -146,6 +146,8 @@ class CoverageArea:
         number = isinstance(r, int | float | np.floating | np.integer) and not isinstance(r, bool)
         if not (number and math.isfinite(r) and r > 0):
             raise ValueError(f"r must be a finite number > 0, got {r!r}")
+        if not math.isfinite(float(r) * float(r)):  # the cell-centre test squares it
+            raise ValueError(f"r must be at most 1e150 (its square a finite float), got {r!r}")
         xy = np.ascontiguousarray(xy, dtype=np.float64)
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")

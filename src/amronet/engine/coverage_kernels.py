@@ -89,11 +89,10 @@ def _row_intervals(x, y, r, ox, oy, res, ncols, i0, nr, lo_out, hi_out, flags): 
         jlo = np.ceil(max(flo, 0.0))
         jhi = np.floor(min(fhi, fcols - 1.0))
         tol = tp * hw + t1
-        f = 0 if (dy2 > r2 or flo > fcols or fhi < -1.0) else 1
-        if min(jlo - flo, flo - jlo + 1.0) * hw < tol:
-            f |= 2
-        if min(fhi - jhi, jhi + 1.0 - fhi) * hw < tol:
-            f |= 4
+        low = min(jlo - flo, flo - jlo + 1.0) * hw < tol
+        high = min(fhi - jhi, jhi + 1.0 - fhi) * hw < tol
+        # (no flag on a row without the disk: its ends may be far outside the map, too far to be integers)
+        f = 0 if (dy2 > r2 or flo > fcols or fhi < -1.0) else 1 + 2 * low + 4 * high
         lo_out[_u(k)] = jlo
         hi_out[_u(k)] = jhi
         flags[_u(k)] = f
@@ -104,12 +103,12 @@ def _node_rows(y, r, oy, res, nrows):  # pragma: no cover - numba
     """The rows ``(i0, nr)`` the node's disk may reach (a row either side to spare); ``nr = 0`` for none."""
     rc = r / res
     v = (y - oy) / res - 0.5
-    lo = v - rc - 1.0
-    hi = v + rc + 1.0
-    if hi < 0.0 or lo > nrows - 1.0:
+    lo = max(v - rc - 1.0, 0.0)  # clipped to the map before they become integers (a disk may be far larger)
+    hi = min(v + rc + 1.0, nrows - 1.0)
+    if hi < lo:
         return 0, 0
-    i0 = max(int(math.floor(lo)), 0)
-    return i0, min(int(math.ceil(hi)), nrows - 1) - i0 + 1
+    i0 = int(np.floor(lo))
+    return i0, int(np.ceil(hi)) - i0 + 1
 
 
 @njit(cache=True)
