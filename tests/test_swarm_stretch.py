@@ -68,3 +68,18 @@ def test_a_single_run_takes_stretches_too():
 def test_no_stretch_where_the_table_does_not_hold_every_pair():
     sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 5, "radio.model": "log-distance"}), 3)
     assert sim.compiled is not None and sim.compiled.stretch is None
+
+
+def test_without_compiled_draws_the_walkers_draw_through_numpy_and_take_no_stretch(monkeypatch):
+    # (a numba without its copy of numpy's ziggurat tables): the same run, step by step
+    from amronet.engine import bitgen
+
+    sc = load_scenario("self-spreading-6x6", {"sim.time_limit": 60})
+    usual = Simulation(sc, 5)
+    monkeypatch.setattr(bitgen, "AVAILABLE", False)
+    plain = Simulation(sc, 5)
+    assert plain.compiled.streams is None and plain.compiled.stretch is None
+    assert usual.compiled.streams is not None
+    a, b = usual.run(), plain.run()
+    np.testing.assert_array_equal(usual.swarm.xy, plain.swarm.xy)
+    assert a.network == b.network

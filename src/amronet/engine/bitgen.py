@@ -21,9 +21,15 @@ import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
-from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
-__all__ = ["addresses", "draw_normal_uniform", "next_double", "standard_normal"]
+try:  # numba's copy of numpy's ziggurat tables (a private module of numba: checked bit for bit by the tests)
+    from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
+except ImportError:  # pragma: no cover - a numba without them: the walkers draw through numpy, as before
+    AVAILABLE = False
+else:
+    AVAILABLE = True
+
+__all__ = ["AVAILABLE", "addresses", "draw_normal_uniform", "next_double", "standard_normal"]
 
 _I8P = ir.IntType(8).as_pointer()
 _BITGEN = ir.LiteralStructType([

@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from amronet.engine.bitgen import addresses
+from amronet.engine import bitgen
 
 __all__ = ["RunStreams", "compiled_streams", "draw_per_run", "normal_then_uniform"]
 
@@ -104,12 +104,15 @@ def draw_per_run(rng: np.random.Generator | RunStreams, who: np.ndarray, draw: D
     return draw(rng, len(who))
 
 
-def compiled_streams(rng: np.random.Generator | RunStreams, n: int) -> tuple[np.ndarray, np.ndarray]:
+def compiled_streams(rng: np.random.Generator | RunStreams, n: int) -> tuple[np.ndarray, np.ndarray] | None:
     """``(bitgens, starts)`` of :func:`amronet.engine.bitgen.draw_normal_uniform` for ``n`` robots drawing from ``rng``.
 
     One run's generator owns all ``n`` robots; a batch's streams, each run its block. The generators must outlive the
-    arrays' use (the controller holding ``rng`` keeps them).
+    arrays' use (the controller holding ``rng`` keeps them). ``None`` when the compiled draws are not available
+    (:data:`amronet.engine.bitgen.AVAILABLE`): the caller draws through numpy.
     """
+    if not bitgen.AVAILABLE:
+        return None
     if isinstance(rng, RunStreams):
-        return addresses(rng.generators), rng.starts.copy()
-    return addresses([rng]), np.array([0, n], dtype=np.int64)
+        return bitgen.addresses(rng.generators), rng.starts.copy()
+    return bitgen.addresses([rng]), np.array([0, n], dtype=np.int64)

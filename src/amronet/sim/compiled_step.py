@@ -101,7 +101,8 @@ class CompiledSpreading:
         self.slot = np.zeros(n, dtype=np.int64)  # the threaded step's (large runs: amronet.threads)
         self.free = np.zeros(n, dtype=np.bool_)
         self.planned = np.zeros((n, 2))
-        self.bitgens, self.run_starts = compiled_streams(c.rng, n)
+        self.streams = compiled_streams(c.rng, n)
+        """The draws' ``(bitgens, starts)`` (:mod:`amronet.engine.bitgen`), ``None``: numpy draws them."""
         self.normal = np.zeros(n)
         self.uniform = np.zeros(n)
         self.stretch = SwarmStretch(self) if SwarmStretch.applies(self) else None
@@ -136,7 +137,7 @@ class CompiledSpreading:
             c.refused[:] = False
             return
         normal, uniform = self.normal[:n_walkers], self.uniform[:n_walkers]
-        if not draw_normal_uniform(self.bitgens, self.run_starts, self.walkers[:n_walkers], normal, uniform):
+        if self.streams is None or not draw_normal_uniform(*self.streams, self.walkers[:n_walkers], normal, uniform):
             normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
         several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
         movers = self.movers[:n_movers]

@@ -69,9 +69,10 @@ class SwarmStretch:
 
     @staticmethod
     def applies(compiled: CompiledSpreading | CompiledField) -> bool:
-        """Whether the loop's steps can be taken in stretches: a radio that keeps every pair, one thread."""
+        """Whether the steps can be taken in stretches: a radio that keeps every pair, one thread, compiled draws."""
         loop = compiled.loop
-        return loop.medium.keeps_every_pair and not use_threads(len(loop.swarm))
+        draws = getattr(compiled, "streams", ()) is not None  # (self-spreading's walkers draw in the kernel)
+        return loop.medium.keeps_every_pair and not use_threads(len(loop.swarm)) and draws
 
     def run(self, limit: int, active: np.ndarray, settled: np.ndarray) -> int:
         """Take up to ``limit`` steps, none of them recorded; how many were taken (0: none could be).
@@ -118,7 +119,7 @@ class SwarmStretch:
         track = (c.current, comp.deployed_lookup, comp.is_ref, bool(comp.want_other), float(c.r_eff), comp.r_c,
                  bool(comp.local), c.disabled, comp.explorers, comp.new_current, comp.nearest, comp.other, comp.movers,
                  comp.walkers)
-        draws = (comp.bitgens, comp.run_starts, comp.normal, comp.uniform)
+        draws = (*comp.streams, comp.normal, comp.uniform)
         steer = (c.refused, comp.turn_sigma, a.angles, a.sensor_range, True, s.goal, s.anchors, s.last_to_goal,
                  s.blocked_steps, int(s.give_up_steps), float(s.min_progress), float(loop.dt), bool(a.collisions),
                  *a.no_bodies(n), comp.scans, comp.length)
