@@ -83,3 +83,14 @@ def test_without_compiled_draws_the_walkers_draw_through_numpy_and_take_no_stret
     a, b = usual.run(), plain.run()
     np.testing.assert_array_equal(usual.swarm.xy, plain.swarm.xy)
     assert a.network == b.network
+
+
+@pytest.mark.parametrize(("preset", "overrides"), [("self-spreading-office", {"sim.time_limit": 60}),
+                                                  ("potential-field-6x6", {"sim.time_limit": 60})])
+def test_the_books_rule_the_kernel_watches_is_the_controllers(preset, overrides):
+    sim = Simulation(load_scenario(preset, overrides), 2)
+    lookup, robots = sim.controller.settling_rule()
+    for _ in range(3):  # at the start, part-way, at the end
+        np.testing.assert_array_equal(lookup[sim.swarm.state] & robots, sim.controller.unsettled())
+        for _ in range(200):
+            sim.step()

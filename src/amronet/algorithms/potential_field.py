@@ -51,7 +51,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.forces import constrained_coverage_force, inverse_square_obstacle_forces
-from amronet.engine.robots import Role, State
+from amronet.engine.robots import Role, State, state_lookup
 
 __all__ = ["PotentialField", "PotentialFieldParams", "come_to_rest", "wake_and_accelerate"]
 
@@ -133,6 +133,10 @@ class PotentialField(Controller):
 
     def unsettled(self) -> np.ndarray:  # noqa: D102
         return (self.swarm.state == State.EXPLORE) & (self.swarm.role == Role.ROUTER)
+
+    def settling_rule(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`unsettled` for compiled callers: ``(lookup, robots)``, unsettled where ``lookup[state] & robots``."""
+        return state_lookup((State.EXPLORE,)), self.swarm.role == Role.ROUTER
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params

@@ -81,7 +81,7 @@ from amronet.algorithms.references import check_loss_band, track_references
 from amronet.algorithms.triangular import TriangularMode, select_triangles, triangle_goal
 from amronet.algorithms.walks import Walker
 from amronet.engine.motion import random_walk
-from amronet.engine.robots import SETTLING_STATES, Role, State
+from amronet.engine.robots import SETTLING_STATES, Role, State, state_lookup
 
 __all__ = ["SelfSpreading", "SelfSpreadingParams"]
 
@@ -177,6 +177,10 @@ class SelfSpreading(Controller):
 
     def unsettled(self) -> np.ndarray:  # noqa: D102
         return self.swarm.in_states(SETTLING_STATES)
+
+    def settling_rule(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`unsettled` for compiled callers: ``(lookup, robots)``, unsettled where ``lookup[state] & robots``."""
+        return state_lookup(SETTLING_STATES), np.ones(len(self.swarm), dtype=np.bool_)
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm

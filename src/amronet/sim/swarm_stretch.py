@@ -19,9 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amronet.algorithms.self_spreading import SETTLING_STATES
 from amronet.engine.neighbours import GroupIds
-from amronet.engine.robots import Role, State, state_lookup
 from amronet.sim.swarm_stretch_kernels import (
     BAD_DRAW,
     CANDIDATES,
@@ -50,17 +48,12 @@ class SwarmStretch:
 
         self.compiled = compiled
         loop = compiled.loop
-        sw = loop.swarm
-        n = len(sw)
         self.spreading = isinstance(compiled, CompiledSpreading)
-        ids = GroupIds.of(loop.groups, n)
+        ids = GroupIds.of(loop.groups, len(loop.swarm))
         self.radio = (float(loop.medium.reach), ids.ids, int(ids.count))
         self.groups = ids.ids
         self.n_runs = int(ids.count)
-        if self.spreading:
-            self.settling = (state_lookup(SETTLING_STATES), np.ones(n, dtype=np.bool_))
-        else:
-            self.settling = (state_lookup((State.EXPLORE,)), sw.role == Role.ROUTER)
+        self.settling = compiled.controller.settling_rule()  # (robots are never added: fixed for the loop)
         self.counts = np.zeros(self.n_runs, dtype=np.int64)
         self.steps = 0
         """Steps taken in stretches."""
@@ -70,8 +63,10 @@ class SwarmStretch:
     @staticmethod
     def applies(compiled: CompiledSpreading | CompiledField) -> bool:
         """Whether the steps can be taken in stretches: a radio that keeps every pair, one thread, compiled draws."""
+        from amronet.sim.compiled_step import CompiledSpreading
+
         loop = compiled.loop
-        draws = getattr(compiled, "streams", ()) is not None  # (self-spreading's walkers draw in the kernel)
+        draws = not isinstance(compiled, CompiledSpreading) or compiled.streams is not None  # (walkers draw in it)
         return loop.medium.keeps_every_pair and not use_threads(len(loop.swarm)) and draws
 
     def run(self, limit: int, active: np.ndarray, settled: np.ndarray) -> int:
