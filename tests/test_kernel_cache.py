@@ -19,6 +19,7 @@ def package(tmp_path, monkeypatch):
     (pkg / "engine" / "robots.py").write_text("class State:\n    X = 1\n")
     (pkg / "cli.py").write_text("from amronet.engine.hearing import hear\ndef main(): pass\n")
     monkeypatch.setattr(kernel_cache, "_PACKAGE", pkg)
+    monkeypatch.setattr(kernel_cache, "_folder", kernel_cache._folder)  # configure() sets it: restored after
     return pkg
 
 
@@ -82,3 +83,26 @@ def test_an_unwritable_cache_home_falls_back_to_numbas_default(package, tmp_path
     monkeypatch.setattr(numba.config, "CACHE_DIR", "unchanged")
     assert kernel_cache.configure() is None
     assert numba.config.CACHE_DIR == "unchanged"
+
+
+def test_warm_ups_are_noted_in_the_folder_of_the_kernels_version(package, tmp_path, monkeypatch):
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setattr(numba.config, "CACHE_DIR", numba.config.CACHE_DIR)
+    folder = kernel_cache.configure()
+    assert kernel_cache.compiled("all", "common") is False
+    kernel_cache.mark_compiled("common")
+    assert kernel_cache.compiled("common") is True and kernel_cache.compiled("all", "common") is True
+    assert kernel_cache.compiled("all") is False
+    assert (folder / "compiled-common").is_file()
+    (package / "engine" / "walls.py").write_text("@njit(cache=True)\ndef count(): return 2\n")
+    assert kernel_cache.configure() != folder  # a new version of the kernels: compiled by nobody yet
+    assert kernel_cache.compiled("all", "common") is False
+
+
+def test_nothing_is_noted_in_a_folder_amronet_does_not_manage(package, tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
+    assert kernel_cache.configure() is None
+    kernel_cache.mark_compiled("all")
+    assert kernel_cache.compiled("all") is None  # unknown: warm_up_if_cold leaves the runs to compile
+    assert not (tmp_path / "mine").exists()

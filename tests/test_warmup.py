@@ -5,6 +5,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+import amronet.sim.warmup as warmup
 from amronet.algorithms.base import ALGORITHMS
 from amronet.algorithms.drops.base import DROP_RULES
 from amronet.algorithms.explorers.base import EXPLORERS
@@ -45,6 +48,11 @@ for pattern in ("r-strip", "hexagonal"):  # Fig. 5's placed counts, amronet patt
     place(pattern, (10.0, 6.0), 1.5)
 for name in list_presets():
     Simulation(load_scenario(name, {"sim.time_limit": 3.0}), 1).run()
+from amronet.experiments.common import CORNERS, agent_scenario
+from amronet.sim.batch import run_seeds
+for n in (1, 4):  # the figures' agents, long enough for their networks to meet (Fig. 7)
+    Simulation(load_scenario(agent_scenario("office-32x32", 6.0, CORNERS[:n], 2, "frontier", 60.0)), 3).run()
+run_seeds(load_scenario("self-spreading-obstacles-6x6", {"sim.time_limit": 3.0}), [1, 2, 3])  # Figs. 10/11
 with threads_from(0):  # what a run of 30 000 robots or more runs
     Simulation(load_scenario("self-spreading-office", {"sim.time_limit": 3.0}), 1).run()
 spec = importlib.util.spec_from_file_location("soak", sys.argv[1])
@@ -100,3 +108,69 @@ def test_compile_interrupted_says_what_stays(monkeypatch, capsys):
     monkeypatch.setattr(warmup, "warm_up", interrupted)
     assert main(["compile", "--jobs", "1"]) == 130
     assert "the kernels compiled so far stay cached" in capsys.readouterr().err
+
+
+def test_common_names_warm_up_cases():
+    labels = {label for label, _ in warmup._tasks()}
+    assert set(warmup.COMMON) <= labels
+    frontier = next(c for c in warmup_cases() if c.label == "explorer frontier")
+    assert frontier.first  # the longest chain of kernels starts first
+
+
+def test_warm_up_runs_the_cases_named_and_notes_the_common_ones(monkeypatch):
+    ran: list[int] = []
+    noted: list[str] = []
+    monkeypatch.setattr(warmup, "_run_case", lambda k: ran.append(k) or 0.0)
+    monkeypatch.setattr(warmup, "mark_compiled", noted.append)
+    keys = dict(warmup._tasks())
+    warmup.warm_up(only=["walk growth"])
+    assert ran == [keys["walk growth"]] and noted == []  # a few cases: nothing to note
+    ran.clear()
+    warmup.warm_up(only=warmup.COMMON)
+    assert sorted(ran) == sorted(keys[label] for label in warmup.COMMON) and noted == ["common"]
+    ran.clear()
+    warmup.warm_up()
+    assert sorted(ran) == sorted(keys.values()) and noted == ["common", "all"]
+    with pytest.raises(ValueError, match="no warm-up case"):
+        warmup.warm_up(only=["explorer nowhere"])
+
+
+@pytest.mark.parametrize(("workers", "runs", "compiled", "expected"), [
+    (2, 10, False, True),  # a cold cache, several workers: the warm-up
+    (1, 10, False, False),  # one worker compiles each kernel once anyway
+    (2, 1, False, False),  # one run compiles only what it uses
+    (2, 10, True, False),  # compiled before (amronet compile, or an earlier sweep)
+    (2, 10, None, False),  # not amronet's folder (NUMBA_CACHE_DIR): unknown, the runs compile
+])
+def test_warm_up_if_cold_only_when_the_kernels_were_never_compiled(monkeypatch, workers, runs, compiled, expected):
+    calls = []
+    monkeypatch.setattr(warmup, "compiled", lambda *names: compiled)
+    monkeypatch.setattr(warmup, "warm_up", lambda **kw: calls.append(kw) or 12.5)
+    said = []
+    seconds = warmup.warm_up_if_cold(workers, runs, announce=lambda: said.append(1), initializer=print,
+                                     initargs=("x",))
+    assert (seconds == 12.5) is expected and (said == [1]) is expected
+    if expected:
+        assert calls == [{"jobs": workers, "only": warmup.COMMON, "initializer": print, "initargs": ("x",)}]
+
+
+def test_a_failed_warm_up_leaves_the_runs_to_compile(monkeypatch):
+    def broken(**kw):
+        raise RuntimeError("a worker died")
+
+    monkeypatch.setattr(warmup, "compiled", lambda *names: False)
+    monkeypatch.setattr(warmup, "warm_up", broken)
+    assert warmup.warm_up_if_cold(2, 10) is None
+
+
+def test_sweeps_and_figures_warm_their_workers_first(monkeypatch, tmp_path):
+    import amronet.sweeps.engine as engine
+    from amronet.experiments.runner import run_jobs
+
+    calls = []
+    monkeypatch.setattr(engine, "warm_up_if_cold", lambda workers, runs, *a: calls.append((workers, runs)))
+    sc = {"map": "open-6x6", "base_stations": [{"x": 0, "y": 0}], "routers": {"count": 5}, "sim": {"time_limit": 1.0}}
+    jobs = [{"scenario": sc, "seed": s} for s in range(3)]
+    run_jobs(jobs, workers=2, show_progress=False)
+    run_jobs(jobs, workers=2, show_progress=False, store=tmp_path / "s.sqlite")
+    assert calls == [(2, 3), (2, 3)]

@@ -20,19 +20,23 @@ A kernel that calls another with a constant (``f(x, True)``, ``g(a, 1)``) makes 
 for that literal value, a copy of seconds each: kernels pass ``np.bool_(True)``, ``np.int64(1)`` instead, which
 share the version the Python callers use (``tests/test_warmup.py`` finds any literal version left).
 
+A warm-up (:mod:`amronet.sim.warmup`) that finished leaves a note in the folder (``compiled-all``,
+``compiled-common``): a sweep on a cold cache compiles the common kernels across its workers first, and only then.
+
 This module must run before any module with kernels is imported: ``amronet/__init__.py`` calls
 :func:`configure` first.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import re
 import shutil
 from pathlib import Path
 
-__all__ = ["KEEP", "cache_folder", "configure"]
+__all__ = ["KEEP", "cache_folder", "compiled", "configure", "mark_compiled"]
 
 KEEP = 8
 """Cache folders of this many source versions are kept (most recently used first)."""
@@ -40,6 +44,9 @@ KEEP = 8
 _PACKAGE = Path(__file__).resolve().parent
 _KERNEL = re.compile(r"^@(numba\.)?njit\b", re.MULTILINE)
 """A module holds kernels when a line starts with a numba decorator."""
+
+_folder: Path | None = None
+"""The folder :func:`configure` pointed numba at (``None``: the user's ``NUMBA_CACHE_DIR``, or numba's default)."""
 
 _IMPORT = re.compile(r"^\s*(?:from|import) (amronet(?:\.\w+)*)", re.MULTILINE)
 
@@ -95,6 +102,8 @@ def configure() -> Path | None:
 
     ``None``: the user's ``NUMBA_CACHE_DIR`` applies, or no folder could be written (numba's default applies).
     """
+    global _folder
+    _folder = None
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     try:
@@ -109,4 +118,31 @@ def configure() -> Path | None:
     import numba
 
     numba.config.CACHE_DIR = str(folder)
+    _folder = folder
     return folder
+
+
+def _stamp(name: str) -> Path | None:
+    return None if _folder is None else _folder / f"compiled-{name}"
+
+
+def mark_compiled(name: str) -> None:
+    """Note in the cache folder that the warm-up ``name`` finished (:mod:`amronet.sim.warmup`).
+
+    Its kernels are cached. Nothing is noted where amronet does not manage the folder.
+    """
+    stamp = _stamp(name)
+    if stamp is not None:
+        with contextlib.suppress(OSError):
+            stamp.touch()
+
+
+def compiled(*names: str) -> bool | None:
+    """Whether one of the warm-ups ``names`` finished with this version of the kernels (:func:`mark_compiled`).
+
+    ``None``: unknown, amronet does not manage the cache folder (the user's ``NUMBA_CACHE_DIR``, or none writable).
+    """
+    stamps = [_stamp(name) for name in names]
+    if any(stamp is None for stamp in stamps):
+        return None
+    return any(stamp.is_file() for stamp in stamps if stamp is not None)

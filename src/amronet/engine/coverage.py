@@ -229,9 +229,9 @@ class CoverageArea:
         """
         xy = self._check(xy, r)
         counts = np.zeros((len(blocks), 2), dtype=np.int64)
+        starts, stops = (np.ascontiguousarray(blocks[:, j], dtype=np.int64) for j in (0, 1))  # one kernel version
         ok = scan_runs(xy, np.ascontiguousarray(network, dtype=np.bool_), np.ascontiguousarray(linked, dtype=np.bool_),
-                       blocks[:, 0], blocks[:, 1], float(r), self._ox, self._oy, self._res, self._words, self._ncols,
-                       counts)
+                       starts, stops, float(r), self._ox, self._oy, self._res, self._words, self._ncols, counts)
         if not ok:
             raise ValueError("xy must be finite")
         n = self.n_cells

@@ -22,7 +22,7 @@ from amronet.experiments.options import RunOptions
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.sim.batch import run_seeds
-from amronet.sweeps.engine import execute_into_store, pending_runs, plan_batches, progress_bar
+from amronet.sweeps.engine import execute_into_store, pending_runs, plan_batches, progress_bar, warm_workers
 from amronet.sweeps.executors import Executor, LocalExecutor, default_workers
 from amronet.sweeps.identity import canonical_json, resolve_scenario, scenario_hash
 from amronet.sweeps.store import ResultStore, check_store_path
@@ -123,6 +123,7 @@ def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_p
     n = 0
     with progress_bar(show_progress) as bar:
         task = bar.add_task(description, total=len(jobs), done=0, failed=0, running=min(slots, len(jobs)))
+        warm_workers(executor, len(jobs), bar, task, description)
         for b, outs in executor.imap_unordered(run_batch, [[jobs[k] for k in ks] for ks in batches]):
             for k, result in zip(batches[b], outs, strict=True):
                 n += 1

@@ -9,6 +9,11 @@ signal map and a static pattern's placement, and one small run with the threaded
 (:mod:`amronet.threads`), so that a user's first run finds every kernel it uses compiled. The cases are built
 from the registries: a new explorer, drop rule or radio model is warmed up without a change here.
 
+Where ``amronet compile`` did not run (a ``pip install``, a new version of the kernels' source), a sweep or a
+figure on several local workers runs the :data:`COMMON` cases first, spread over its workers
+(:func:`warm_up_if_cold`): otherwise each worker compiles the same kernels at the same time. A note in the cache
+folder (:func:`amronet.kernel_cache.mark_compiled`) says which warm-up finished for this version of the kernels.
+
 The runs' results are thrown away; they change nothing but numba's cache (the same machine code a first run would
 have compiled), so results are bit for bit the same with or without a warm-up.
 """
@@ -18,7 +23,7 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
@@ -31,6 +36,7 @@ from amronet.algorithms.explorers.base import EXPLORERS
 from amronet.algorithms.walks import WALKS
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import MEDIA, make_medium
+from amronet.kernel_cache import compiled, mark_compiled
 from amronet.patterns import place
 from amronet.scenario import load_scenario
 from amronet.sim.batch import run_seeds
@@ -38,7 +44,7 @@ from amronet.sim.loop import Simulation, StepKind
 from amronet.threads import threads_from
 from amronet.world.builtin import resolve_map
 
-__all__ = ["BASE_PRESETS", "WarmupCase", "warm_up", "warmup_cases"]
+__all__ = ["BASE_PRESETS", "COMMON", "WarmupCase", "warm_up", "warm_up_if_cold", "warmup_cases"]
 
 BASE_PRESETS: dict[str, str] = {
     "agent-assisted": "agent-assisted-office",
@@ -47,6 +53,15 @@ BASE_PRESETS: dict[str, str] = {
     "dssa": "dssa-obstacles-6x6",
 }
 """The preset each registered algorithm is warmed up on (a test checks that every algorithm has one)."""
+
+COMMON: tuple[str, ...] = (
+    "explorer frontier", "algorithm agent-assisted", "algorithm self-spreading", "algorithm potential-field",
+    "algorithm dssa", "batch self-spreading", "batch potential field", "static patterns",
+)
+"""The warm-up cases whose kernels common runs share: every algorithm with its defaults, the frontier explorer
+(the figures' agents), batches (the figures' runs) and the static patterns (Fig. 5)."""
+
+ALL, _COMMON_STAMP = "all", "common"
 
 _SECONDS = 3.0
 """Simulated seconds per warm-up run: enough for every phase of a step to run a few times."""
@@ -103,8 +118,14 @@ def warmup_cases() -> list[WarmupCase]:
     """The warm-up runs, built from the registries (every algorithm, explorer, drop rule, walk and radio model)."""
     aa, ss = BASE_PRESETS["agent-assisted"], BASE_PRESETS["self-spreading"]
     cases = [WarmupCase(f"algorithm {name}", BASE_PRESETS[name]) for name in ALGORITHMS]
-    cases += [WarmupCase(f"explorer {name}", aa, {"algorithm.params.explorer": name}, first=name == "frontier")
-              for name in EXPLORERS]
+    cases += [WarmupCase(f"explorer {name}", aa, {"algorithm.params.explorer": name}) for name in EXPLORERS
+              if name != "frontier"]
+    # the figures' agents: four base stations' networks meet (triangle routers drive to their goals), the frontier
+    # repaints what its network covers, agents check their release spots, all within 40 simulated seconds
+    cases.insert(len(ALGORITHMS), WarmupCase(
+        "explorer frontier", aa, {"algorithm.params.explorer": "frontier", "sim.dt": 0.25, "base_stations": [
+            {"x": x, "y": y, "region": [1.6, 1.6]} for x, y in ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))]},
+        seconds=40.0, first=True))
     cases += [WarmupCase(f"drop rule {name}", aa, {"algorithm.params.drop_rule": name,
                                                    "algorithm.params.explorer": "frontier"}) for name in DROP_RULES]
     cases += [WarmupCase(f"walk {name}", ss, {"algorithm.params.walk": name}) for name in WALKS]
@@ -131,6 +152,17 @@ def warmup_cases() -> list[WarmupCase]:
     return cases
 
 
+def _tasks() -> list[tuple[str, int]]:
+    """Every warm-up task as ``(label, key)``, in the order they start.
+
+    The longest chains first (``first``), then the signal map (key -1) and the static patterns (key -2), then the
+    other cases (key: their index in :func:`warmup_cases`).
+    """
+    cases = warmup_cases()
+    order = [k for k, c in enumerate(cases) if c.first] + [-1, -2] + [k for k, c in enumerate(cases) if not c.first]
+    return [(cases[k].label if k >= 0 else ("signal map", "static patterns")[-1 - k], k) for k in order]
+
+
 def _run_case(k: int) -> float:
     t = time.perf_counter()
     if k == -1:
@@ -142,26 +174,72 @@ def _run_case(k: int) -> float:
     return time.perf_counter() - t
 
 
-def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None) -> float:
-    """Run every warm-up case (:func:`warmup_cases`) and the signal map; return the wall time in seconds.
+def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None,
+            only: Collection[str] | None = None, initializer: Callable[..., object] | None = None,
+            initargs: tuple[Any, ...] = ()) -> float:
+    """Run every warm-up case (:func:`warmup_cases`), the signal map and the static patterns; return the wall time.
 
     Args:
         jobs: Worker processes (1: in this process). Kernels compiled by one worker are written to the cache, so
             the workers share what they compile once it is written.
         progress: Called with each case's label and its wall time as it finishes.
+        only: The labels of the cases to run (default: all); :data:`COMMON` names the kernels common runs share.
+        initializer: With several jobs, what each worker process runs first, with ``initargs`` (as for
+            :class:`~concurrent.futures.ProcessPoolExecutor`).
+        initargs: Its arguments.
+
+    Raises:
+        ValueError: ``only`` names a case that does not exist.
     """
-    cases = warmup_cases()
-    order = [k for k, c in enumerate(cases) if c.first] + [-1, -2] + [k for k, c in enumerate(cases) if not c.first]
-    labels = [cases[k].label if k >= 0 else ("signal map", "static patterns")[-1 - k] for k in order]
+    tasks = _tasks()
+    if only is not None:
+        unknown = sorted(set(only) - {label for label, _ in tasks})
+        if unknown:
+            raise ValueError(f"no warm-up case {unknown}")
+        tasks = [(label, k) for label, k in tasks if label in only]
     t0 = time.perf_counter()
     if jobs <= 1:
-        for label, k in zip(labels, order, strict=True):
+        for label, k in tasks:
             seconds = _run_case(k)
             if progress is not None:
                 progress(label, seconds)
-        return time.perf_counter() - t0
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-        for label, seconds in zip(labels, pool.map(_run_case, order), strict=True):
-            if progress is not None:
-                progress(label, seconds)
+    else:
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=initializer, initargs=initargs) as pool:
+            for (label, _), seconds in zip(tasks, pool.map(_run_case, [k for _, k in tasks]), strict=True):
+                if progress is not None:
+                    progress(label, seconds)
+    if only is None or set(only) >= set(COMMON):  # noted for warm_up_if_cold
+        mark_compiled(ALL if only is None else _COMMON_STAMP)
     return time.perf_counter() - t0
+
+
+def warm_up_if_cold(workers: int, runs: int, announce: Callable[[], None] | None = None,
+                    initializer: Callable[..., object] | None = None, initargs: tuple[Any, ...] = ()) -> float | None:
+    """Compile the :data:`COMMON` kernels across the workers first if this version of them was never compiled.
+
+    Called before ``runs`` runs on ``workers`` local processes; "never compiled": no warm-up of them finished
+    (:func:`~amronet.kernel_cache.compiled`; ``make`` runs ``amronet compile`` when it installs amronet). Without
+    it, with a cold cache, every worker compiles the same kernels at the same time, each as slowly as one alone
+    (147 s instead of 79 s of compiling for ``reproduce paper`` on two cores). Here each warm-up case runs in one
+    worker, the longest first, so the workers compile different kernels, mostly, and load each other's from the
+    cache. A failure here is no error: the runs compile what they use, as without it.
+
+    Args:
+        workers: The local worker processes the runs will use.
+        runs: The runs about to start (a single run compiles only what it uses, in one process: no warm-up).
+        announce: Called before the warm-up starts (a progress bar's note).
+        initializer: What each of the warm-up's worker processes runs first, with ``initargs``.
+        initargs: Its arguments.
+
+    Returns:
+        The warm-up's wall time in seconds, or ``None`` if none ran.
+    """
+    if workers < 2 or runs < 2 or compiled(ALL, _COMMON_STAMP) is not False:
+        return None
+    if announce is not None:
+        announce()
+    try:
+        return warm_up(jobs=workers, only=COMMON, initializer=initializer, initargs=initargs)
+    except Exception:  # the runs compile what they use, and report their own errors
+        return None

@@ -9,7 +9,9 @@ failed, elapsed, ETA) on stderr.
 from __future__ import annotations
 
 import contextlib
+import os
 import sqlite3
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -21,16 +23,17 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from amronet.scenario import load_scenario
 from amronet.sim.batch import batchable
+from amronet.sim.warmup import warm_up_if_cold
 from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, WorkerDiedError
 from amronet.sweeps.spec import Sweep
 from amronet.sweeps.store import ClaimOwner, ResultStore
-from amronet.sweeps.worker import execute_batch
+from amronet.sweeps.worker import execute_batch, start_worker
 
 if TYPE_CHECKING:
     from rich.progress import TaskID
 
 __all__ = ["CLAIM_POLL_S", "MAX_BATCH", "SweepReport", "execute_into_store", "pending_runs", "plan_batches",
-           "run_sweep"]
+           "run_sweep", "warm_workers"]
 
 StoreJob = tuple[str, int, dict[str, Any]]
 """``(scenario_hash, seed, resolved scenario)``."""
@@ -189,7 +192,8 @@ def execute_into_store(
                     count(h, seed, {"status": status, "elsewhere": True})
                 if claims.claimed:
                     bar.update(task, description=description)
-                    _run_claimed(store, [remaining.pop(key) for key in claims.claimed], executor, bar, task, count)
+                    claimed_runs = [remaining.pop(key) for key in claims.claimed]
+                    _run_claimed(store, claimed_runs, executor, bar, task, description, count)
                 elif remaining:
                     holders = ", ".join(sorted(set(claims.held.values())))
                     bar.update(task, running=0, description=f"{description} (waiting for {len(claims.held)} runs "
@@ -210,8 +214,26 @@ def execute_into_store(
     return counts[0], counts[1]
 
 
+def warm_workers(executor: Executor, runs: int, bar: Progress, task: TaskID, description: str) -> None:
+    """Before ``runs`` runs on a local process pool, compile the kernels they share across its workers if needed.
+
+    Needed: this version of amronet's kernels was never compiled (:func:`~amronet.sim.warmup.warm_up_if_cold`);
+    the progress bar says so meanwhile. Other executors' workers are on other machines, with caches of their own.
+    """
+    if not isinstance(executor, LocalExecutor):
+        return
+
+    def announce() -> None:
+        bar.update(task, description=f"{description} (compiling amronet's kernels: once per version)")
+
+    # like the pool's workers: none outlives this process
+    guard = (os.getpid(), threading.current_thread() is threading.main_thread())
+    if warm_up_if_cold(executor.workers, runs, announce, start_worker, guard) is not None:
+        bar.update(task, description=description)
+
+
 def _run_claimed(store: ResultStore, runs: Sequence[StoreJob], executor: Executor, bar: Progress, task: TaskID,
-                 count: Callable[[str, int, dict[str, Any]], None]) -> None:
+                 description: str, count: Callable[[str, int, dict[str, Any]], None]) -> None:
     """Run ``runs`` (claimed) on ``executor`` in batches, recording each outcome as it arrives."""
     slots = executor.slots
     batches = plan_batches(runs, slots)
@@ -221,6 +243,7 @@ def _run_claimed(store: ResultStore, runs: Sequence[StoreJob], executor: Executo
     def running() -> int:
         return sum(list(unfinished.values())[:slots])
 
+    warm_workers(executor, len(runs), bar, task, description)
     bar.update(task, running=running())
     for b, outcomes in executor.imap_unordered(execute_batch, jobs):
         del unfinished[b]
