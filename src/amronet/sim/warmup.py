@@ -221,9 +221,9 @@ def warm_up_if_cold(workers: int, runs: int, announce: Callable[[], None] | None
     Called before ``runs`` runs on ``workers`` local processes; "never compiled": no warm-up of them finished
     (:func:`~amronet.kernel_cache.compiled`; ``make`` runs ``amronet compile`` when it installs amronet). Without
     it, with a cold cache, every worker compiles the same kernels at the same time, each as slowly as one alone
-    (147 s instead of 79 s of compiling for ``reproduce paper`` on two cores). Here each warm-up case runs in one
-    worker, the longest first, so the workers compile different kernels, mostly, and load each other's from the
-    cache. A failure here is no error: the runs compile what they use, as without it.
+    (``reproduce paper`` on two cores with an empty cache: 142–147 s, 93–100 s with this first). Here each case
+    runs in one worker, the longest first, so the workers compile different kernels, mostly, and load each other's
+    from the cache. A failure here is no error: the runs compile what they use, as without it.
 
     Args:
         workers: The local worker processes the runs will use.
