@@ -122,19 +122,14 @@ def configure() -> Path | None:
     return folder
 
 
-def _stamp(name: str) -> Path | None:
-    return None if _folder is None else _folder / f"compiled-{name}"
-
-
 def mark_compiled(name: str) -> None:
     """Note in the cache folder that the warm-up ``name`` finished (:mod:`amronet.sim.warmup`).
 
     Its kernels are cached. Nothing is noted where amronet does not manage the folder.
     """
-    stamp = _stamp(name)
-    if stamp is not None:
+    if _folder is not None:
         with contextlib.suppress(OSError):
-            stamp.touch()
+            (_folder / f"compiled-{name}").touch()
 
 
 def compiled(*names: str) -> bool | None:
@@ -142,7 +137,6 @@ def compiled(*names: str) -> bool | None:
 
     ``None``: unknown, amronet does not manage the cache folder (the user's ``NUMBA_CACHE_DIR``, or none writable).
     """
-    stamps = [_stamp(name) for name in names]
-    if any(stamp is None for stamp in stamps):
+    if _folder is None:
         return None
-    return any(stamp.is_file() for stamp in stamps if stamp is not None)
+    return any((_folder / f"compiled-{name}").is_file() for name in names)
