@@ -135,24 +135,6 @@ def test_warm_up_runs_the_cases_named_and_notes_the_common_ones(monkeypatch):
         warmup.warm_up(only=["explorer nowhere"])
 
 
-def test_warm_up_on_given_workers_reports_each_case_as_it_finishes(monkeypatch):
-    """A sweep's pool runs the cases (``imap_unordered``: index and result, in the order they finish)."""
-    monkeypatch.setattr(warmup, "_run_case", lambda k: float(k))
-    monkeypatch.setattr(warmup, "mark_compiled", lambda name: None)
-    given = []
-
-    def backwards(fn, args):
-        given.extend(args)
-        return reversed([(j, fn(a)) for j, a in enumerate(args)])
-
-    reported = []
-    warmup.warm_up(jobs=2, only=warmup.COMMON, workers=backwards, progress=lambda label, s: reported.append((label, s)))
-    keys = dict(warmup._tasks())
-    assert sorted(given) == sorted(keys[label] for label in warmup.COMMON)
-    assert sorted(reported) == sorted((label, float(keys[label])) for label in warmup.COMMON)
-    assert reported[0] == next((label, float(k)) for label, k in reversed(warmup._tasks()) if label in warmup.COMMON)
-
-
 @pytest.mark.parametrize(("workers", "runs", "compiled", "expected"), [
     (2, 10, False, True),  # a cold cache, several workers: the warm-up
     (1, 10, False, False),  # one worker compiles each kernel once anyway
@@ -165,10 +147,11 @@ def test_warm_up_if_cold_only_when_the_kernels_were_never_compiled(monkeypatch, 
     monkeypatch.setattr(warmup, "compiled", lambda *names: compiled)
     monkeypatch.setattr(warmup, "warm_up", lambda **kw: calls.append(kw) or 12.5)
     said = []
-    seconds = warmup.warm_up_if_cold(workers, runs, announce=lambda: said.append(1), on=map)
+    seconds = warmup.warm_up_if_cold(workers, runs, announce=lambda: said.append(1), initializer=print,
+                                     initargs=("x",))
     assert (seconds == 12.5) is expected and (said == [1]) is expected
     if expected:
-        assert calls == [{"jobs": workers, "only": warmup.COMMON, "workers": map}]
+        assert calls == [{"jobs": workers, "only": warmup.COMMON, "initializer": print, "initargs": ("x",)}]
 
 
 def test_a_failed_warm_up_leaves_the_runs_to_compile(monkeypatch):
@@ -185,10 +168,9 @@ def test_sweeps_and_figures_warm_their_workers_first(monkeypatch, tmp_path):
     from amronet.experiments.runner import run_jobs
 
     calls = []
-    monkeypatch.setattr(engine, "warm_up_if_cold",
-                        lambda workers, runs, *a, on: calls.append((workers, runs, on.__name__)))
+    monkeypatch.setattr(engine, "warm_up_if_cold", lambda workers, runs, *a: calls.append((workers, runs)))
     sc = {"map": "open-6x6", "base_stations": [{"x": 0, "y": 0}], "routers": {"count": 5}, "sim": {"time_limit": 1.0}}
     jobs = [{"scenario": sc, "seed": s} for s in range(3)]
     run_jobs(jobs, workers=2, show_progress=False)
     run_jobs(jobs, workers=2, show_progress=False, store=tmp_path / "s.sqlite")
-    assert calls == [(2, 3, "imap_unordered"), (2, 3, "imap_unordered")]  # on the pool's own workers
+    assert calls == [(2, 3), (2, 3)]

@@ -23,7 +23,7 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import time
-from collections.abc import Callable, Collection, Iterable
+from collections.abc import Callable, Collection
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
@@ -179,13 +179,9 @@ def _run_case(k: int) -> float:
     return time.perf_counter() - t
 
 
-CaseMap = Callable[[Callable[[int], float], list[int]], Iterable[tuple[int, float]]]
-"""Runs a function on each of a list of arguments on some workers, yielding ``(index, result)`` pairs as they
-finish (what :meth:`amronet.sweeps.executors.Executor.imap_unordered` does)."""
-
-
 def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None,
-            only: Collection[str] | None = None, workers: CaseMap | None = None) -> float:
+            only: Collection[str] | None = None, initializer: Callable[..., object] | None = None,
+            initargs: tuple[Any, ...] = ()) -> float:
     """Run every warm-up case (:func:`warmup_cases`), the signal map and the static patterns; return the wall time.
 
     Args:
@@ -193,8 +189,9 @@ def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None,
             the workers share what they compile once it is written.
         progress: Called with each case's label and its wall time as it finishes.
         only: The labels of the cases to run (default: all); :data:`COMMON` names the kernels common runs share.
-        workers: Run the cases on these workers (a sweep's own pool, whose processes then keep the kernels they
-            compiled) instead of ``jobs`` new processes.
+        initializer: With several jobs, what each worker process runs first, with ``initargs`` (as for
+            :class:`~concurrent.futures.ProcessPoolExecutor`).
+        initargs: Its arguments.
 
     Raises:
         ValueError: ``only`` names a case that does not exist.
@@ -206,25 +203,24 @@ def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None,
             raise ValueError(f"no warm-up case {unknown}")
         tasks = [(label, k) for label, k in tasks if label in only]
     t0 = time.perf_counter()
-    keys = [k for _, k in tasks]
-    with contextlib.ExitStack() as stack:
-        if workers is not None:
-            done: Iterable[tuple[int, float]] = workers(_run_case, keys)
-        elif jobs <= 1:
-            done = ((j, _run_case(k)) for j, k in enumerate(keys))
-        else:
-            pool = stack.enter_context(ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")))
-            done = enumerate(pool.map(_run_case, keys))
-        for j, seconds in done:
+    if jobs <= 1:
+        for label, k in tasks:
+            seconds = _run_case(k)
             if progress is not None:
-                progress(tasks[j][0], seconds)
+                progress(label, seconds)
+    else:
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=initializer, initargs=initargs) as pool:
+            for (label, _), seconds in zip(tasks, pool.map(_run_case, [k for _, k in tasks]), strict=True):
+                if progress is not None:
+                    progress(label, seconds)
     if only is None or set(only) >= set(COMMON):  # noted for warm_up_if_cold
         mark_compiled(_ALL_STAMP if only is None else _COMMON_STAMP)
     return time.perf_counter() - t0
 
 
 def warm_up_if_cold(workers: int, runs: int, announce: Callable[[], None] | None = None,
-                    on: CaseMap | None = None) -> float | None:
+                    initializer: Callable[..., object] | None = None, initargs: tuple[Any, ...] = ()) -> float | None:
     """Compile the :data:`COMMON` kernels across the workers first if this version of them was never compiled.
 
     Called before ``runs`` runs on ``workers`` local processes; "never compiled": no warm-up of them finished
@@ -238,8 +234,8 @@ def warm_up_if_cold(workers: int, runs: int, announce: Callable[[], None] | None
         workers: The local worker processes the runs will use.
         runs: The runs about to start (a single run compiles only what it uses, in one process: no warm-up).
         announce: Called before the warm-up starts (a progress bar's note).
-        on: The runs' own workers (their executor's ``imap_unordered``), which then keep the kernels they compiled
-            in memory; default: ``workers`` new processes of its own.
+        initializer: What each of the warm-up's worker processes runs first, with ``initargs``.
+        initargs: Its arguments.
 
     Returns:
         The warm-up's wall time in seconds, or ``None`` if none ran.
@@ -249,6 +245,6 @@ def warm_up_if_cold(workers: int, runs: int, announce: Callable[[], None] | None
     if announce is not None:
         announce()
     try:
-        return warm_up(jobs=workers, only=COMMON, workers=on)
+        return warm_up(jobs=workers, only=COMMON, initializer=initializer, initargs=initargs)
     except Exception:  # the runs compile what they use, and report their own errors
         return None

@@ -9,7 +9,9 @@ failed, elapsed, ETA) on stderr.
 from __future__ import annotations
 
 import contextlib
+import os
 import sqlite3
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -25,7 +27,7 @@ from amronet.sim.warmup import warm_up_if_cold
 from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, WorkerDiedError
 from amronet.sweeps.spec import Sweep
 from amronet.sweeps.store import ClaimOwner, ResultStore
-from amronet.sweeps.worker import execute_batch
+from amronet.sweeps.worker import execute_batch, start_worker
 
 if TYPE_CHECKING:
     from rich.progress import TaskID
@@ -216,8 +218,7 @@ def warm_workers(executor: Executor, runs: int, bar: Progress, task: TaskID, des
     """Before ``runs`` runs on a local process pool, compile the kernels they share across its workers if needed.
 
     Needed: this version of amronet's kernels was never compiled (:func:`~amronet.sim.warmup.warm_up_if_cold`);
-    the progress bar says so meanwhile. The pool's own workers compile (they keep the kernels in memory for the
-    runs). Other executors' workers are on other machines, with caches of their own.
+    the progress bar says so meanwhile. Other executors' workers are on other machines, with caches of their own.
     """
     if not isinstance(executor, LocalExecutor):
         return
@@ -225,7 +226,9 @@ def warm_workers(executor: Executor, runs: int, bar: Progress, task: TaskID, des
     def announce() -> None:
         bar.update(task, description=f"{description} (compiling amronet's kernels: once per version)")
 
-    if warm_up_if_cold(executor.workers, runs, announce, on=executor.imap_unordered) is not None:
+    # like the pool's workers: none outlives this process
+    guard = (os.getpid(), threading.current_thread() is threading.main_thread())
+    if warm_up_if_cold(executor.workers, runs, announce, start_worker, guard) is not None:
         bar.update(task, description=description)
 
 
