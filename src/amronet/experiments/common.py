@@ -10,11 +10,12 @@ from pathlib import Path
 from typing import Any
 
 from amronet.outputs.files import write_files_atomically
+from amronet.world.builtin import FLOOR_CORNERS
 
 __all__ = ["STORE_FILES", "Claim", "agent_scenario", "claims_markdown", "csv_table_text", "csv_text", "load_plotting",
            "write_outputs"]
 
-CORNERS = ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))
+CORNERS = FLOOR_CORNERS
 """Base-station positions at the corners of the 32 m x 32 m floors (paper 5.1: 'located at the corner')."""
 START_LOCATIONS = (*CORNERS, (16.0, 16.0))
 """Five start locations for Fig. 5: the four corners and the centre (a corridor crossing on office-32x32)."""

@@ -42,7 +42,7 @@ from amronet.scenario import load_scenario
 from amronet.sim.batch import run_seeds
 from amronet.sim.loop import Simulation, StepKind
 from amronet.threads import threads_from
-from amronet.world.builtin import resolve_map
+from amronet.world.builtin import FLOOR_CORNERS, resolve_map
 
 __all__ = ["BASE_PRESETS", "COMMON", "WarmupCase", "warm_up", "warm_up_if_cold", "warmup_cases"]
 
@@ -106,7 +106,7 @@ _FIGURES_AGENTS = WarmupCase(
     "explorer frontier", BASE_PRESETS["agent-assisted"],
     {"algorithm.params.explorer": "frontier", "sim.dt": 0.25,
      "base_stations": [{"x": x, "y": y, "region": [1.6, 1.6]}
-                       for x, y in ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))]},
+                       for x, y in FLOOR_CORNERS]},
     seconds=40.0, first=True)
 """The frontier explorer as the figures' agents run it (Fig. 7's four corner bases, their step): the networks meet
 (triangle routers drive to their goals), the frontier repaints what its network covers and agents check their release

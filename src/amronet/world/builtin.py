@@ -29,7 +29,7 @@ from amronet.errors import MapError
 from amronet.world.loading import load_map_yaml
 from amronet.world.occupancy import OccupancyMap
 
-__all__ = ["BUILTIN_MAPS", "MapInfo", "list_builtin_maps", "load_builtin_map", "resolve_map"]
+__all__ = ["BUILTIN_MAPS", "FLOOR_CORNERS", "MapInfo", "list_builtin_maps", "load_builtin_map", "resolve_map"]
 
 BUILTIN_MAPS: MappingProxyType[str, str] = MappingProxyType(
     {
@@ -44,6 +44,10 @@ BUILTIN_MAPS: MappingProxyType[str, str] = MappingProxyType(
     }
 )
 """Name → one-line description of every built-in map (the registry; its order is the listing order)."""
+
+FLOOR_CORNERS: tuple[tuple[float, float], ...] = ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))
+"""Base-station spots in the free corners of the 32 m x 32 m floors (``open-32x32``, ``office-32x32``), 1 m from
+either wall (paper 5.1: the base stations are 'located at the corner')."""
 
 
 @dataclass(frozen=True)
