@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import statistics
 import sys
 import time
 from typing import Any
@@ -120,33 +121,55 @@ def bench_amronet(n: int, map_name: str, r_c: float, seconds: float) -> dict[str
     return run_bench(robots=n, steps=steps, map_name=map_name, r_c=r_c)
 
 
+def measure(n: int, map_name: str, r_c: float, seconds: float, rounds: int) -> dict[str, Any]:
+    """``rounds`` pairs of measurements at ``n``, Mesa then amronet back to back; the ratio of each pair.
+
+    The machines this runs on change speed by up to 2x from minute to minute, so one pair proves little: the ratio is
+    taken within each pair (both sides measured under the same conditions) and the median ratio reported, with the
+    lowest and highest.
+    """
+    side = math.sqrt(free_area(map_name, n))
+    pairs = []
+    for _ in range(rounds):
+        m = bench_mesa(n, side, r_c, seconds)
+        a = bench_amronet(n, map_name, r_c, seconds)
+        pairs.append({"mesa": m, "amronet": a, "ratio": round(a["robot_steps_per_s"] / m["robot_steps_per_s"], 1)})
+    ratios = [p["ratio"] for p in pairs]
+    return {"robots": n, "area_m2": round(side**2, 1), "r_c": r_c, "rounds": pairs,
+            "ratio_median": round(statistics.median(ratios), 1), "ratio_min": min(ratios), "ratio_max": max(ratios)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sizes", default="30,300,3000", help="comma-separated N (default 30,300,3000)")
     parser.add_argument("--map", default="hospital_section", help="amronet's floor plan (sets the area)")
     parser.add_argument("--rc", type=float, default=1.0, help="communication radius = query radius (m)")
     parser.add_argument("--seconds", type=float, default=2.0, help="target length of each measurement (s)")
+    parser.add_argument("--rounds", type=int, default=3,
+                        help="pairs of measurements (Mesa, then amronet) per N; the median ratio is reported "
+                             "(default 3)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
+    if args.rounds < 1:
+        parser.error(f"--rounds: must be a whole number >= 1, got {args.rounds}")
     sizes = [int(s) for s in args.sizes.split(",") if s.strip()]
-    rows = []
-    for n in sizes:
-        side = math.sqrt(free_area(args.map, n))
-        m = bench_mesa(n, side, args.rc, args.seconds)
-        a = bench_amronet(n, args.map, args.rc, args.seconds)
-        rows.append({"robots": n, "area_m2": round(side**2, 1), "r_c": args.rc, "mesa": m, "amronet": a,
-                     "ratio": round(a["robot_steps_per_s"] / m["robot_steps_per_s"], 1)})
+    rows = [measure(n, args.map, args.rc, args.seconds, args.rounds) for n in sizes]
     if args.json:
         print(json.dumps(rows, indent=2))
         return
     print(f"Mesa {mesa.__version__} (random walk + radius query) vs amronet (full self-spreading step), "
-          f"r_c = {args.rc} m, map {args.map}")
-    print("| N | area m² | Mesa robot-steps/s | amronet robot-steps/s | ratio amronet/Mesa | degree Mesa/amronet |")
-    print("|---:|---:|---:|---:|---:|---:|")
+          f"r_c = {args.rc} m, map {args.map}, {args.rounds} rounds per N (each ratio within one Mesa-amronet pair)")
+    print("| N | area m² | Mesa robot-steps/s | amronet robot-steps/s | ratio per round | median ratio | "
+          "degree Mesa/amronet |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        m, a = r["mesa"], r["amronet"]
-        print(f"| {r['robots']:,} | {r['area_m2']:,.0f} | {m['robot_steps_per_s']:,} | {a['robot_steps_per_s']:,} | "
-              f"{r['ratio']:,.1f}x | {m['mean_degree']:.1f}/{a['mean_degree']:.1f} |")
+        pairs = r["rounds"]
+        mesa_rates = " / ".join(f"{p['mesa']['robot_steps_per_s']:,}" for p in pairs)
+        ours = " / ".join(f"{p['amronet']['robot_steps_per_s']:,}" for p in pairs)
+        ratios = " / ".join(f"{p['ratio']:,.1f}x" for p in pairs)
+        degrees = f"{pairs[-1]['mesa']['mean_degree']:.1f}/{pairs[-1]['amronet']['mean_degree']:.1f}"
+        print(f"| {r['robots']:,} | {r['area_m2']:,.0f} | {mesa_rates} | {ours} | {ratios} | "
+              f"**{r['ratio_median']:,.1f}x** | {degrees} |")
 
 
 if __name__ == "__main__":
