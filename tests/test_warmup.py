@@ -135,28 +135,6 @@ def test_warm_up_runs_the_cases_named_and_notes_the_common_ones(monkeypatch):
         warmup.warm_up(only=["explorer nowhere"])
 
 
-PLANNER_PROBE = """
-import json
-from amronet.algorithms.explorers.frontier.navigation import navigate_kernel
-from amronet.sim import warmup
-warmup._run_case(dict(warmup._tasks())["frontier planner"])
-planner = [str(s) for s in navigate_kernel.signatures]
-warmup._run_case(dict(warmup._tasks())["explorer frontier"])
-print(json.dumps([planner, [str(s) for s in navigate_kernel.signatures]]))
-"""
-
-
-def test_the_planner_task_compiles_the_version_of_the_planner_a_frontier_run_uses():
-    """The frontier planner task exists so that another worker compiles the planner meanwhile: for the same types.
-
-    In a fresh process (no version in memory): after the planner task, the figures' frontier run adds none.
-    """
-    out = subprocess.run([sys.executable, "-c", PLANNER_PROBE], capture_output=True, text=True, check=True)
-    planner, after_run = json.loads(out.stdout.strip().splitlines()[-1])
-    assert len(planner) == 1 and after_run == planner
-    assert "frontier planner" in warmup.COMMON
-
-
 @pytest.mark.parametrize(("workers", "runs", "compiled", "expected"), [
     (2, 10, False, True),  # a cold cache, several workers: the warm-up
     (1, 10, False, False),  # one worker compiles each kernel once anyway

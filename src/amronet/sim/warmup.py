@@ -30,7 +30,6 @@ from typing import Any
 
 import numpy as np
 
-from amronet.algorithms.agent_assisted import AgentAssistedParams
 from amronet.algorithms.base import ALGORITHMS
 from amronet.algorithms.drops.base import DROP_RULES
 from amronet.algorithms.explorers.base import EXPLORERS
@@ -56,11 +55,11 @@ BASE_PRESETS: dict[str, str] = {
 """The preset each registered algorithm is warmed up on (a test checks that every algorithm has one)."""
 
 COMMON: tuple[str, ...] = (
-    "explorer frontier", "frontier planner", "algorithm agent-assisted", "algorithm self-spreading",
-    "algorithm potential-field", "algorithm dssa", "batch self-spreading", "batch potential field", "static patterns",
+    "explorer frontier", "algorithm agent-assisted", "algorithm self-spreading", "algorithm potential-field",
+    "algorithm dssa", "batch self-spreading", "batch potential field", "static patterns",
 )
 """The warm-up cases whose kernels common runs share: every algorithm with its defaults, the frontier explorer
-(the figures' agents) and its planner, batches (the figures' runs) and the static patterns (Fig. 5)."""
+(the figures' agents), batches (the figures' runs) and the static patterns (Fig. 5)."""
 
 _ALL_STAMP, _COMMON_STAMP = "all", "common"
 
@@ -126,35 +125,10 @@ def _patterns() -> None:
     place("r-strip", (8.0, 8.0), 2.0)
 
 
-def _frontier_planner() -> None:
-    """The frontier explorer's planner (``navigate_kernel``, the longest compile of its chain) without a run.
-
-    The frontier case reaches the planner only after the neighbour search and the agents' step are compiled; this
-    task compiles it meanwhile on another worker, which the frontier case then loads from the cache. The explorer is
-    built as agent-assisted deployment builds it (its parameters' defaults), its arrays as a run hands them over, so
-    the kernel is compiled for the same types (``tests/test_warmup.py`` checks that a frontier run compiles no other
-    version).
-    """
-    p = AgentAssistedParams()
-    explorer = EXPLORERS.lookup("frontier", "explorer")(p.turn_noise, p.avoid_range, 0.25, 4.0, (0.0, 0.0, 8.0, 8.0))
-    m = 2
-    explorer.plan_and_steer(np.zeros(m), np.arange(m, dtype=np.int64), np.full((m, 8), 2.0), 2.0,
-                            np.zeros(m, dtype=np.bool_), np.random.default_rng(0), np.array([[2.0, 2.0], [6.0, 6.0]]),
-                            np.array([[1.0, 1.0]]))
-
-
-_TASKS: dict[int, tuple[str, Callable[[], None]]] = {
-    -1: ("frontier planner", _frontier_planner), -2: ("signal map", _signal_map), -3: ("static patterns", _patterns)}
-"""The warm-up's tasks that are not runs, by key (negative: the runs' keys are their indices in
-:func:`warmup_cases`)."""
-
-
 def warmup_cases() -> list[WarmupCase]:
     """The warm-up runs, built from the registries (every algorithm, explorer, drop rule, walk and radio model)."""
     aa, ss = BASE_PRESETS["agent-assisted"], BASE_PRESETS["self-spreading"]
-    # agent-assisted last: it shares the agents' kernels, which the frontier case compiles meanwhile
-    cases = [WarmupCase(f"algorithm {name}", BASE_PRESETS[name])
-             for name in sorted(ALGORITHMS, key=lambda name: name == "agent-assisted")]
+    cases = [WarmupCase(f"algorithm {name}", BASE_PRESETS[name]) for name in ALGORITHMS]
     cases += [_FIGURES_AGENTS if name == "frontier" else
               WarmupCase(f"explorer {name}", aa, {"algorithm.params.explorer": name}) for name in EXPLORERS]
     cases += [WarmupCase(f"drop rule {name}", aa, {"algorithm.params.drop_rule": name,
@@ -186,21 +160,20 @@ def warmup_cases() -> list[WarmupCase]:
 def _tasks() -> list[tuple[str, int]]:
     """Every warm-up task as ``(label, key)``, in the order they start.
 
-    The longest chains first (``first``), then the frontier planner (which the first of them needs later on), the
-    other cases (key: their index in :func:`warmup_cases`), and last the signal map and the static patterns: short
-    and sharing nothing with the rest, they fill the workers' last seconds (a worker that takes the next case in
-    line while another compiles a kernel that case needs compiles it a second time).
+    The longest chains first (``first``), then the signal map (key -1) and the static patterns (key -2), then the
+    other cases (key: their index in :func:`warmup_cases`).
     """
     cases = warmup_cases()
-    order = [k for k, c in enumerate(cases) if c.first] + [-1] + [k for k, c in enumerate(cases) if not c.first] + [
-        -2, -3]
-    return [(cases[k].label if k >= 0 else _TASKS[k][0], k) for k in order]
+    order = [k for k, c in enumerate(cases) if c.first] + [-1, -2] + [k for k, c in enumerate(cases) if not c.first]
+    return [(cases[k].label if k >= 0 else ("signal map", "static patterns")[-1 - k], k) for k in order]
 
 
 def _run_case(k: int) -> float:
     t = time.perf_counter()
-    if k < 0:
-        _TASKS[k][1]()
+    if k == -1:
+        _signal_map()
+    elif k == -2:
+        _patterns()
     else:
         warmup_cases()[k].run()
     return time.perf_counter() - t
