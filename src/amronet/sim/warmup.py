@@ -125,6 +125,12 @@ def _patterns() -> None:
     place("r-strip", (8.0, 8.0), 2.0)
 
 
+_TASKS: dict[int, tuple[str, Callable[[], None]]] = {
+    -1: ("signal map", _signal_map), -2: ("static patterns", _patterns)}
+"""The warm-up's tasks that are not runs: label and function by key (negative; a run's key is its index in
+:func:`warmup_cases`)."""
+
+
 def warmup_cases() -> list[WarmupCase]:
     """The warm-up runs, built from the registries (every algorithm, explorer, drop rule, walk and radio model)."""
     aa, ss = BASE_PRESETS["agent-assisted"], BASE_PRESETS["self-spreading"]
@@ -160,20 +166,18 @@ def warmup_cases() -> list[WarmupCase]:
 def _tasks() -> list[tuple[str, int]]:
     """Every warm-up task as ``(label, key)``, in the order they start.
 
-    The longest chains first (``first``), then the signal map (key -1) and the static patterns (key -2), then the
-    other cases (key: their index in :func:`warmup_cases`).
+    The longest chains first (``first``), then the tasks that are not runs (:data:`_TASKS`: the signal map, the
+    static patterns), then the other cases (key: their index in :func:`warmup_cases`).
     """
     cases = warmup_cases()
-    order = [k for k, c in enumerate(cases) if c.first] + [-1, -2] + [k for k, c in enumerate(cases) if not c.first]
-    return [(cases[k].label if k >= 0 else ("signal map", "static patterns")[-1 - k], k) for k in order]
+    order = [k for k, c in enumerate(cases) if c.first] + list(_TASKS) + [k for k, c in enumerate(cases) if not c.first]
+    return [(cases[k].label if k >= 0 else _TASKS[k][0], k) for k in order]
 
 
 def _run_case(k: int) -> float:
     t = time.perf_counter()
-    if k == -1:
-        _signal_map()
-    elif k == -2:
-        _patterns()
+    if k < 0:
+        _TASKS[k][1]()
     else:
         warmup_cases()[k].run()
     return time.perf_counter() - t
@@ -226,7 +230,8 @@ def warm_up_if_cold(workers: int, runs: int, announce: Callable[[], None] | None
     Called before ``runs`` runs on ``workers`` local processes; "never compiled": no warm-up of them finished
     (:func:`~amronet.kernel_cache.compiled`; ``make`` runs ``amronet compile`` when it installs amronet). Without
     it, with a cold cache, every worker compiles the same kernels at the same time, each as slowly as one alone
-    (``reproduce paper`` on two cores with an empty cache: 142–147 s, 93–100 s with this first). Here each case
+    (``reproduce paper`` on two cores with an empty cache, in one sitting: 142.5 s, 92.5–99.9 s with this first; the
+    machine's speed moved such times by a quarter from hour to hour, 95–125 s on 2026-11-26). Here each case
     runs in one worker, the longest first, so the workers compile different kernels, mostly, and load each other's
     from the cache. A failure here is no error: the runs compile what they use, as without it.
 
