@@ -8,8 +8,12 @@ of the source of every module that holds kernels and of every amronet module the
 ``$XDG_CACHE_HOME/amronet/numba-HASH`` (``~/.cache/...`` without ``XDG_CACHE_HOME``). A change to any of them
 starts a fresh cache, which the next run (or ``amronet compile``) fills; a change elsewhere (the command line,
 the experiments, the pictures) keeps it. The folders of the :data:`KEEP` most recently used versions are kept,
-older ones removed (they hold only what amronet wrote there). Where no such folder can be written, numba's
-default (``__pycache__`` next to the sources) applies.
+older ones removed -- but only folders amronet made: a folder is removed when it carries amronet's stamp
+(:data:`STAMP`, holding the folder's own hash) *and* holds nothing but what amronet and numba write there (the
+stamp, the warm-up notes, numba's index and data files). A folder named like amronet's that the user made, or one
+of amronet's into which the user put a file of their own, is never touched. A relative ``XDG_CACHE_HOME`` is
+ignored, as the XDG Base Directory specification asks. Where no such folder can be written, numba's default
+(``__pycache__`` next to the sources) applies.
 
 numba has one cache setting per process, so a program that imports amronet and then defines kernels of its own
 with ``cache=True`` finds their cache in the same folder (still correct: numba checks their own source files;
@@ -36,10 +40,18 @@ import re
 import shutil
 from pathlib import Path
 
-__all__ = ["KEEP", "cache_folder", "compiled", "configure", "mark_compiled"]
+__all__ = ["KEEP", "STAMP", "cache_folder", "compiled", "configure", "mark_compiled"]
 
 KEEP = 8
 """Cache folders of this many source versions are kept (most recently used first)."""
+
+STAMP = "amronet-kernel-cache"
+"""The file that marks a cache folder as amronet's; it holds the folder's name (``numba-HASH``)."""
+
+_FOLDER_NAME = re.compile(r"^numba-[0-9a-f]{16}$")
+_OURS = re.compile(r"^(?:compiled-[\w-]+|.+\.nb[ic](?:\.tmp\.[\w-]+)?)$")
+"""Files amronet or numba write in a cache folder: the warm-up notes, numba's index and data files (and the
+temporary files numba writes them through)."""
 
 _PACKAGE = Path(__file__).resolve().parent
 _KERNEL = re.compile(r"^@(numba\.)?njit\b", re.MULTILINE)
@@ -76,10 +88,16 @@ def _kernel_sources() -> list[Path]:
     return sorted(found)
 
 
+def _cache_home() -> Path:
+    """``$XDG_CACHE_HOME``, or ``~/.cache`` where it is unset, empty or relative (the XDG specification)."""
+    home = os.environ.get("XDG_CACHE_HOME", "")
+    return Path(home) if os.path.isabs(home) else Path.home() / ".cache"
+
+
 def cache_folder(root: Path | None = None) -> Path:
     """The cache folder of the kernels' present source, under ``root`` (default: the user's cache folder)."""
     if root is None:
-        root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "amronet"
+        root = _cache_home() / "amronet"
     digest = hashlib.sha256()
     for path in _kernel_sources():
         digest.update(path.relative_to(_PACKAGE).as_posix().encode())
@@ -89,11 +107,44 @@ def cache_folder(root: Path | None = None) -> Path:
     return root / f"numba-{digest.hexdigest()[:16]}"
 
 
+def _stamp(folder: Path) -> None:
+    """Mark ``folder`` as amronet's cache folder (:data:`STAMP`), if it is not yet."""
+    stamp = folder / STAMP
+    if not stamp.is_file():
+        stamp.write_text(folder.name + "\n", encoding="utf-8")
+
+
+def _removable(folder: Path) -> bool:
+    """Whether ``folder`` is one amronet made and holds nothing but what amronet and numba wrote there.
+
+    Not a symbolic link, named ``numba-HASH``, stamped with its own name, and every file in it (at any depth) a
+    warm-up note or one of numba's cache files; no symbolic link inside.
+    """
+    if folder.is_symlink() or not folder.is_dir() or not _FOLDER_NAME.match(folder.name):
+        return False
+    try:
+        if (folder / STAMP).read_text(encoding="utf-8").strip() != folder.name:
+            return False
+        for path in folder.rglob("*"):
+            if path.is_symlink():
+                return False
+            if path.is_file() and path.parent == folder and path.name == STAMP:
+                continue
+            if not path.is_dir() and not _OURS.match(path.name):
+                return False
+    except (OSError, UnicodeDecodeError):
+        return False
+    return True
+
+
 def _prune(folder: Path) -> None:
-    """Remove the cache folders of all but the :data:`KEEP` most recently used source versions."""
-    others = [p for p in folder.parent.glob("numba-*") if p.is_dir() and p != folder]
-    others.sort(key=lambda p: p.stat().st_mtime, reverse=True)
-    for old in others[KEEP - 1:]:
+    """Remove amronet's cache folders of all but the :data:`KEEP` most recently used source versions.
+
+    Only folders :func:`_removable` accepts count and go: nothing the user made or put there is removed.
+    """
+    ours = [p for p in folder.parent.iterdir() if p != folder and _removable(p)]
+    ours.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    for old in ours[KEEP - 1:]:
         shutil.rmtree(old, ignore_errors=True)
 
 
@@ -109,6 +160,7 @@ def configure() -> Path | None:
     try:
         folder = cache_folder()
         folder.mkdir(parents=True, exist_ok=True)
+        _stamp(folder)
         os.utime(folder)  # used now: the pruning keeps the most recently used versions
         _prune(folder)
     except OSError:
