@@ -27,6 +27,10 @@ share the version the Python callers use (``tests/test_warmup.py`` finds any lit
 A warm-up (:mod:`amronet.sim.warmup`) that finished leaves a note in the folder (``compiled-all``,
 ``compiled-common``): a sweep on a cold cache compiles the common kernels across its workers first, and only then.
 
+A cache entry that cannot be loaded (an empty, truncated or garbled index or data file) is recompiled, never
+fatal (:mod:`amronet.kernel_cache_repair`, installed by :func:`configure`); :func:`clear` (``amronet compile
+--fresh``) empties the folder of the kernels' present source.
+
 This module must run before any module with kernels is imported: ``amronet/__init__.py`` calls
 :func:`configure` first.
 """
@@ -40,7 +44,7 @@ import re
 import shutil
 from pathlib import Path
 
-__all__ = ["KEEP", "STAMP", "cache_folder", "compiled", "configure", "mark_compiled"]
+__all__ = ["KEEP", "STAMP", "cache_folder", "clear", "compiled", "configure", "mark_compiled"]
 
 KEEP = 8
 """Cache folders of this many source versions are kept (most recently used first)."""
@@ -152,8 +156,12 @@ def configure() -> Path | None:
     """Point numba's cache at :func:`cache_folder` unless ``NUMBA_CACHE_DIR`` is set; return the folder used.
 
     ``None``: the user's ``NUMBA_CACHE_DIR`` applies, or no folder could be written (numba's default applies).
+    Whichever folder applies, an entry that cannot be loaded is recompiled (:mod:`amronet.kernel_cache_repair`).
     """
     global _folder
+    from amronet.kernel_cache_repair import install
+
+    install()
     _folder = None
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
@@ -192,3 +200,29 @@ def compiled(*names: str) -> bool | None:
     if _folder is None:
         return None
     return any((_folder / f"compiled-{name}").is_file() for name in names)
+
+
+_COMPILED = re.compile(r"^(?:compiled-[\w-]+|.+\.nb[ic])$")
+"""The files :func:`clear` removes: the warm-up notes and numba's index and data files (not the temporary files
+numba writes them through: another process may be writing one)."""
+
+
+def clear() -> int | None:
+    """Remove the compiled kernels and warm-up notes from amronet's cache folder; return how many files went.
+
+    Only the warm-up notes and numba's ``.nbi`` and ``.nbc`` files in the folder :func:`configure` chose go
+    (regular files, not symbolic links; the folder and its stamp stay): the next run, or ``amronet compile``,
+    compiles every kernel afresh. ``None``: amronet does not manage the folder (the user's ``NUMBA_CACHE_DIR``, or
+    none writable), and removes nothing.
+    """
+    if _folder is None:
+        return None
+    removed = 0
+    for parent, _dirs, files in os.walk(_folder):  # does not descend into symbolic links
+        for name in files:
+            path = Path(parent) / name
+            if _COMPILED.match(name) and not path.is_symlink() and path.is_file():
+                with contextlib.suppress(FileNotFoundError):
+                    path.unlink()
+                    removed += 1
+    return removed
