@@ -31,23 +31,33 @@ def parse_base(text: str) -> tuple[float, float]:
     return parse_point(text)
 
 
-def add_executor_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add ``--workers``, ``--scheduler`` and ``--cluster``: where the runs of a command execute."""
-    parser.add_argument("--workers", type=int, help="local worker processes, or LocalCluster workers "
-                                                    "(default: all cores; not with --scheduler)")
+def add_executor_arguments(parser: argparse.ArgumentParser, force: bool = True) -> None:
+    """Add ``--workers``, ``--scheduler`` and ``--cluster``: where the runs of a command execute.
+
+    Args:
+        parser: The subcommand's parser.
+        force: Also add ``--force`` (more ``--workers`` than cores); ``False`` for a command whose own ``--force``
+            acknowledges that too.
+    """
+    parser.add_argument("--workers", type=int, help="local worker processes, or LocalCluster workers, at most one "
+                                                    "per run (default: all cores; more than the cores only with "
+                                                    "--force, never more than the memory holds; not with "
+                                                    "--scheduler)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="run on a running Dask scheduler, e.g. tcp://host:8786")
     parser.add_argument("--cluster", metavar="KIND", help="start a Dask cluster here: local (a LocalCluster)")
+    if force:
+        parser.add_argument("--force", action="store_true", help="start more --workers than there are cores")
 
 
 def make_executor_from_args(args: argparse.Namespace) -> Any:
     """The executor (a context manager) that :func:`add_executor_arguments`'s options ask for.
 
     Raises:
-        AmronetError: ``--workers`` below 1, or with ``--scheduler`` (or a bad scheduler / cluster, from the
-            executor).
+        AmronetError: ``--workers`` below 1, above the cores without ``--force`` or above the memory
+            (:func:`~amronet.sweeps.worker_bounds.check_workers`), or with ``--scheduler`` (or a bad scheduler /
+            cluster, from the executor).
     """
     from amronet.sweeps import make_executor
 
-    if args.workers is not None and args.workers < 1:
-        raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
-    return make_executor(workers=args.workers, scheduler=args.scheduler, cluster=args.cluster)
+    return make_executor(workers=args.workers, scheduler=args.scheduler, cluster=args.cluster,
+                         force=getattr(args, "force", False))

@@ -178,7 +178,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
                               description="Run every (point, seed) of a sweep file that is not in the store yet.")
     p.add_argument("sweep", help="sweep YAML file")
     p.add_argument("--store", required=True, help="result store (SQLite file; created when missing)")
-    add_executor_arguments(p)
+    add_executor_arguments(p, force=False)
     p.add_argument("--worker-timeout", type=float, metavar="SECONDS",
                    help="with Dask: stop when the scheduler has had no worker for this long (default 300; 0 waits "
                         "forever); the finished runs stay in the store")
@@ -186,7 +186,8 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no table")
     p.add_argument("--force", action="store_true", help="run a sweep of more than 100 000 points or 1 000 000 runs "
-                                                        "(refused otherwise as absurdly long)")
+                                                        "(refused otherwise as absurdly long), or start more "
+                                                        "--workers than there are cores")
     p.set_defaults(func=cmd_sweep)
 
     r = subparsers.add_parser("results", help="list the sweeps and runs of a result store, or export them")

@@ -28,6 +28,7 @@ from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, 
 from amronet.sweeps.spec import Sweep
 from amronet.sweeps.store import ClaimOwner, ResultStore
 from amronet.sweeps.worker import execute_batch, start_worker
+from amronet.sweeps.worker_bounds import pool_size
 
 if TYPE_CHECKING:
     from rich.progress import TaskID
@@ -228,7 +229,7 @@ def warm_workers(executor: Executor, runs: int, bar: Progress, task: TaskID, des
 
     # like the pool's workers: none outlives this process
     guard = (os.getpid(), threading.current_thread() is threading.main_thread())
-    if warm_up_if_cold(executor.workers, runs, announce, start_worker, guard) is not None:
+    if warm_up_if_cold(pool_size(executor.workers, runs), runs, announce, start_worker, guard) is not None:
         bar.update(task, description=description)
 
 

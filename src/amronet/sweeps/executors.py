@@ -5,10 +5,11 @@ Both take a picklable function and a list of picklable jobs and yield ``(index, 
 worker function never raises for a failed run; see :mod:`amronet.sweeps.worker`). A local worker process that
 dies (killed, out of memory) raises :class:`WorkerDiedError`, one line, instead of ``BrokenProcessPool``.
 
-* :class:`LocalExecutor` — ``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes; one worker
-  runs the jobs in this process, one after another. Its workers end when this process dies, even by ``kill -9``
-  (:func:`amronet.sweeps.worker.guard_worker`: a parent-death signal on Linux, a watchdog thread everywhere); they
-  run their kernels on one thread (:func:`amronet.threads.serial_only`).
+* :class:`LocalExecutor` — ``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes, no more than
+  jobs (:mod:`~amronet.sweeps.worker_bounds` bounds ``workers``); one worker runs the jobs in this process, one
+  after another. Its workers end when this process dies, even by ``kill -9`` (:func:`~amronet.sweeps.worker.
+  guard_worker`: a parent-death signal on Linux, a watchdog thread everywhere); they run their kernels on one
+  thread (:func:`amronet.threads.serial_only`).
 * :class:`DaskExecutor` — a ``distributed.Client`` on an existing scheduler (``tcp://host:8786``; any cluster:
   ``dask scheduler`` + ``dask worker`` by hand, SLURM/PBS through ``dask-jobqueue``, Kubernetes...) or on a
   ``LocalCluster`` it starts. Dask is optional: ``pip install 'amronet[cluster]'``. Losing the scheduler,
@@ -35,6 +36,7 @@ from typing import Any
 
 from amronet.errors import AmronetError
 from amronet.sweeps.worker import on_one_thread, start_worker
+from amronet.sweeps.worker_bounds import check_worker_timeout, check_workers, default_workers, pool_size
 
 __all__ = ["DEFAULT_WORKER_TIMEOUT_S", "ClusterLostError", "DaskExecutor", "Executor", "LocalExecutor",
            "WorkerDiedError", "check_worker_timeout", "default_workers", "make_executor"]
@@ -109,27 +111,6 @@ class _QuietWhenLost(logging.Filter):
                                                                  "Couldn't gather"))
 
 
-def check_worker_timeout(worker_timeout: float | None, dask: bool) -> None:
-    """Check ``--worker-timeout``: at least 0, and only with Dask (``dask``: ``--scheduler`` or ``--cluster``).
-
-    Raises:
-        AmronetError: Otherwise.
-    """
-    if worker_timeout is None:
-        return
-    if not dask:
-        raise AmronetError("--worker-timeout: only with --scheduler ADDRESS or --cluster local (the local pool's "
-                           "workers cannot go missing)")
-    if not worker_timeout >= 0 or worker_timeout == float("inf"):
-        raise AmronetError(f"--worker-timeout: must be a number of seconds >= 0 (0 waits forever), got "
-                           f"{worker_timeout}")
-
-
-def default_workers() -> int:
-    """Worker processes by default: the cores this process may use."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-
-
 class Executor:
     """Runs jobs somewhere and yields their results as they complete."""
 
@@ -162,15 +143,18 @@ class LocalExecutor(Executor):
     """A process pool on this machine.
 
     Args:
-        workers: Processes (default: the cores available); 1 runs every job in this process.
+        workers: Processes at most (default: the cores available); 1 runs every job in this process.
+        force: Allow more ``workers`` than cores (never more than the memory holds).
+
+    Raises:
+        AmronetError: ``workers`` refused by :func:`~amronet.sweeps.worker_bounds.check_workers`.
     """
 
     name = "local"
 
-    def __init__(self, workers: int | None = None) -> None:
-        if workers is not None and workers < 1:
-            raise AmronetError(f"--workers: must be >= 1, got {workers}")
-        self.workers = workers or default_workers()
+    def __init__(self, workers: int | None = None, force: bool = False) -> None:
+        self.workers = check_workers(workers, force)
+        self.started = 0  # processes of the running pool: at most workers, and at most the jobs it was started for
         self._pool: ProcessPoolExecutor | None = None
 
     @property
@@ -185,10 +169,12 @@ class LocalExecutor(Executor):
             for k, job in enumerate(jobs):
                 yield k, fn(job)
             return
-        if self._pool is None:
+        if self.started < pool_size(self.workers, len(jobs)):
+            self.close()  # none yet, or one started for fewer jobs (idle now): a larger one replaces it
             # the parent-death signal follows the thread that forks the workers: only from the main thread
             death_signal = threading.current_thread() is threading.main_thread()
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=start_worker,
+            self.started = pool_size(self.workers, len(jobs))
+            self._pool = ProcessPoolExecutor(max_workers=self.started, initializer=start_worker,
                                              initargs=(os.getpid(), death_signal))
         pending: dict[Future[Any], int] = {}
         try:
@@ -209,7 +195,7 @@ class LocalExecutor(Executor):
     def close(self) -> None:  # noqa: D102
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
+            self._pool, self.started = None, 0
 
 
 def _distributed() -> Any:
@@ -225,20 +211,22 @@ class DaskExecutor(Executor):
 
     Args:
         scheduler: Address of a running scheduler (``tcp://host:8786``); ``None`` starts a ``LocalCluster``.
-        workers: With a ``LocalCluster``: worker processes (default: the cores available), one thread each.
+        workers: With a ``LocalCluster``: worker processes (default: the cores available), one thread each; more
+            than cores only with ``force``, never more than the memory holds.
         timeout: Seconds to wait for the scheduler.
         worker_timeout: Seconds to wait while the scheduler has no worker at all (all lost, or none started yet)
             before :meth:`imap_unordered` gives up with :class:`ClusterLostError`; ``0`` or ``None`` waits forever.
 
     Raises:
-        AmronetError: Dask is not installed, or the scheduler cannot be reached.
+        AmronetError: Dask is not installed, the scheduler cannot be reached, or ``workers`` is refused.
     """
 
     name = "dask"
 
     def __init__(self, scheduler: str | None = None, workers: int | None = None, timeout: float = 20.0,
-                 worker_timeout: float | None = DEFAULT_WORKER_TIMEOUT_S) -> None:
+                 worker_timeout: float | None = DEFAULT_WORKER_TIMEOUT_S, force: bool = False) -> None:
         check_worker_timeout(worker_timeout, dask=True)
+        n_workers = check_workers(workers, force) if scheduler is None else None
         distributed = _distributed()
         self.scheduler = scheduler
         self.worker_timeout = worker_timeout
@@ -249,7 +237,7 @@ class DaskExecutor(Executor):
         try:
             if scheduler is None:
                 self.cluster = distributed.LocalCluster(
-                    n_workers=workers or default_workers(), threads_per_worker=1, processes=True,
+                    n_workers=n_workers, threads_per_worker=1, processes=True,
                     dashboard_address=None, silence_logs=logging.ERROR)
                 self.client = distributed.Client(self.cluster)
             else:
@@ -424,15 +412,16 @@ class _WorkerWatch:
 
 
 def make_executor(workers: int | None = None, scheduler: str | None = None, cluster: str | None = None,
-                  worker_timeout: float | None = None) -> Executor:
+                  worker_timeout: float | None = None, force: bool = False) -> Executor:
     """The executor the options ask for: ``--scheduler ADDRESS``, ``--cluster local`` or a local pool.
 
     ``worker_timeout`` (``--worker-timeout``) goes with Dask: how long to wait while the scheduler has no worker
-    (default :data:`DEFAULT_WORKER_TIMEOUT_S`; 0 waits forever).
+    (default :data:`DEFAULT_WORKER_TIMEOUT_S`; 0 waits forever). ``force`` (``--force``): more workers than cores.
 
     Raises:
         AmronetError: Both ``scheduler`` and ``cluster``, ``workers`` with ``scheduler``, an unknown ``cluster``,
-            ``worker_timeout`` without Dask or below 0, Dask missing, or an unreachable scheduler.
+            ``worker_timeout`` without Dask or below 0, ``workers`` refused (below 1, above the cores without
+            ``force``, above the memory), Dask missing, or an unreachable scheduler.
     """
     check_worker_timeout(worker_timeout, dask=scheduler is not None or cluster is not None)
     dask_options = {} if worker_timeout is None else {"worker_timeout": worker_timeout}
@@ -445,7 +434,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None, clus
         if cluster != "local":
             raise AmronetError(f"--cluster: only 'local' (a Dask LocalCluster) is built in, got {cluster!r}; "
                                "for another cluster start its scheduler and pass --scheduler ADDRESS")
-        return DaskExecutor(workers=workers, **dask_options)
+        return DaskExecutor(workers=workers, force=force, **dask_options)
     if scheduler is not None:
         return DaskExecutor(scheduler=scheduler, **dask_options)
-    return LocalExecutor(workers)
+    return LocalExecutor(workers, force)
