@@ -6,7 +6,7 @@ The command line prints that line and exits with status 2; the library raises th
 
 from __future__ import annotations
 
-__all__ = ["AmronetError", "MapError", "ScenarioError"]
+__all__ = ["AmronetError", "MapError", "RecordingError", "ScenarioError"]
 
 
 class AmronetError(Exception):
@@ -32,3 +32,24 @@ class ScenarioError(AmronetError, ValueError):
 
 class MapError(ScenarioError):
     """A map file or image cannot be loaded or makes no sense."""
+
+
+class RecordingError(AmronetError):
+    """A recording (``recording.npz``) is damaged, truncated or forged: one of its arrays cannot be what it claims.
+
+    Args:
+        path: The file, as the message names it.
+        field: The offending array (``xy_quantum``, ``status``), ``meta`` or a key of it (``meta.r_c``), or
+            ``file`` when the file as a whole cannot be read.
+        problem: What is wrong with it, in a few words.
+    """
+
+    def __init__(self, path: str, field: str, problem: str) -> None:
+        self.path = path
+        self.field = field
+        self.problem = problem
+        super().__init__(f"{path} is damaged or was not written by amronet run --record ({problem}); "
+                         "record the run again")
+
+    def __reduce__(self) -> tuple[type, tuple[str, str, str]]:
+        return type(self), (self.path, self.field, self.problem)

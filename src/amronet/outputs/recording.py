@@ -26,9 +26,10 @@ What ``recording.npz`` holds (format ``amronet-recording/1``):
   seed, ``r_c``, ``dt``, ``every``, medium, stop reason, and the medium's resolved link budget ``budget`` with
   ``packet_loss``).
 
-Before any array is read, :func:`load_recording` reads each array's header (shape and type) alone and refuses a
-file whose headers claim more data than the file can hold (a damaged or forged file) or more memory than is
-available for the arrays and their decoding (the resource guard, :mod:`amronet.limits`).
+Before anything is decoded, every reader goes through :mod:`amronet.outputs.recording_checks`: each array's header
+(shape and type) is read alone, the layout and the memory are checked before any data is read, and the values
+(finite scales, bounds, codes, counts) before anything is decoded; a damaged or forged file is one line
+(:class:`~amronet.errors.RecordingError`) naming the file, the array and what is wrong.
 
 The medium's name, link budget and the seed rebuild the run's radio (:attr:`Recording.medium`, its shadowing field
 included): coverage (:meth:`Recording.covered`) and the signal map (:meth:`Recording.signal`) of any frame are the
@@ -41,22 +42,21 @@ from __future__ import annotations
 import dataclasses
 import io
 import json
-import math
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from amronet import limits
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.neighbours import neighbour_csr, pairs_from_csr
 from amronet.engine.propagation import LinkBudget
-from amronet.engine.radio import MEDIA, RadioMedium, make_medium
+from amronet.engine.radio import RadioMedium, make_medium
 from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role, State, state_lookup
-from amronet.errors import AmronetError
+from amronet.errors import AmronetError, RecordingError
+from amronet.outputs.recording_checks import read_budget, read_meta, read_recording_arrays, validate
 from amronet.outputs.recording_codec import (
+    FORMAT,
     Q_MAX,
     backfill,
     decode_positions,
@@ -71,9 +71,6 @@ if TYPE_CHECKING:
     from amronet.sim.run import Run
 
 __all__ = ["FORMAT", "Recorder", "Recording", "decode_positions", "encode_positions", "load_recording"]
-
-FORMAT = "amronet-recording/1"
-_META_KEYS = ("algorithm", "map", "seed", "r_c")  # what the pictures read from ``meta``
 
 
 class Recorder:
@@ -256,38 +253,25 @@ class Recording:
 
     @classmethod
     def from_arrays(cls, data: dict[str, np.ndarray], where: str = "recording") -> Recording:
-        """Build a recording from the arrays of ``recording.npz``.
+        """Build a recording from the arrays of ``recording.npz``, checked first (:mod:`~.recording_checks`).
 
         Raises:
-            AmronetError: A required array is missing or damaged, or the format is not ``amronet-recording/1``.
+            RecordingError: An array is missing, of another type or shape than the others, holds values out of
+                range (non-finite or non-positive scales, unknown codes, counts that disagree), or the meta is
+                malformed or of another format than ``amronet-recording/1``.
         """
-        damaged = f"{where} is damaged or was not written by amronet run --record"
+        meta = read_meta(data, where)
+        budget = read_budget(meta, where) if "budget" in meta else None
+        validate(data, where)
         try:
-            meta = json.loads(str(data["meta"]))
-        except KeyError:
-            raise AmronetError(f"{where}: array 'meta' is missing; record the run again") from None
-        except (ValueError, TypeError):
-            raise AmronetError(f"{damaged} (its meta is not valid JSON); record the run again") from None
-        if not isinstance(meta, dict):
-            raise AmronetError(f"{damaged} (its meta is a JSON {type(meta).__name__}, not an object); "
-                               "record the run again")
-        if meta.get("format") != FORMAT:
-            raise AmronetError(f"{where}: format {meta.get('format')!r} is not {FORMAT}; record the run again")
-        missing = [k for k in _META_KEYS if k not in meta]
-        if missing:
-            raise AmronetError(f"{damaged} (its meta lacks {missing[0]!r}); record the run again")
-        budget = _read_budget(meta, damaged) if "budget" in meta else None
-        try:
-            if not math.isfinite(float(meta["r_c"])):
-                raise ValueError("r_c")
             origin = np.asarray(data["xy_origin"], dtype=np.float64)
             quantum = float(data["xy_quantum"])
             delta = np.asarray(data["xy_delta"], dtype=np.uint16)
             cells = np.asarray(data["map_cells"], dtype=np.int8)
-            omap = OccupancyMap(meta["map"], float(data["map_resolution"]), tuple(map(float, data["map_origin"])),
-                                cells)
+            omap = OccupancyMap(str(meta["map"]), float(data["map_resolution"]),
+                                tuple(map(float, data["map_origin"])), cells)
             reachable = np.unpackbits(data["reachable"], count=cells.size).astype(bool).reshape(cells.shape)
-            rec = cls(
+            return cls(
                 meta=meta,
                 steps=np.asarray(data["steps"], dtype=np.int64),
                 t=np.asarray(data["t"], dtype=np.float64),
@@ -301,21 +285,12 @@ class Recording:
                 xy_delta=delta,
                 xy_origin=origin,
                 xy_quantum=quantum,
-                link_offsets=np.asarray(data["link_offsets"]) if "link_offsets" in data else None,
+                link_offsets=np.asarray(data["link_offsets"], dtype=np.int64) if "link_offsets" in data else None,
                 link_pairs=np.asarray(data["link_pairs"], dtype=np.int64) if "link_pairs" in data else None,
                 budget=budget,
             )
-        except KeyError as exc:
-            raise AmronetError(f"{where}: array {exc.args[0]!r} is missing; record the run again") from None
-        except (ValueError, TypeError, IndexError) as exc:
-            raise AmronetError(f"{damaged} ({type(exc).__name__} reading its arrays); record the run again") from None
-        if (rec.state.ndim != 2 or rec.xy.shape != (*rec.state.shape, 2) or rec.kind.shape != rec.state.shape[1:]
-                or rec.t.shape != rec.state.shape[:1] or rec.n.shape != rec.state.shape[:1]):
-            raise AmronetError(f"{where}: arrays have inconsistent shapes; record the run again")
-        f = rec.state.shape[0]
-        if f == 0:
-            raise AmronetError(f"{where}: holds no frame; record the run again")
-        return rec
+        except (ValueError, TypeError, IndexError) as exc:  # not expected after the checks: still one line
+            raise RecordingError(where, "file", f"{type(exc).__name__} reading its arrays") from None
 
     # -- one frame -------------------------------------------------------------------------------------------
     def frame(self, f: int) -> dict[str, np.ndarray]:
@@ -394,93 +369,13 @@ class Recording:
         return np.array(ROLE_NAMES)[fr["kind"]], np.array(STATE_NAMES)[fr["state"]]
 
 
-_BUDGET_FIELDS = tuple(f.name for f in dataclasses.fields(LinkBudget))
-
-
-def _read_budget(meta: dict[str, Any], damaged: str) -> LinkBudget:
-    """The link budget recorded in ``meta`` (with its medium and seed checked, to rebuild the medium).
-
-    Raises:
-        AmronetError: The budget, the medium's name or the seed is malformed.
-    """
-    raw = meta["budget"]
-    if not isinstance(raw, dict) or "r_c" not in raw:
-        raise AmronetError(f"{damaged} (its meta's 'budget' is not a link budget); record the run again")
-    values: dict[str, float] = {}
-    for key, value in raw.items():
-        if key not in _BUDGET_FIELDS:
-            raise AmronetError(f"{damaged} (its meta's budget has an unknown field {key!r}); record the run again")
-        try:
-            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-                raise ValueError(key)
-            values[key] = float(value)
-        except (ValueError, OverflowError):
-            raise AmronetError(f"{damaged} (its meta's budget.{key} is not a finite number); record the run "
-                               "again") from None
-    budget = LinkBudget(**values)
-    if budget.r_c <= 0 or budget.exponent <= 0 or budget.shadowing_corr_m <= 0 or min(
-            budget.wall_db, budget.shadowing_db, budget.shadowing_clip) < 0:
-        raise AmronetError(f"{damaged} (its meta's budget is out of range); record the run again")
-    if not isinstance(meta.get("medium"), str) or meta["medium"] not in MEDIA:
-        raise AmronetError(f"{damaged} (its meta's medium {meta.get('medium')!r} is not a radio model of this "
-                           f"amronet: {', '.join(sorted(MEDIA))}); record the run again")
-    seed = meta.get("seed")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise AmronetError(f"{damaged} (its meta's seed {seed!r} is not a whole number >= 0); record the run again")
-    return budget
-
-
-_DEFLATE_MAX_RATIO = 1100
-"""Deflate packs at most 1 032 bytes into one: a member claiming to expand more is forged."""
-DECODE_BYTES_PER_POSITION = 24
-"""Decoding one stored coordinate of ``xy_delta`` (uint16): its running sum (2 B), the float64 products (2 x 8 B)
-and the float32 result (4 B)."""
-
-
-def check_recording_arrays(archive: zipfile.ZipFile, where: str) -> None:
-    """Read the header (shape, type) of every array of a recording without its data, and refuse what cannot be read.
-
-    Refused: a header claiming more bytes than the file holds (or than its compressed size can expand to), or
-    arrays that need more memory than is available for reading and decoding them.
-
-    Raises:
-        AmronetError: A damaged or forged header (one line naming the array), or memory that is not there.
-    """
-    damaged = f"{where} is damaged or was not written by amronet run --record"
-    total = decode = 0
-    for info in archive.infolist():
-        name = info.filename.removesuffix(".npy")
-        try:
-            with archive.open(info) as fp:
-                version = np.lib.format.read_magic(fp)
-                read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-                shape, _, dtype = read(fp)
-                header = fp.tell()
-        except (ValueError, OSError, EOFError, zipfile.BadZipFile, NotImplementedError) as exc:
-            raise AmronetError(f"{damaged} (array {name!r}: {type(exc).__name__} reading its header); record the "
-                               "run again") from None
-        count = math.prod(shape)
-        nbytes = count * dtype.itemsize
-        stored = info.file_size - header
-        packed = info.compress_size * _DEFLATE_MAX_RATIO + 4096 if info.compress_type != zipfile.ZIP_STORED else None
-        if nbytes > stored or (packed is not None and info.file_size > packed):
-            raise AmronetError(f"{damaged} (array {name!r} claims shape {tuple(shape)} of {dtype}, "
-                               f"{limits.format_bytes(nbytes)}, in {limits.format_bytes(info.compress_size)} of file); "
-                               "record the run again")
-        total += nbytes
-        if name == "xy_delta":
-            decode += count * DECODE_BYTES_PER_POSITION
-    limits.check_memory(total + decode, "", f"reading {where} ({limits.format_bytes(total)} of arrays)",
-                        "read it on a machine with more memory, or record fewer frames (--record-every)",
-                        error=AmronetError)
-
-
 def load_recording(path: str | Path) -> Recording:
     """Load ``recording.npz``, or the one inside a run folder.
 
     Raises:
-        AmronetError: The folder or file does not exist, is not a recording, holds arrays whose headers claim more
-            than the file holds, or needs more memory than is available (:func:`check_recording_arrays`).
+        AmronetError: The folder or file does not exist, or the recording needs more memory than is available.
+        RecordingError: The file is not a recording, or is damaged or forged: one line naming the array and what is
+            wrong (:func:`~amronet.outputs.recording_checks.read_recording_arrays`, :meth:`Recording.from_arrays`).
     """
     path = Path(path)
     if path.is_dir():
@@ -489,11 +384,4 @@ def load_recording(path: str | Path) -> Recording:
             raise AmronetError(f"{folder} has no recording.npz: run it again with --record")
     elif not path.exists():
         raise AmronetError(f"{path} does not exist: give a run folder written by amronet run --record")
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            if data.zip is not None:
-                check_recording_arrays(data.zip, str(path))
-            arrays = {k: data[k] for k in data.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise AmronetError(f"{path} is not a recording ({type(exc).__name__}); run it again with --record") from None
-    return Recording.from_arrays(arrays, where=str(path))
+    return Recording.from_arrays(read_recording_arrays(path), where=str(path))

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["backfill", "decode_positions", "decode_status", "encode_positions", "encode_status", "pad"]
+__all__ = ["FORMAT", "backfill", "decode_positions", "decode_status", "encode_positions", "encode_status", "pad"]
 
+FORMAT = "amronet-recording/1"
+"""The format of ``recording.npz`` (``meta["format"]``)."""
 NO_STATUS_U8 = 255
 Q_MAX = 65535
 
