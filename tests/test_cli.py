@@ -66,6 +66,8 @@ def test_run_scenario_file_with_overrides(tmp_path, capsys):
         ("map: open-6x6\nbase_stations: [{x: -2.9, y: 0}]\n", "too close for the reference node's body"),
         ("map: nowhere.yaml\nbase_stations: [{x: 0, y: 0}]\n", "map"),
         ("map: [broken\n", "not valid YAML"),
+        ("map: open-6x6\nradio: {r_c: 1}\nbase_stations: [{x: 0, y: 0}]\nradio: {r_c: 2}\n",
+         "key 'radio' appears twice in"),  # issue #45 (5f)
     ],
 )
 def test_bad_input_one_line_exit_2_nothing_written(tmp_path, capsys, yaml_text, words):
@@ -158,3 +160,29 @@ def test_console_script_in_a_subprocess(tmp_path):
 def test_bench_refuses_bad_sizes_in_one_line(argv, option, capsys):
     code, cap = run_cli("bench", "--map", "open-6x6", "--robots", "30", "--steps", "5", *argv, capsys=capsys)
     assert code == 2 and cap.err.startswith(f"amronet: error: {option}: ") and cap.err.count("\n") == 1
+
+
+@pytest.mark.parametrize("seed", ["-1", str(2**63)])
+def test_bench_refuses_a_bad_seed_as_run_does(seed, tmp_path, capsys):
+    """Issue #45 (5a): one line, exit 2, the same validation (and words) as ``run``."""
+    code, cap = run_cli("bench", "--map", "open-6x6", "--robots", "30", "--steps", "5", "--seed", seed, capsys=capsys)
+    assert code == 2 and cap.err.count("\n") == 1 and "Traceback" not in cap.err
+    bench_err = cap.err
+    code, cap = run_cli("run", "--preset", "self-spreading-6x6", "--out", str(tmp_path / "o"), "--seed", seed,
+                        capsys=capsys)
+    assert code == 2 and cap.err == bench_err == f"amronet: error: seed: {seed} is not an integer in [0, 2**63 - 1]; " \
+                                                 "give e.g. --seed 1\n"
+
+
+@pytest.mark.parametrize(("value", "words"), [
+    ("sim.dt=1e-9", "sim.dt: sim.time_limit 300 s / sim.dt 1e-09 s = 300,000,000,000 steps would take absurdly long"),
+    ("radio.r_c=1e300", "radio.r_c: 1e+300 m is beyond the longest range amronet models"),
+    ("radio.r_c=.inf", "radio.r_c: input should be a finite number (got inf)"),
+    ("radio={r_c: 1, r_c: 2}", "radio: key 'r_c' appears twice in value '{r_c: 1, r_c: 2}'"),
+])
+def test_set_reads_the_usual_float_notations(value, words, tmp_path, capsys):
+    """Issue #45 (5b): ``1e-9`` is a number (here refused for what it is, not as "not a number")."""
+    code, cap = run_cli("run", "--preset", "self-spreading-6x6", "--out", str(tmp_path / "o"), "--set", value,
+                        capsys=capsys)
+    assert code == 2 and cap.err.count("\n") == 1 and cap.err.startswith(f"amronet: error: {words}"), cap.err
+    assert not (tmp_path / "o").exists()

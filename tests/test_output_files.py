@@ -150,3 +150,18 @@ def test_plan_and_export_refuse_a_users_folder(tmp_path, capsys):
     code, cap = run(["results", str(store), "--export", "csv", "--out", str(out)], capsys)
     assert code == 2 and "keep.me" in cap.err
     assert sorted(p.name for p in out.iterdir()) == ["keep.me"]
+
+
+def test_the_longest_name_the_file_system_takes_can_be_written(tmp_path, capsys):
+    """Issue #45 (5c): staging names are amronet's own, not the output's name with a prefix (which overflowed)."""
+    longest = os.pathconf(tmp_path, "PC_NAME_MAX")
+    out = tmp_path / ("r" * longest)
+    write_files_atomically(out, {"a.txt": b"y"})
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "a.txt"]
+    code, cap = run(["run", "--preset", "self-spreading-6x6", "--seed", "1", "--out", str(out), *FAST, "-q"], capsys)
+    assert code == 0, cap.err  # replaced: the previous content is moved aside under a short name too
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "network.json", "summary.json", "timeseries.csv"]
+    picture = tmp_path / ("m" * (longest - 4) + ".png")
+    code, cap = run(["maps", "show", "open-6x6", "--out", str(picture)], capsys)
+    assert code == 0 and picture.stat().st_size > 0, cap.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([out.name, picture.name])  # nothing staged is left

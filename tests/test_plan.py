@@ -191,3 +191,38 @@ def test_plan_bad_trajectories_are_one_line_naming_the_option(tmp_path, capsys, 
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "--trajectories" in err and what in err
     assert not (tmp_path / "p").exists()
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (["--drop", "novalue"], "--drop: expected KEY=VALUE, got 'novalue'; the last-reference rule takes no keys; the "
+                            "rules that take some: distance-junction, link-quality, radius, strip-goals (--drop-rule)"),
+    (["--drop-rule", "link-quality", "--drop", "=3"],
+     "--drop: expected KEY=VALUE, got '=3'; the link-quality rule takes: drop_margin_db, loss_margin_db, smoothing_s"),
+    (["--drop-rule", "radius", "--drop", "radius=[1"], "--drop: radius: value '[1' is not valid YAML at line 1"),
+])
+def test_plan_drop_errors_name_drop_and_its_keys(tmp_path, capsys, args, words):
+    """Issue #45 (5d): the error names --drop (not --set) and the keys the drop rule takes."""
+    code = main(["plan", "--map", "office-32x32", "--base", "1,1", "--rc", "6", "--runs", "1", "--out",
+                 str(tmp_path / "p"), *args])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and err.startswith(f"amronet: error: {words}"), err
+    assert not (tmp_path / "p").exists()
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (["--rc", "1"], "--rc: 1 m leaves the agents an 'about to lose' band (5 % of r_c) no wider than one of their "
+                    "steps (0.125 m); give --rc above 2.5 m"),
+    (["--rc", "2.5"], "--rc: 2.5 m leaves the agents an 'about to lose' band (5 % of r_c) no wider than one of "
+                      "their steps (0.125 m); give --rc above 2.5 m"),
+    (["--rc", "6", "--time-limit", "1e8"], "--time-limit: 1e+08 s is more than 10,000,000 steps of 0.25 s per run; "
+                                           "lower --time-limit"),
+])
+def test_plan_advice_names_plan_s_own_options(tmp_path, capsys, args, words):
+    """Issue #45 (5e): not loss_margin, sim.dt or --force, which plan does not have."""
+    code = main(["plan", "--map", "office-32x32", "--base", "1,1", "--runs", "1", "--out", str(tmp_path / "p"),
+                 *args])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and err.startswith(f"amronet: error: {words}"), err
+    for foreign in ("loss_margin", "sim.dt", "--force", "sim.time_limit"):
+        assert foreign not in err
+    assert not (tmp_path / "p").exists()

@@ -121,3 +121,40 @@ def test_switching_the_algorithm_drops_the_base_s_parameters_for_every_caller():
     assert same.algorithm.params == load_scenario("self-spreading-6x6").algorithm.params
     switched = load_scenario("self-spreading-6x6").with_overrides({"algorithm.name": "potential-field"})
     assert switched.algorithm.params == {}
+
+
+# -- issue #45 (5b, 5f): numbers as YAML 1.2 reads them, a key given twice refused ----------------------------------
+
+def test_set_reads_exponents_without_a_dot():
+    assert parse_override("sim.dt=1e-3") == ("sim.dt", 1e-3)
+    assert parse_override("radio.r_c=1e300") == ("radio.r_c", 1e300)
+    assert parse_override("routers.count=010") == ("routers.count", 10)
+    sc = load_scenario("self-spreading-6x6", dict([parse_override("sim.dt=5e-2"), parse_override("radio.r_c=15E-1")]))
+    assert sc.sim.dt == 0.05 and sc.radio.r_c == 1.5
+
+
+def test_set_refuses_a_mapping_with_a_key_twice():
+    with pytest.raises(ScenarioError) as info:
+        parse_override("radio={r_c: 1, r_c: 2}")
+    assert str(info.value) == ("radio: key 'r_c' appears twice in value '{r_c: 1, r_c: 2}' (line 1, columns 2 and "
+                               "10); keep one")
+
+
+def test_a_scenario_file_reads_exponents_and_refuses_a_key_twice(tmp_path):
+    good = tmp_path / "s.yaml"
+    good.write_text("map: open-6x6\nbase_stations: [{x: 0, y: 0}]\nradio: {r_c: 15e-1}\nsim: {dt: 5E-2}\n")
+    sc = load_scenario(good)
+    assert sc.radio.r_c == 1.5 and sc.sim.dt == 0.05
+    bad = tmp_path / "scenario.yaml"
+    bad.write_text("map: open-6x6\nradio: {r_c: 1.0}\nbase_stations: [{x: 0, y: 0}]\nradio: {r_c: 2.0}\n")
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(bad)
+    assert str(info.value) == (f"scenario: key 'radio' appears twice in {str(bad)!r} (lines 2 and 4); keep one")
+
+
+def test_a_scenario_file_with_inf_is_still_refused_where_a_finite_value_is_needed(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text("map: open-6x6\nbase_stations: [{x: 0, y: 0}]\nradio: {r_c: 1e999}\n")
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert str(info.value).startswith("radio.r_c: input should be a finite number")

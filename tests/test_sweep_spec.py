@@ -292,3 +292,15 @@ def test_a_store_that_is_not_a_database_is_one_line_and_untouched(tmp_path, caps
     assert "--store" in err and "not a SQLite database" in err and len(err.strip().splitlines()) == 1
     assert store.read_text() == "my notes, not a database\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results.sqlite", "s.yaml"]
+
+
+def test_a_sweep_file_reads_exponents_and_refuses_a_key_twice(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text("name: t\nbase: self-spreading-6x6\noverrides: {sim.time_limit: 3e0}\n"
+                    "grid: {radio.r_c: [8e-1, 1E0]}\nseeds: 1\n")
+    sweep = load_sweep(path)
+    assert [p.overrides["radio.r_c"] for p in sweep.points] == [0.8, 1.0]
+    path.write_text("name: t\nbase: self-spreading-6x6\ngrid: {radio.r_c: [0.8]}\nseeds: 1\ngrid: {radio.r_c: [1]}\n")
+    with pytest.raises(ScenarioError) as info:
+        load_sweep(path)
+    assert str(info.value) == f"sweep: key 'grid' appears twice in {str(path)!r} (lines 3 and 5); keep one"

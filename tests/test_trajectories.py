@@ -1,6 +1,9 @@
 """Issue #15: agents that follow the paths of a CSV file (``agents.trajectories``): parsing and following."""
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -277,3 +280,29 @@ def test_a_replayed_mission_is_the_same_with_the_compiled_step_and_the_reference
     np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
     np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
     assert a.network == b.network and compiled.rows == reference.rows
+
+
+@pytest.mark.parametrize("x", ["1e300", "-1e300", "1e19", "1.7976931348623157e308"])
+def test_a_waypoint_far_off_the_map_is_one_error_and_no_warning(tmp_path, x, recwarn):
+    """Issue #45 (5g): checked against the map's extent before any cell arithmetic (which overflowed, warning)."""
+    path = write(tmp_path, f"t,agent,x,y\n0,0,1,1\n10,0,{x},1\n")
+    with pytest.raises(ScenarioError) as info:
+        load_trajectories(path, box_map(), n_agents=1, shown="paths.csv")
+    where = f"{FIELD}: paths.csv line 3: ({float(x):g}, 1) is outside the map [0, 5] x [0, 5]"
+    assert str(info.value).startswith(where)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_a_waypoint_far_off_the_map_on_the_command_line_is_exactly_one_line(tmp_path):
+    """Issue #45 (5g): stderr is the one error line, no numpy RuntimeWarning before it (a real process: pytest would
+    capture the warnings in its own)."""
+    write(tmp_path, "t,agent,x,y\n0,0,3,2\n10,0,1e300,2\n")
+    sc = tmp_path / "sc.yaml"
+    sc.write_text("map: open-32x32\nalgorithm: {name: agent-assisted}\nradio: {r_c: 4.0}\n"
+                  "base_stations: [{x: 2, y: 2}]\nrouters: {count: 0}\n"
+                  "agents: {per_base: 1, trajectories: paths.csv}\n")
+    exe = Path(sys.executable).with_name("amronet")
+    proc = subprocess.run([str(exe), "run", str(sc), "--out", str(tmp_path / "out")], capture_output=True, text=True)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert proc.stderr.startswith(f"amronet: error: {FIELD}: paths.csv line 3: (1e+300, 2) is outside the map")
+    assert not (tmp_path / "out").exists()

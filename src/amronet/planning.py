@@ -24,6 +24,7 @@ Example:
 
 from __future__ import annotations
 
+import json
 import math
 import tempfile
 from dataclasses import dataclass, field
@@ -32,6 +33,9 @@ from typing import Any
 
 import numpy as np
 
+from amronet import limits
+from amronet.algorithms.agent_assisted import AgentAssistedParams
+from amronet.engine.robots import ROBOT_MODELS
 from amronet.errors import AmronetError, MapError, ScenarioError
 from amronet.experiments.common import agent_scenario
 from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
@@ -107,8 +111,7 @@ class Plan:
 
     def markdown(self, picture: str | None = "typical.png") -> str:
         """``plan.md``: the inputs, the three answers in one table, the distribution and the recommendation."""
-        n_b = len(self.bases)
-        d = self.distribution
+        n_b, d = len(self.bases), self.distribution
         q = f"{100 * self.confidence:g}th percentile"
         bases = ", ".join(f"({x:g}, {y:g})" for x, y in self.bases)
         lines = [f"# Deployment plan: {self.map}", "",
@@ -178,7 +181,6 @@ _OPTION_OF_FIELD = (("radio", "--radio"), ("algorithm.params.drop_rule", "--drop
 
 def _scenario(map_ref: str, bases: list[tuple[float, float]], r_c: float, agents: int, explorer: str,
               time_limit: float, dt: float, mission: dict[str, Any] | None = None) -> dict[str, Any]:
-
     sc = agent_scenario(map_ref, r_c, tuple(bases), agents, explorer, time_limit, dt=dt, **(mission or {}))
     if map_ref not in BUILTIN_MAPS:
         sc["map"] = str(Path(map_ref).resolve())
@@ -260,14 +262,18 @@ def plan(
         agents_fields.update(routers_carried=int(stock), when_empty=when_empty or "continue")
     elif when_empty is not None:
         agents_fields["when_empty"] = when_empty
-    if settle_s is not None:
-        agents_fields["drop_settle_s"] = float(settle_s)
-    if reverse_drop is not None:
-        agents_fields["reverse_drop"] = float(reverse_drop)
+    for key, value in (("drop_settle_s", settle_s), ("reverse_drop", reverse_drop)):
+        if value is not None:
+            agents_fields[key] = float(value)
     if trajectories is not None:
         agents_fields["trajectories"] = str(Path(trajectories).resolve())
     mission = {"radio": radio, "drop_rule": drop_rule, "drop": drop, "agents": agents_fields or None}
     scenario = _scenario(map_ref, bases, r_c, agents_per_base, explorer, time_limit, dt, mission)
+    step, band = ROBOT_MODELS[scenario["agents"]["robot"]].max_speed * dt, AgentAssistedParams().loss_margin
+    _check("--rc", band * r_c > step, f"{r_c:g} m leaves the agents an 'about to lose' band ({100 * band:g} % of r_c) "
+           f"no wider than one of their steps ({step:g} m); give --rc above {step / band:.3g} m")
+    _check("--time-limit", time_limit / dt <= limits.MAX_STEPS, f"{time_limit:g} s is more than "
+           f"{limits.format_count(limits.MAX_STEPS)} steps of {dt:g} s per run; lower --time-limit")
     try:
         Simulation(load_scenario(scenario), seed)  # fail fast, here, on a scenario that cannot start
     except MapError as exc:
@@ -345,8 +351,7 @@ def plan(
                 agents_per_base=agents_per_base, area_m2=area,
                 estimate_nodes=math.ceil(PLAN_ESTIMATE_DENSITY * area / r_c**2 - 1e-9), patterns=patterns,
                 runs=rows, confidence=confidence, distribution=distribution, recommended=recommended,
-                typical_seed=typical, warnings=warnings,
-                connected=connected,
+                typical_seed=typical, warnings=warnings, connected=connected,
                 settings={"explorer": explorer, "time_limit": time_limit, "dt": dt, "coverage_target": target,
                           "radio": dict(radio or {"model": "unit-disk"}), "drop_rule": drop_rule or "last-reference",
                           "stock": stock, "when_empty": agents_fields.get("when_empty", "tether"),
@@ -371,7 +376,6 @@ def typical_picture(p: Plan) -> bytes | None:
     """PNG of the typical run (re-run here from its seed; the same seed gives the same deployment)."""
     if p.typical_seed is None:
         return None
-
     result = Simulation(load_scenario(p.scenario), p.typical_seed).run()
     stored = next(r["routers_deployed"] for r in p.runs if r["seed"] == p.typical_seed)
     if result.summary["routers_deployed"] != stored:  # the same seed must give the same run
@@ -388,9 +392,6 @@ def write_plan(p: Plan, out_dir: str | Path, keep: tuple[str, ...] = ()) -> Path
         out_dir: The folder (see :func:`amronet.outputs.files.write_files_atomically`).
         keep: Files of the folder to keep (a result store that lies in it).
     """
-    import json
-
-
     picture = typical_picture(p)
     files = {"plan.json": (json.dumps(p.to_dict(), indent=2) + "\n").encode(),
              "plan.md": p.markdown("typical.png" if picture else None).encode()}

@@ -20,7 +20,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -38,6 +37,7 @@ from amronet.algorithms import ALGORITHMS
 from amronet.engine.propagation import LinkBudget, median_range
 from amronet.engine.radio import DEFAULT_WALL_DB, MEDIA
 from amronet.errors import ScenarioError
+from amronet.yaml_loading import load_yaml
 
 __all__ = [
     "AgentsSpec",
@@ -426,15 +426,11 @@ def _validate(data: Any, base_dir: str | None) -> Scenario:
 
 
 def parse_override(text: str) -> tuple[str, Any]:
-    """Parse one ``--set key=value`` item; the value is read as YAML (``1.5``, ``true``, ``[1, 2]``)."""
+    """Parse one ``--set key=value`` item; the value is YAML (``1e-3``, ``true``, ``[1, 2]``; :func:`load_yaml`)."""
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
         raise ScenarioError("--set", f"expected KEY=VALUE such as radio.r_c=1.5, got {text!r}")
-    try:
-        parsed = yaml.safe_load(value)
-    except yaml.YAMLError:
-        raise ScenarioError(key.strip(), f"value {value!r} is not valid YAML") from None
-    return key.strip(), parsed
+    return key.strip(), load_yaml(value, key.strip(), f"value {value!r}")
 
 
 def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
@@ -494,7 +490,7 @@ def list_presets() -> dict[str, str]:
     out = {}
     for entry in sorted(_preset_dir().iterdir(), key=lambda e: e.name):
         if entry.name.endswith(".yaml"):
-            data = yaml.safe_load(entry.read_text())
+            data = load_yaml(entry.read_text(), "preset", repr(entry.name))
             out[entry.name[:-5]] = str(data.get("description", ""))
     return out
 
@@ -525,24 +521,19 @@ def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dic
         path = Path(source)
         preset = _preset_dir() / f"{source}.yaml"
         if not path.suffix and preset.is_file():
-            text = preset.read_text()
+            text, shown = preset.read_text(), f"preset {str(source)!r}"
         elif path.is_file():
             try:
                 text = path.read_text()
             except (OSError, UnicodeDecodeError) as exc:
                 raise ScenarioError("scenario", f"cannot read {str(path)!r}: {exc}") from None
-            base_dir = str(path.resolve().parent)
+            base_dir, shown = str(path.resolve().parent), repr(str(path))
         else:
             raise ScenarioError(
                 "scenario", f"no file {str(source)!r} and no preset of that name; presets: "
                 + ", ".join(list_presets())
             )
-        try:
-            data = yaml.safe_load(text)
-        except yaml.YAMLError as exc:
-            line = getattr(getattr(exc, "problem_mark", None), "line", None)
-            where = f" at line {line + 1}" if line is not None else ""
-            raise ScenarioError("scenario", f"not valid YAML{where}; fix the syntax") from None
+        data = load_yaml(text, "scenario", shown)
     if overrides:
         data = apply_overrides(data if isinstance(data, dict) else {}, overrides)
     return _validate(data, base_dir)

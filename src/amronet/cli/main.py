@@ -118,6 +118,20 @@ def _cmd_compile(args: argparse.Namespace) -> int:
 
     if args.jobs < 1:
         raise AmronetError(f"--jobs: must be >= 1, got {args.jobs}")
+    if args.fresh:
+        from amronet import kernel_cache
+
+        removed = kernel_cache.clear()
+        if removed is None:
+            mine = os.environ.get("NUMBA_CACHE_DIR")
+            raise AmronetError(f"--fresh: the kernel cache is your NUMBA_CACHE_DIR ({mine}), which amronet does not "
+                               "empty; remove its .nbi and .nbc files yourself, or unset NUMBA_CACHE_DIR" if mine else
+                               "--fresh: amronet has no kernel cache folder of its own here (its cache home cannot be "
+                               "written; numba's default __pycache__ applies): nothing to empty")
+        if not args.quiet:
+            files = "file" if removed == 1 else "files"
+            print(f"emptied the kernel cache {kernel_cache.cache_folder()} ({removed} {files} removed); "
+                  "compiling afresh")
 
     def progress(label: str, seconds: float) -> None:
         if not args.quiet:
@@ -137,9 +151,11 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     from amronet.experiments.common import STORE_FILES
     from amronet.experiments.registry import FIGURES, check_options, group
     from amronet.outputs.files import check_output_folder
+    from amronet.sweeps.worker_bounds import check_workers
 
-    if args.workers is not None and args.workers < 1:
-        raise AmronetError(f"--workers: must be >= 1, got {args.workers}")
+    dask = args.scheduler is not None or args.cluster is not None
+    if not dask:  # before anything: each figure's pool checks them again, without --force
+        check_workers(args.workers, args.force)
     names = group(args.figure) or [args.figure]
     several = group(args.figure) is not None
     # the run options given on the command line (None: not given, the figure's own default applies); each
@@ -151,8 +167,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
             for name in names}
     for out in outs.values():  # before any run: a folder that holds a user's files is refused, untouched
         check_output_folder(out, keep=STORE_FILES)
-    dask = args.scheduler is not None or args.cluster is not None
-    with make_executor_from_args(args) if dask else contextlib.nullcontext() as executor:
+    shared = dask or (args.force and args.workers is not None)  # more workers than cores: one pool, forced
+    with make_executor_from_args(args) if shared else contextlib.nullcontext() as executor:
         for name, out in outs.items():
             store = Path(args.store) if args.store else out / "results.sqlite"
             report = FIGURES[name].run(out, quick=args.quick, show_progress=not args.quiet, store=store,
@@ -245,6 +261,10 @@ def _parser() -> argparse.ArgumentParser:
                                        "installation, so that a first run does not spend tens of seconds compiling)")
     c.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
                    help="worker processes (default: 2, or 1 on a one-core machine)")
+    c.add_argument("--fresh", action="store_true",
+                   help="first remove the kernels already compiled into amronet's cache folder (and its warm-up "
+                        "notes), then compile them all again; a damaged cache entry needs no --fresh: runs "
+                        "recompile it by themselves. Refused when NUMBA_CACHE_DIR (your own folder) is set")
     c.add_argument("-q", "--quiet", action="store_true", help="print only the closing line")
     c.set_defaults(func=_cmd_compile)
 

@@ -73,11 +73,31 @@ def _mission_options(args: argparse.Namespace) -> dict[str, Any]:
             radio[key] = float(option)
     drop: dict[str, Any] = {}
     for item in args.drop or []:
-        key, value = parse_override(item)
+        if "=" not in item or not item.partition("=")[0].strip():
+            raise AmronetError(f"--drop: expected KEY=VALUE, got {item!r}; {_drop_keys(args.drop_rule)}")
+        try:
+            key, value = parse_override(item)
+        except AmronetError as exc:
+            raise AmronetError(f"--drop: {exc}") from None
         drop[key] = value
     return {"radio": radio or None, "drop_rule": args.drop_rule, "drop": drop or None, "stock": args.stock,
             "when_empty": args.when_empty, "settle_s": args.settle_s, "reverse_drop": args.reverse_drop,
             "trajectories": args.trajectories}
+
+
+def _drop_keys(rule: str | None) -> str:
+    """The keys ``--drop`` takes under the drop rule ``rule`` (``None``: the default), as advice."""
+    from amronet.algorithms.drops import DROP_RULES
+
+    name = rule or "last-reference"
+    rule_cls = DROP_RULES.get(name)
+    if rule_cls is None:
+        return f"and --drop-rule {name!r} is no drop rule; choose one of: " + ", ".join(sorted(DROP_RULES))
+    keys = list(rule_cls.Params.model_fields)
+    if keys:
+        return f"the {name} rule takes: " + ", ".join(keys)
+    with_keys = [n for n in sorted(DROP_RULES) if DROP_RULES.get(n).Params.model_fields]
+    return f"the {name} rule takes no keys; the rules that take some: {', '.join(with_keys)} (--drop-rule)"
 
 
 def _store_in(store: str | None, out: str | None) -> tuple[str, ...]:

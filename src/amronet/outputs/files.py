@@ -8,9 +8,9 @@ wrote it, a folder an older amronet wrote without a manifest — makes the comma
 it, before anything is written. The current folder and the folders that contain it are refused too: they cannot
 be replaced.
 
-The new content is written into a hidden staging folder beside the output folder and renamed into place at the
-end, so an interrupted or failed command leaves either the previous output or the complete new one, never
-half-written files.
+The new content is written into a hidden staging folder beside the output folder (``.amronet-tmp-`` and random
+characters, whatever the output's name) and renamed into place at the end, so an interrupted or failed command
+leaves either the previous output or the complete new one, never half-written files.
 
 Single files (``snapshot --out pic.png``) are written to a temporary sibling and renamed over the path the user
 named, as ``cp`` or ``-o`` would.
@@ -36,6 +36,14 @@ MANIFEST = ".amronet-manifest.json"
 """The file in every folder amronet writes that lists the files it wrote there, with their SHA-256."""
 
 _SQLITE_SIDE_FILES = ("-wal", "-shm", "-journal")
+
+_STAGING = ".amronet-tmp-"
+"""Prefix of the staging folders and files (``mkdtemp`` adds 8 random characters): a short name of its own, not
+the output's, so that an output named with the longest name the file system takes (255 bytes) can be staged too;
+the output's own name is given only by the final rename."""
+
+_RETIRED = ".amronet-old-"
+"""Prefix of the folder the previous output is moved into, just before it is deleted."""
 
 
 def check_output_folder(out_dir: str | Path, keep: Iterable[str] = (), option: str = "--out") -> Path:
@@ -93,7 +101,7 @@ def write_files_atomically(out_dir: str | Path, files: Mapping[str, bytes], keep
     parent = out_dir.parent if str(out_dir.parent) else Path(".")
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=parent))
+        staging = Path(tempfile.mkdtemp(prefix=_STAGING, dir=parent))
     except OSError as exc:
         raise AmronetError(f"{option}: cannot write to {str(parent)!r}: {exc.strerror}") from None
     try:
@@ -111,7 +119,7 @@ def write_files_atomically(out_dir: str | Path, files: Mapping[str, bytes], keep
         _write_synced(staging / MANIFEST, (json.dumps(manifest, indent=1, sort_keys=True) + "\n").encode())
         old = None
         if out_dir.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=parent))
+            old = Path(tempfile.mkdtemp(prefix=_RETIRED, dir=parent))
             os.replace(out_dir, old / "previous")
         os.replace(staging, out_dir)
         if old is not None:
@@ -129,7 +137,7 @@ def write_file_atomically(path: str | Path, write: Callable[[Path], object], opt
         raise AmronetError(f"{option}: {str(path)!r} is a folder; give a file name")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.tmp-", suffix=path.suffix, dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=_STAGING, suffix=path.suffix, dir=path.parent)
         os.close(fd)
     except OSError as exc:
         raise AmronetError(f"{option}: cannot write {str(path)!r}: {exc.strerror}") from None

@@ -26,7 +26,7 @@ from amronet import __version__, limits
 from amronet.engine.robots import Role
 from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
-from amronet.sim.loop import Simulation, StepKind
+from amronet.sim.loop import Simulation, StepKind, check_seed
 from amronet.threads import threads_for
 from amronet.world.builtin import resolve_map
 from amronet.world.space import clearance
@@ -97,7 +97,9 @@ def run_bench(
         AmronetError: ``robots`` or ``steps`` below 1, ``r_c`` not a finite number > 0, more robots than the
             memory available holds, or (without ``force``) more than ``limits.MAX_ROBOT_STEPS`` robot-steps (named
             as the options of ``amronet bench``).
+        ScenarioError: ``seed`` is not an integer in ``[0, 2**63 - 1]`` (as ``amronet run`` refuses it).
     """
+    seed = check_seed(seed)
     for option, value in (("--robots", robots), ("--steps", steps)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise AmronetError(f"{option}: must be a whole number >= 1, got {value!r}")

@@ -66,14 +66,15 @@ from amronet.world.trajectories import AgentPaths
 if TYPE_CHECKING:
     from amronet.outputs.recording import Recorder
 
-__all__ = ["Loop", "Metrics", "Simulation", "StepKind", "move", "sense"]
+__all__ = ["Loop", "Metrics", "Simulation", "StepKind", "check_seed", "move", "sense"]
 
 StepKind = Literal["compiled", "reference"]
 """How a loop steps: ``compiled`` where the algorithm has a compiled step, else (and always with ``reference``) phase
 by phase."""
 
 
-def _check_seed(seed: object) -> int:
+def check_seed(seed: object) -> int:
+    """The seed as an ``int``; :class:`ScenarioError` unless it is an integer in ``[0, 2**63 - 1]``."""
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed < 2**63:
         raise ScenarioError("seed", f"{seed!r} is not an integer in [0, 2**63 - 1]; give e.g. --seed 1")
     return int(seed)
@@ -91,9 +92,8 @@ class Loop:
         step: ``compiled`` (the default): where the algorithm has one (self-spreading with its paper rules and the
             potential field, :mod:`amronet.sim.compiled_step`; agent-assisted runs under the paper's drop rule,
             :mod:`amronet.sim.compiled_agents`), sense, decide and move run as one or two compiled passes;
-            ``reference``:
-            always the phases one by one, through the controller's Python code. Both give the same result bit for
-            bit.
+            ``reference``: always the phases one by one, through the controller's Python code. Both give the same
+            result bit for bit.
 
     Raises:
         ScenarioError: A seed is invalid, the scenario cannot be set up (see the scenario's fields), or the resource
@@ -107,7 +107,7 @@ class Loop:
             raise ValueError(f"step must be 'compiled' or 'reference', got {step!r}")
         if len(seeds) == 0:
             raise ScenarioError("seeds", "a batch needs at least one seed")
-        seeds = [_check_seed(s) for s in seeds]
+        seeds = [check_seed(s) for s in seeds]
         sc = self.scenario = scenario
         self.dt = sc.sim.dt
         params = sc.algorithm_params()

@@ -15,7 +15,8 @@ A sweep is one YAML file::
     seed_start: 0
 
 Keys are the dotted paths of ``--set`` (:func:`amronet.scenario.apply_overrides`). Without ``grid`` and
-``points`` the sweep has one point, the base. Every point is validated as a whole scenario before anything
+``points`` the sweep has one point, the base. The file is read as scenario files are (:mod:`amronet.yaml_loading`:
+``1e-3`` is a number, a key given twice an error). Every point is validated as a whole scenario before anything
 runs: unknown keys (in the sweep file or in a point), empty grids, a seed count of 0, a seed outside
 ``[0, 2**63 - 1]`` (the range the result store's 64-bit integer column holds) or a bad value raise
 :class:`~amronet.errors.ScenarioError` with one line naming the field, and nothing is written.
@@ -46,7 +47,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, ValidationError, model_validator
 
 from amronet import limits
@@ -55,6 +55,7 @@ from amronet.scenario import Scenario, load_scenario, to_scenario_error
 from amronet.sim.guard import check_scenario
 from amronet.sweeps.check import check_points, owner_key
 from amronet.sweeps.identity import resolve_scenario, scenario_hash
+from amronet.yaml_loading import load_yaml
 
 __all__ = ["MAX_SEED", "MAX_SEEDS", "Point", "Sweep", "SweepSpec", "load_sweep", "sweep_from_spec"]
 
@@ -296,13 +297,10 @@ def load_sweep(source: str | Path | dict[str, Any], force: bool = False) -> Swee
     if not path.is_file():
         raise ScenarioError("sweep", f"no sweep file {str(path)!r}; give the path of a sweep YAML")
     try:
-        data = yaml.safe_load(path.read_text())
+        text = path.read_text()
     except (OSError, UnicodeDecodeError) as exc:
         raise ScenarioError("sweep", f"cannot read {str(path)!r}: {exc}") from None
-    except yaml.YAMLError as exc:
-        line = getattr(getattr(exc, "problem_mark", None), "line", None)
-        where = f" at line {line + 1}" if line is not None else ""
-        raise ScenarioError("sweep", f"{str(path)!r} is not valid YAML{where}; fix the syntax") from None
+    data = load_yaml(text, "sweep", repr(str(path)))
     if data is None:
         raise ScenarioError("sweep", f"{str(path)!r} is empty; give name, base and seeds (and grid or points)")
     return sweep_from_spec(data, base_dir=path.resolve().parent, force=force)

@@ -189,8 +189,11 @@ def _check_times(t: np.ndarray, agent: np.ndarray, lines: np.ndarray, shown: str
 
 def _check_points(xy: np.ndarray, lines: np.ndarray, shown: str, omap: OccupancyMap,
                   reachable: np.ndarray | None) -> None:
-    inside = omap.inside(xy)
-    free = omap.is_free(xy)
+    xmin, xmax, ymin, ymax = omap.extent
+    pad = omap.resolution  # points farther out are outside: the map's cell arithmetic never sees them (1e300)
+    near = ((xy[:, 0] >= xmin - pad) & (xy[:, 0] <= xmax + pad) & (xy[:, 1] >= ymin - pad) & (xy[:, 1] <= ymax + pad))
+    inside, free = np.zeros(len(xy), dtype=bool), np.zeros(len(xy), dtype=bool)
+    inside[near], free[near] = omap.inside(xy[near]), omap.is_free(xy[near])
     ok = free.copy()
     if reachable is not None:
         rows, cols = omap.world_to_cell(xy[free])
@@ -201,7 +204,6 @@ def _check_points(xy: np.ndarray, lines: np.ndarray, shown: str, omap: Occupancy
     k = bad[0]
     where = f"({xy[k, 0]:g}, {xy[k, 1]:g})"
     if not inside[k]:
-        xmin, xmax, ymin, ymax = omap.extent
         why = f"{where} is outside the map [{xmin:g}, {xmax:g}] x [{ymin:g}, {ymax:g}]"
     elif not free[k]:
         why = f"{where} is inside a wall or unknown space"
