@@ -29,7 +29,7 @@ from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import make_medium
 from amronet.engine.robots import Role
 from amronet.scenario import load_scenario
-from amronet.sim.loop import Simulation
+from amronet.sim.simulation import Simulation
 from amronet.world.builtin import resolve_map
 
 

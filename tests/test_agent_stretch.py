@@ -1,4 +1,5 @@
-"""Quiet stretches of agent-assisted runs (amronet.sim.agent_stretch) against the same runs step by step."""
+"""Quiet stretches of agent-assisted runs (amronet.algorithms.agent_assisted.stretch) against the same runs step by
+step."""
 
 import json
 
@@ -7,14 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.algorithms.agent_assisted import _pair_key
-from amronet.algorithms.triangular import select_triangles
+from amronet.algorithms.agent_assisted.controller import _pair_key
+from amronet.algorithms.agent_assisted.stretch import QuietStretch
+from amronet.algorithms.agent_assisted.stretch_kernels import TRIANGLES_LOCAL, TRIANGLES_NONE, _triangle_goes
+from amronet.algorithms.common.triangular import select_triangles
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.radio import NeighbourTable
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
-from amronet.sim.agent_stretch import QuietStretch
-from amronet.sim.stretch_kernels import TRIANGLES_LOCAL, TRIANGLES_NONE, _triangle_goes
 
 FRONTIER = {"algorithm.params.explorer": "frontier"}
 CASES = {
@@ -55,24 +56,24 @@ def test_stretches_give_the_step_by_step_run_bit_for_bit(name):
     preset, seed, overrides = CASES[name]
     sc = load_scenario(preset, overrides)
     fast, slow = Simulation(sc, seed), Simulation(sc, seed)
-    assert isinstance(fast.compiled.stretch, QuietStretch)
-    slow.compiled.stretch = None
+    assert isinstance(fast.compiled.quiet, QuietStretch)
+    slow.compiled.quiet = None
     a, b = fast.run(), slow.run()
     for key, value in _books(slow).items():
         np.testing.assert_array_equal(_books(fast)[key], value, err_msg=key)
     assert fast.rows == slow.rows
     assert _summary(a) == _summary(b)
-    ends = fast.compiled.stretch.ends
+    ends = fast.compiled.quiet.ends
     assert sum(ends.values()) > 0  # stretches ran
     if name == "office, r_c 4 m":  # whole stretches, and stretches that stopped where an agent acted
         assert ends["quiet"] > 0 and ends["acts"] > 0
     if name.startswith("hospital"):  # here the agents soon run out of plans: stretches stop where one walks at random
         assert ends["idle"] > 0
     if name.startswith("four bases"):  # steps where an agent heard another network and the local rule said no
-        assert fast.compiled.stretch.triangles_looked_at > 0
+        assert fast.compiled.quiet.triangles_looked_at > 0
         assert fast.controller.triangles_released  # and triangles that went ahead, in Python
         # triangle routers driving to their goals in stretches, and stretches that stopped where one arrived
-        assert fast.compiled.stretch.triangle_steps > 0 and ends["triangle"] > 0
+        assert fast.compiled.quiet.triangle_steps > 0 and ends["triangle"] > 0
 
 
 @settings(max_examples=200, deadline=None)
@@ -109,7 +110,7 @@ def test_steps_stepped_one_by_one_take_no_stretch():
     sim = Simulation(load_scenario("agent-assisted-office", {**FRONTIER, "sim.time_limit": 30}), 1)
     for _ in range(20):
         sim.step()
-    assert sum(sim.compiled.stretch.ends.values()) == 0
+    assert sum(sim.compiled.quiet.ends.values()) == 0
 
 
 @pytest.mark.parametrize("overrides", [
@@ -118,7 +119,7 @@ def test_steps_stepped_one_by_one_take_no_stretch():
 ])
 def test_runs_it_cannot_take_in_stretches_have_none(overrides):
     sim = Simulation(load_scenario("agent-assisted-office", overrides), 1)
-    assert sim.compiled is not None and sim.compiled.stretch is None
+    assert sim.compiled is not None and sim.compiled.quiet is None
 
 
 def test_a_recorded_run_is_stepped_one_by_one_to_the_same_end():
@@ -128,6 +129,6 @@ def test_a_recorded_run_is_stepped_one_by_one_to_the_same_end():
     recorded, plain = Simulation(sc, 1), Simulation(sc, 1)
     recorded.run(recorder=Recorder(every=10))
     plain.run()
-    assert sum(recorded.compiled.stretch.ends.values()) == 0 and sum(plain.compiled.stretch.ends.values()) > 0
+    assert sum(recorded.compiled.quiet.ends.values()) == 0 and sum(plain.compiled.quiet.ends.values()) > 0
     for key, value in _books(plain).items():
         np.testing.assert_array_equal(_books(recorded)[key], value, err_msg=key)

@@ -1,15 +1,17 @@
-"""The compiled steps (amronet.sim.compiled_step) against the reference phases, bit for bit."""
+"""The compiled steps (amronet.algorithms.self_spreading.fast) against the reference phases, bit for bit."""
 
 import numpy as np
 import pytest
 
-from amronet.algorithms.agent_assisted import AgentAssisted
-from amronet.algorithms.self_spreading import SelfSpreading
+from amronet.algorithms.agent_assisted.controller import AgentAssisted
+from amronet.algorithms.agent_assisted.fast import CompiledAgents
+from amronet.algorithms.potential_field.fast import CompiledField
+from amronet.algorithms.self_spreading import fast as compiled_step
+from amronet.algorithms.self_spreading.controller import SelfSpreading
+from amronet.algorithms.self_spreading.fast import CompiledSpreading
 from amronet.engine.robots import State
 from amronet.scenario import load_scenario
-from amronet.sim import BatchSimulation, Simulation, compiled_step
-from amronet.sim.compiled_agents import CompiledAgents
-from amronet.sim.compiled_step import CompiledField, CompiledSpreading
+from amronet.sim import BatchSimulation, Simulation
 
 CASES = {
     "open 6x6": ("self-spreading-6x6", 3, {"sim.time_limit": 40}),
@@ -155,7 +157,7 @@ def test_batched_runs_are_the_same_with_either_step(preset, overrides):
 def test_rules_it_does_not_compile_take_the_reference_path(overrides):
     sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 5, **overrides}), 1)
     assert sim.compiled is None and "sense" in sim.phase_seconds
-    assert not CompiledSpreading.applies(sim)
+    assert not CompiledSpreading.applies(sim.controller, sim.step_context())
 
 
 def test_each_algorithm_gets_its_compiled_step_or_none():

@@ -8,9 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import amronet
-from amronet.algorithms.drops import DROP_RULES, AgentView, DropContext, validate_drop_params
-from amronet.algorithms.drops.junction import PathTurns, count_openings
-from amronet.algorithms.drops.trail import Trails
+from amronet.algorithms.agent_assisted.drops import DROP_RULES, AgentView, DropContext, validate_drop_params
+from amronet.algorithms.agent_assisted.drops.junction import PathTurns, count_openings
+from amronet.algorithms.agent_assisted.drops.trail import Trails
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import make_medium
 from amronet.engine.robots import State

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import amronet
-import amronet.algorithms.explorers as explorers_pkg
-from amronet.algorithms.explorers import EXPLORERS, Explorer, FrontierExplorer, RandomExplorer
-from amronet.algorithms.explorers.random_walk import RandomEscapeExplorer, open_directions
+import amronet.algorithms.agent_assisted.explorers as explorers_pkg
+from amronet.algorithms.agent_assisted.explorers import EXPLORERS, Explorer, FrontierExplorer, RandomExplorer
+from amronet.algorithms.agent_assisted.explorers.random_walk import RandomEscapeExplorer, open_directions
 from amronet.engine.robots import Role
 from amronet.errors import ScenarioError
 from amronet.registry import Registry
@@ -49,10 +49,12 @@ def test_the_random_explorer_turns_after_a_refused_move():
     assert heading[0] == 0.0 and heading[1] != 0.0
 
 
-@pytest.mark.parametrize("module", ["amronet.algorithms.explorers.frontier.explorer",
-                                    "amronet.algorithms.explorers.random_walk", "amronet.algorithms.agent_assisted"])
+@pytest.mark.parametrize("module", ["amronet.algorithms.agent_assisted.explorers.frontier.explorer",
+                                    "amronet.algorithms.agent_assisted.explorers.random_walk",
+                                    "amronet.algorithms.agent_assisted.controller"])
 def test_any_module_imports_first_and_registers_every_explorer(module):
-    code = f"import {module}; from amronet.algorithms.explorers import EXPLORERS; print(sorted(EXPLORERS))"
+    code = (f"import {module}; from amronet.algorithms.agent_assisted.explorers import EXPLORERS; "
+            "print(sorted(EXPLORERS))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "['frontier', 'random', 'random-escape', 'wall-follow']"
 
@@ -164,7 +166,7 @@ def test_the_escaping_random_walk_is_reproducible_and_draws_from_the_runs_genera
 
 
 def test_random_escape_keeps_an_agents_memory_when_the_agents_steered_change():
-    from amronet.algorithms.explorers.random_walk import RandomEscapeExplorer
+    from amronet.algorithms.agent_assisted.explorers.random_walk import RandomEscapeExplorer
 
     ex = RandomEscapeExplorer(0.5, 0.6, 0.1, 4.0, (0.0, 10.0, 0.0, 10.0))
     rng = np.random.default_rng(0)

@@ -5,9 +5,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.algorithms.dssa import DSSA
-from amronet.algorithms.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
-from amronet.algorithms.potential_field import PotentialField
+from amronet.algorithms.common.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
+from amronet.algorithms.dssa.controller import DSSA
+from amronet.algorithms.potential_field.controller import PotentialField
 from amronet.engine.radio import UnitDisk
 from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
@@ -204,7 +204,7 @@ def test_same_seed_same_run(algorithm):
 @settings(max_examples=30, deadline=None)
 @given(st.integers(2, 25), st.integers(0, 2), st.integers(0, 2**31 - 1))
 def test_compiled_constrained_coverage_matches_the_link_formula(n, k_conn, seed):
-    from amronet.algorithms.forces import constrained_coverage_forces
+    from amronet.algorithms.common.forces import constrained_coverage_forces
 
     rng = np.random.default_rng(seed)
     xy = rng.uniform(0, 1.5, size=(n, 2))
@@ -225,7 +225,7 @@ def test_compiled_constrained_coverage_matches_the_link_formula(n, k_conn, seed)
 @settings(max_examples=30, deadline=None)
 @given(st.integers(1, 8), st.integers(0, 2**31 - 1))
 def test_compiled_obstacle_forces_match_the_hits(m, seed):
-    from amronet.algorithms.forces import inverse_square_obstacle_forces
+    from amronet.algorithms.common.forces import inverse_square_obstacle_forces
 
     rng = np.random.default_rng(seed)
     scans = np.where(rng.random((m, 12)) < 0.4, rng.uniform(0.0, 0.14, (m, 12)), 0.14)
@@ -240,7 +240,7 @@ def test_compiled_obstacle_forces_match_the_hits(m, seed):
 
 def _reference_decide(ctl: PotentialField, table):
     """The potential field's decide as plain vector formulas (the laws of the module docstring): movers, velocity."""
-    from amronet.algorithms.forces import constrained_coverage_forces
+    from amronet.algorithms.common.forces import constrained_coverage_forces
 
     sw, p = ctl.swarm, ctl.params
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import amronet
-from amronet.algorithms.explorers import EXPLORERS
-from amronet.algorithms.explorers.frontier import (
+from amronet.algorithms.agent_assisted.explorers import EXPLORERS
+from amronet.algorithms.agent_assisted.explorers.frontier import (
     FRONTIER,
     HIT_GAIN,
     REPLAN_REASONS,
@@ -16,8 +16,12 @@ from amronet.algorithms.explorers.frontier import (
     KnowledgeGrid,
     gap_to_uncovered,
 )
-from amronet.algorithms.explorers.frontier.knowledge import clearance_offsets, paint_covered, update_passable
-from amronet.algorithms.explorers.frontier.planning import (
+from amronet.algorithms.agent_assisted.explorers.frontier.knowledge import (
+    clearance_offsets,
+    paint_covered,
+    update_passable,
+)
+from amronet.algorithms.agent_assisted.explorers.frontier.planning import (
     kind_at,
     search_buffers,
     search_target,

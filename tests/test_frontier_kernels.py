@@ -6,21 +6,27 @@ import inspect
 import numpy as np
 import pytest
 
-from amronet.algorithms.explorers.frontier import KnowledgeGrid, gap_to_uncovered, navigation
-from amronet.algorithms.explorers.frontier.knowledge import (
+from amronet.algorithms.agent_assisted.explorers.frontier import KnowledgeGrid, gap_to_uncovered, navigation
+from amronet.algorithms.agent_assisted.explorers.frontier.knowledge import (
     clearance_offsets,
     paint_covered,
     paint_nodes,
     passable,
     update_passable,
 )
-from amronet.algorithms.explorers.frontier.planning import (
+from amronet.algorithms.agent_assisted.explorers.frontier.planning import (
     search_buffers,
     search_target,
     update_window_counts,
     window_buffers,
 )
-from amronet.algorithms.explorers.frontier.state import AgentPlans, MapLayers, NavBuffers, NavSettings, StepInputs
+from amronet.algorithms.agent_assisted.explorers.frontier.state import (
+    AgentPlans,
+    MapLayers,
+    NavBuffers,
+    NavSettings,
+    StepInputs,
+)
 
 RES = 0.25
 

@@ -67,7 +67,7 @@ def test_random_walk_reproducible_and_bounces_when_blocked():
 
 
 def test_goal_steering_heads_for_goal_keeps_anchors_and_gives_up():
-    from amronet.algorithms.goto import GoalSteering
+    from amronet.algorithms.common.goto import GoalSteering
 
     xy = np.array([[0.0, 0.0], [0.0, 0.9], [5.0, 5.0]])
     heading = np.zeros(3)

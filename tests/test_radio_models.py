@@ -17,7 +17,7 @@ from amronet.engine.radio import LogDistance, MultiWall, UnitDisk, make_medium
 from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
 from amronet.scenario import load_scenario
-from amronet.sim.loop import Simulation
+from amronet.sim.simulation import Simulation
 from amronet.world.builtin import resolve_map
 from amronet.world.occupancy import FREE, OCCUPIED, OccupancyMap
 

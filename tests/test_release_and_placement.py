@@ -20,7 +20,7 @@ from amronet import load_scenario
 from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
 from amronet.sim.assemble import build_swarm, build_world
-from amronet.sim.loop import Simulation
+from amronet.sim.simulation import Simulation
 from amronet.world.space import clearance
 
 PILING = {"map": "depot", "algorithm.params.triangular": "none", "algorithm.params.explorer": "frontier",

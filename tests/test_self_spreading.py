@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amronet.algorithms.triangular import select_triangles, triangle_goal
+from amronet.algorithms.common.triangular import select_triangles, triangle_goal
 from amronet.engine.network import connected_to
 from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError

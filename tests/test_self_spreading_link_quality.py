@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amronet.algorithms.base import Readings, StepInput
-from amronet.algorithms.link_quality import MarginSearch, MarginSmoother, anchor_margins, strongest_references
+from amronet.algorithms.common.link_quality import MarginSearch, MarginSmoother, anchor_margins, strongest_references
 from amronet.engine.network import connected_to
 from amronet.engine.robots import Role, State
 from amronet.engine.table import NeighbourTable

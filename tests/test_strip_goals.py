@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import amronet
-from amronet.algorithms.drops import DROP_RULES, DropContext, validate_drop_params
-from amronet.algorithms.drops.strip_goals import ROW_GAP, strip_goal_points
+from amronet.algorithms.agent_assisted.drops import DROP_RULES, DropContext, validate_drop_params
+from amronet.algorithms.agent_assisted.drops.strip_goals import ROW_GAP, strip_goal_points
 from amronet.engine.network import connected_to
 from amronet.engine.robots import State
 from amronet.errors import ScenarioError

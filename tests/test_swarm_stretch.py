@@ -1,11 +1,12 @@
-"""Stretches of self-spreading and potential-field loops (amronet.sim.swarm_stretch) against step-by-step runs."""
+"""Stretches of self-spreading and potential-field loops (amronet.algorithms.common.swarm_stretch) against step-by-step
+runs."""
 
 import numpy as np
 import pytest
 
+from amronet.algorithms.common.swarm_stretch import SwarmStretch
 from amronet.scenario import load_scenario
 from amronet.sim import BatchSimulation, Simulation
-from amronet.sim.swarm_stretch import SwarmStretch
 
 CASES = {
     # runs that settle at different times and leave the batch (each stretch stops after a run settles)
@@ -27,7 +28,7 @@ CASES = {
 def _run(preset, seeds, overrides, stretch):
     sim = BatchSimulation(load_scenario(preset, overrides), seeds)
     if not stretch:
-        sim.compiled.stretch = None
+        sim.compiled.stretches = False
     return sim, sim.run()
 
 
@@ -36,7 +37,7 @@ def test_a_batch_in_stretches_is_the_batch_step_by_step(name):
     preset, seeds, overrides = CASES[name]
     fast, fast_results = _run(preset, seeds, overrides, True)
     slow, slow_results = _run(preset, seeds, overrides, False)
-    stretch = fast.compiled.stretch
+    stretch = fast.compiled.stretcher
     assert isinstance(stretch, SwarmStretch) and stretch.steps > fast.steps // 2
     for field in ("xy", "heading", "state", "status", "distance"):
         np.testing.assert_array_equal(getattr(fast.swarm, field), getattr(slow.swarm, field))
@@ -51,23 +52,23 @@ def test_a_batch_in_stretches_is_the_batch_step_by_step(name):
 
 def test_stretches_end_where_runs_settle_and_before_triangles():
     settle, _ = _run(*CASES["self-spreading, runs settle"], True)
-    assert settle.compiled.stretch.ends["settling"] > 0
+    assert settle.compiled.stretcher.ends["settling"] > 0
     assert sum(r.stop_reason == "settled" for r in settle.runs) > 1
     triangles, _ = _run(*CASES["self-spreading, two bases, no optimization"], True)
-    assert triangles.compiled.stretch.ends["candidates"] > 0
+    assert triangles.compiled.stretcher.ends["candidates"] > 0
     woken, _ = _run(*CASES["potential field, settled runs go on"], True)
-    assert woken.compiled.stretch.ends["settling"] > 0 and woken.controller.wakeups.sum() > 0
+    assert woken.compiled.stretcher.ends["settling"] > 0 and woken.controller.wakeups.sum() > 0
 
 
 def test_a_single_run_takes_stretches_too():
     sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 60}), 3)
     sim.run()
-    assert sim.compiled.stretch is not None and sim.compiled.stretch.steps > 0
+    assert sim.compiled.stretcher is not None and sim.compiled.stretcher.steps > 0
 
 
 def test_no_stretch_where_the_table_does_not_hold_every_pair():
     sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 5, "radio.model": "log-distance"}), 3)
-    assert sim.compiled is not None and sim.compiled.stretch is None
+    assert sim.compiled is not None and sim.compiled.stretcher is None
 
 
 def test_without_compiled_draws_the_walkers_draw_through_numpy_and_take_no_stretch(monkeypatch):
@@ -78,7 +79,7 @@ def test_without_compiled_draws_the_walkers_draw_through_numpy_and_take_no_stret
     usual = Simulation(sc, 5)
     monkeypatch.setattr(bitgen, "AVAILABLE", False)
     plain = Simulation(sc, 5)
-    assert plain.compiled.streams is None and plain.compiled.stretch is None
+    assert plain.compiled.streams is None and plain.compiled.stretcher is None
     assert usual.compiled.streams is not None
     a, b = usual.run(), plain.run()
     np.testing.assert_array_equal(usual.swarm.xy, plain.swarm.xy)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from amronet.algorithms.explorers import PathFollower, RandomExplorer
+from amronet.algorithms.agent_assisted.explorers import PathFollower, RandomExplorer
 from amronet.cli import main
 from amronet.engine.network import agents_connected, connected_to
 from amronet.engine.robots import Role

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import amronet
-from amronet.algorithms.walks import Walker
+from amronet.algorithms.self_spreading.walks import Walker
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.network import connected_to
 from amronet.engine.robots import State

@@ -8,14 +8,15 @@ from pathlib import Path
 import pytest
 
 import amronet.sim.warmup as warmup
-from amronet.algorithms.base import ALGORITHMS
-from amronet.algorithms.drops.base import DROP_RULES
-from amronet.algorithms.explorers.base import EXPLORERS
-from amronet.algorithms.walks import WALKS
+from amronet.algorithms.agent_assisted.drops.base import DROP_RULES
+from amronet.algorithms.agent_assisted.explorers.base import EXPLORERS
+from amronet.algorithms.base import ALGORITHMS, Controller
+from amronet.algorithms.self_spreading.walks import WALKS
 from amronet.cli.main import main
 from amronet.engine.radio import MEDIA
-from amronet.scenario import list_presets
-from amronet.sim.warmup import BASE_PRESETS, warmup_cases
+from amronet.scenario import list_presets, load_scenario
+from amronet.sim import Simulation
+from amronet.sim.warmup import warmup_cases
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,12 +75,38 @@ print(json.dumps({"compiled": sorted(set(compiled)), "literal": literal}))
 
 
 def test_cases_cover_every_registered_name():
-    assert set(BASE_PRESETS) == set(ALGORITHMS)
-    assert set(BASE_PRESETS.values()) <= set(list_presets())
-    labels = {case.label for case in warmup_cases()}
+    cases = warmup_cases()
+    assert {case.preset for case in cases} <= set(list_presets())
+    for name, controller in ALGORITHMS.items():  # every algorithm's own runs, its defaults' run first
+        assert controller.warm_ups()[0].label == f"algorithm {name}"
+    labels = {case.label for case in cases}
+    assert len(labels) == len(cases)
     for kind, names in (("explorer", EXPLORERS), ("drop rule", DROP_RULES), ("walk", WALKS), ("radio", MEDIA),
                         ("algorithm", ALGORITHMS)):
         assert {f"{kind} {name}" for name in names} <= labels
+
+
+@pytest.mark.parametrize("name", sorted(ALGORITHMS))
+def test_an_algorithm_with_a_fast_step_warms_it_up(name):
+    """A registered algorithm that offers a fast step has a warm-up run that takes it (else its kernels compile in
+    the user's first run)."""
+    controller = ALGORITHMS[name]
+    if controller.fast_step is Controller.fast_step:
+        return
+    fast = []
+    for case in controller.warm_ups():
+        sim = Simulation(load_scenario(case.preset, {"sim.time_limit": 1.0, **case.overrides}), case.seeds[0],
+                         step=case.step)
+        fast.append(sim.compiled is not None)
+    assert any(fast), f"{name} offers a fast step but none of its warm-up runs takes it"
+
+
+def test_a_fast_step_missing_from_the_warm_up_is_found(monkeypatch):
+    controller = ALGORITHMS["potential-field"]
+    monkeypatch.setattr(controller, "warm_ups", classmethod(lambda cls: [
+        warmup.WarmUp("algorithm potential-field", "potential-field-6x6", {"faults": [{"at": 1.0, "routers": 0.5}]})]))
+    with pytest.raises(AssertionError, match="offers a fast step"):
+        test_an_algorithm_with_a_fast_step_warms_it_up("potential-field")
 
 
 def test_after_the_warm_up_runs_compile_nothing():

@@ -65,7 +65,7 @@ from amronet.engine.radio import MEDIA
 from amronet.engine.robots import Role
 from amronet.errors import ScenarioError
 from amronet.scenario import load_scenario
-from amronet.sim.loop import Simulation
+from amronet.sim.simulation import Simulation
 from amronet.world.builtin import BUILTIN_MAPS, load_builtin_map
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance

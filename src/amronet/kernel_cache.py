@@ -161,7 +161,7 @@ def configure() -> Path | None:
     global _folder
     from amronet.kernel_cache_repair import install
 
-    install()
+    install(lambda: _folder)
     _folder = None
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None

@@ -36,6 +36,14 @@ from typing import Any
 __all__ = ["install", "notice"]
 
 _installed = False
+
+
+def _no_folder() -> Path | None:
+    return None
+
+
+_managed_folder: Callable[[], Path | None] = _no_folder
+"""The folder amronet manages now (given by :func:`install`), or ``None``."""
 _notice: str | None = None
 """The line printed for the first damaged entry this process met (``None``: none met yet)."""
 
@@ -51,9 +59,7 @@ def _managed(path: Path) -> Path | None:
     Only a regular ``.nbi`` or ``.nbc`` file (not a symbolic link) whose real path lies in the folder
     :func:`amronet.kernel_cache.configure` pointed numba at counts.
     """
-    from amronet import kernel_cache
-
-    folder = kernel_cache._folder
+    folder = _managed_folder()
     if folder is None or path.suffix not in (".nbi", ".nbc") or path.is_symlink() or not path.is_file():
         return None
     try:
@@ -129,9 +135,15 @@ def _wrap_load_overload(original: Callable[[Any, Any, Any], Any]) -> Callable[[A
     return load_overload
 
 
-def install() -> None:
-    """Make numba treat a cache entry that cannot be loaded as a miss (see the module's docstring); idempotent."""
-    global _installed
+def install(managed_folder: Callable[[], Path | None]) -> None:
+    """Make numba treat a cache entry that cannot be loaded as a miss (see the module's docstring); idempotent.
+
+    Args:
+        managed_folder: The cache folder amronet manages at the time of a load (``None``: none; files are then
+            never removed), :func:`amronet.kernel_cache.configure`'s.
+    """
+    global _installed, _managed_folder
+    _managed_folder = managed_folder
     if _installed:
         return
     from numba.core import caching

@@ -195,7 +195,7 @@ class AgentsSpec(_Strict):
     path is taken from the scenario file's folder (the working folder for a preset or a mapping) and recorded as an
     absolute one (:meth:`Scenario.to_dict`). The file must exist when the scenario is loaded; it is read and
     checked against the map when the run is set up (:mod:`amronet.world.trajectories`), following in
-    :mod:`amronet.algorithms.explorers.trajectory`. ``null``: the agents explore."""
+    :mod:`amronet.algorithms.agent_assisted.explorers.trajectory`. ``null``: the agents explore."""
 
 
 class SimSpec(_Strict):

@@ -5,7 +5,8 @@ and a sweep already keeps every core busy with one run per worker process. A run
 is different: its neighbour search and the sensing, deciding and obstacle checks of its self-spreading step take
 tens of milliseconds, spent row by row and robot by robot on independent data. Those have threaded twins
 (``prange`` over rows or robots: :func:`amronet.engine.neighbours.neighbour_csr_checked`,
-:class:`amronet.sim.compiled_step.CompiledSpreading`) that give the same numbers bit for bit; a caller picks one
+:class:`amronet.algorithms.self_spreading.fast.CompiledSpreading`) that give the same numbers bit for bit; a caller
+picks one
 with :func:`use_threads`, which says yes only when
 
 * the call handles at least :data:`MIN_ITEMS` points or robots,

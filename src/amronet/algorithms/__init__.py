@@ -1,4 +1,4 @@
-"""Deployment algorithms, one module each, registered by name in :data:`ALGORITHMS`."""
+"""Deployment algorithms, one package each, registered by name in :data:`ALGORITHMS`."""
 
 from amronet.algorithms import (  # noqa: F401  (register themselves)
     agent_assisted,

@@ -9,74 +9,39 @@ medium's neighbour table (who hears whom, how far). A robot's decision reads its
 it hears; nothing else of the world reaches a controller: not the map, not the scenario, not the loop. Metrics and
 stop conditions live in :mod:`amronet.sim`, not here. What the loop needs to know of an algorithm it asks through
 the declared interface below (:meth:`Controller.start_range`, :attr:`Controller.default_coverage_target`,
-:meth:`Controller.unsettled`, :attr:`Controller.follows_paths`).
+:meth:`Controller.unsettled`, :attr:`Controller.follows_paths`, :meth:`Controller.fast_step`).
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel
 
-from amronet.engine.radio import NeighbourTable
+from amronet.algorithms.stepping import Command, Readings, StepInput
 from amronet.engine.robots import RobotModel, Swarm
 from amronet.registry import Registry
 
 if TYPE_CHECKING:
+    from amronet.algorithms.stepping import FastStep, StepContext
     from amronet.engine.streams import RunStreams
     from amronet.world.trajectories import AgentPaths
 
-__all__ = ["ALGORITHMS", "AreaKnowledge", "Command", "Controller", "Readings", "RouterStock", "Setup", "StepInput"]
-
-
-@dataclass(frozen=True)
-class Readings:
-    """Range readings of the robots that were sensed this step, grouped by robot model.
-
-    Attributes:
-        groups: ``model index → (robot indices (M,), ranges (M, n_beams))``.
-    """
-
-    groups: dict[int, tuple[np.ndarray, np.ndarray]]
-
-    def of(self, robots: np.ndarray, model: int) -> np.ndarray:
-        """Readings of the given robots, all of robot model ``model`` and all sensed this step."""
-        who, scans = self.groups[model]
-        if len(who) == len(robots) and (who == robots).all():
-            return scans
-        slot = np.searchsorted(who, robots)
-        return scans[slot]
-
-
-@dataclass(frozen=True)
-class StepInput:
-    """Everything a controller may use in one step.
-
-    Attributes:
-        index: Step number, starting at 0.
-        t: Simulated time at the start of the step, seconds.
-        dt: Step length, seconds.
-        table: The radio medium's neighbour table for the current positions.
-        readings: This step's range readings of the mobile robots.
-    """
-
-    index: int
-    t: float
-    dt: float
-    table: NeighbourTable
-    readings: Readings
-
-
-@dataclass(frozen=True)
-class Command:
-    """The motion a controller asks for: robots ``movers`` drive at ``speed`` along their (updated) headings."""
-
-    movers: np.ndarray
-    speed: np.ndarray
+__all__ = [
+    "ALGORITHMS",
+    "AreaKnowledge",
+    "Command",
+    "Controller",
+    "Readings",
+    "RouterStock",
+    "Setup",
+    "StepInput",
+    "WarmUp",
+]
 
 
 @dataclass(frozen=True)
@@ -141,6 +106,32 @@ class Setup:
     paths: AgentPaths | None = None
 
 
+@dataclass(frozen=True)
+class WarmUp:
+    """A short run that compiles kernels this algorithm's runs use, ahead of a first run (:mod:`amronet.sim.warmup`).
+
+    Attributes:
+        label: What the run warms up, for the report (``algorithm NAME`` for the algorithm with its defaults).
+        preset: The built-in scenario.
+        overrides: Dotted-path fields to replace.
+        seeds: One seed: a single run; several: one batch of them (the batched kernels).
+        seconds: Simulated seconds.
+        threaded: Run the kernels that large runs run on several threads (:mod:`amronet.threads`).
+        step: The loop's step (``reference``: phase by phase, as the runs a fast step does not cover).
+        first: One of the runs that compile the longest chains of kernels (tens of seconds): with several jobs they
+            start first, so that the other jobs compile the rest meanwhile.
+    """
+
+    label: str
+    preset: str
+    overrides: dict[str, Any] = field(default_factory=dict)
+    seeds: tuple[int, ...] = (1,)
+    seconds: float = 3.0
+    threaded: bool = False
+    step: Literal["compiled", "reference"] = "compiled"
+    first: bool = False
+
+
 class Controller(ABC):
     """Base class of deployment algorithms.
 
@@ -177,6 +168,14 @@ class Controller(ABC):
         """How far from its base node a robot may start, so that it hears the base (default ``0.95 r_c``)."""
         return (1.0 - 0.05) * r_c
 
+    @classmethod
+    def warm_ups(cls) -> list[WarmUp]:
+        """The short runs that compile this algorithm's kernels (its rules, its fast step), the defaults' run first.
+
+        A test checks that every registered algorithm has them and that an algorithm with a fast step reaches it.
+        """
+        return []
+
     @abstractmethod
     def decide(self, step: StepInput) -> Command:
         """Update states and headings from local information and say who moves how fast."""
@@ -188,6 +187,15 @@ class Controller(ABC):
         Sensing has no randomness, so skipping it changes nothing but the time a step takes.
         """
         return True
+
+    def fast_step(self, context: StepContext) -> FastStep | None:
+        """This controller's fast step in the loop ``context`` describes (:mod:`amronet.algorithms.stepping`).
+
+        A fast step does the sense, decide and move phases of this controller in compiled passes, bit for bit what
+        the phases one by one give. ``None`` (the default, and wherever the algorithm's fast step does not cover the
+        loop's rules): the loop runs the phases one by one through :meth:`decide`.
+        """
+        return None
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: B027 - optional hook
         """Learn which of the requested moves the world refused (default: ignore)."""

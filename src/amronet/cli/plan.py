@@ -87,7 +87,7 @@ def _mission_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _drop_keys(rule: str | None) -> str:
     """The keys ``--drop`` takes under the drop rule ``rule`` (``None``: the default), as advice."""
-    from amronet.algorithms.drops import DROP_RULES
+    from amronet.algorithms.agent_assisted.drops import DROP_RULES
 
     name = rule or "last-reference"
     rule_cls = DROP_RULES.get(name)

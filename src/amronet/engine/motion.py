@@ -5,7 +5,7 @@ Behaviours turn sensor readings into headings:
 
 * :func:`random_walk`: keep going, with a little heading noise; when a beam sees something close, turn away
   from it (Braitenberg-style avoidance); after a blocked move, pick a new random heading.
-* go-to-goal (:mod:`amronet.algorithms.goto`): head for the goal, and blend in the same avoidance when
+* go-to-goal (:mod:`amronet.algorithms.common.goto`): head for the goal, and blend in the same avoidance when
   something is close.
 
 :func:`integrate` moves robots along their headings and checks every move along its whole path: a move is

@@ -1,7 +1,8 @@
 """``amronet reproduce buildings``: which drop rule keeps agents connected in a real building, and at what cost.
 
 Agent-assisted deployment with 3 agents from one base station on five floor plans (``office-32x32`` and four real
-maps), for every drop rule (:mod:`amronet.algorithms.drops`) × radio (the paper's unit disk, and ``multi-wall`` with
+maps), for every drop rule (:mod:`amronet.algorithms.agent_assisted.drops`) × radio (the paper's unit disk, and
+``multi-wall`` with
 4 dB of correlated shadowing) × stock per agent (unlimited, 12, 6; an agent whose stock runs out goes on and may be
 cut off, ``agents.when_empty: continue``, so that the cost of a short stock shows as outages). Each run stops at 99 %
 coverage or after ``time_limit`` (default 600 s). Per cell: the relays used and the fraction of time the agents were
@@ -71,7 +72,7 @@ STOCKS: tuple[int | None, ...] = (None, 12, 6)
 
 def _rules() -> dict[str, tuple[str, dict[str, Any]]]:
     """:data:`RULES`, and ``strip-goals`` when it is registered."""
-    from amronet.algorithms.drops import DROP_RULES
+    from amronet.algorithms.agent_assisted.drops import DROP_RULES
 
     return {**RULES, **({"strip-goals": ("strip-goals", {})} if "strip-goals" in DROP_RULES else {})}
 

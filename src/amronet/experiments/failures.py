@@ -7,7 +7,7 @@ coverage has levelled off), and the run goes on for ``after`` seconds (600). Alg
 at 2 m; routers still exploring refill holes by the paper's rules) and agent-assisted deployment (3 agents from one
 base station, as in ``reproduce buildings``, frontier explorer; agents repair by their drop rule with the references
 they still hear; ``sim.coverage_target: off`` keeps the agents going after 99 %), and agent-assisted deployment with
-``algorithm.params.repair: relocate`` (:mod:`amronet.algorithms.relocate`). ``runs`` seeds per cell.
+``algorithm.params.repair: relocate`` (:mod:`amronet.algorithms.agent_assisted.relocate`). ``runs`` seeds per cell.
 
 Per run: connected coverage just before and just after the fault and at the end, the time until every surviving
 agent and deployed router again had a path to a base station, extra routers, the agents' outages. A figure shows

@@ -2,7 +2,8 @@
 
 Self-spreading (paper 4.2) on four floor plans (:data:`WALK_MAPS`: a base station at a free point, a
 communication radius and a router count that suit each map; the routers of the ``self-spreading-autolab`` demo:
-0.045 m discs at 0.5 m/s with 12 range beams of 0.3 m), for every walk rule (:mod:`amronet.algorithms.walks`),
+0.045 m discs at 0.5 m/s with 12 range beams of 0.3 m), for every walk rule
+(:mod:`amronet.algorithms.self_spreading.walks`),
 the same seeds for every rule. Per run, from its coverage over time: the final coverage (at ``time_limit``, default
 1 200 s, or when every router has stopped), the time to 90 % of the run's own final coverage, the time to 90 % of
 the random walk's mean final coverage on that map (the same level for every rule), the routers deployed, and whether
@@ -21,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from amronet.algorithms.walks import WALKS
+from amronet.algorithms.self_spreading.walks import WALKS
 from amronet.experiments.common import Claim, claims_markdown, csv_text, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs

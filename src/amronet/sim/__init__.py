@@ -7,7 +7,8 @@ and returns its :class:`RunResult`.
 
 from amronet.sim.api import run
 from amronet.sim.batch import BatchSimulation, batchable, run_seeds
-from amronet.sim.loop import Metrics, Simulation, move, sense
+from amronet.sim.loop import Metrics, move, sense
 from amronet.sim.results import RunResult
+from amronet.sim.simulation import Simulation
 
 __all__ = ["BatchSimulation", "Metrics", "RunResult", "Simulation", "batchable", "move", "run", "run_seeds", "sense"]

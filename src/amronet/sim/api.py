@@ -7,8 +7,8 @@ from pathlib import Path
 from typing import Any
 
 from amronet.scenario import Scenario, load_scenario
-from amronet.sim.loop import Simulation
 from amronet.sim.results import RunResult
+from amronet.sim.simulation import Simulation
 
 __all__ = ["run"]
 

@@ -25,7 +25,8 @@ from amronet.algorithms import ALGORITHMS
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario
 from amronet.sim.assemble import medium_needs_rng
-from amronet.sim.loop import Loop, Simulation, StepKind
+from amronet.sim.loop import Loop, StepKind
+from amronet.sim.simulation import Simulation
 from amronet.world.occupancy import OccupancyMap
 
 if TYPE_CHECKING:

@@ -20,7 +20,7 @@ repair's distance) and how many of them moved (its scope).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -28,10 +28,25 @@ from amronet.engine.network import agents_connected, connected_to
 from amronet.engine.robots import Role, State
 
 if TYPE_CHECKING:
+    from amronet.engine.robots import Swarm
+    from amronet.engine.table import NeighbourTable
     from amronet.scenario import FaultSpec
-    from amronet.sim.run import Run
 
 __all__ = ["FaultBook", "FaultSchedule"]
+
+
+class FaultedRun(Protocol):
+    """What the faults' books read of a run (:class:`~amronet.sim.run.Run`)."""
+
+    agents: np.ndarray
+    live_bases: np.ndarray
+    swarm: Swarm
+    t: float
+    table: NeighbourTable
+
+    def metrics(self, method: str | None = None) -> Any:
+        """The run's network metrics now."""
+
 
 
 class FaultSchedule:
@@ -118,7 +133,7 @@ class FaultBook:
     """Distance travelled so far by each node when the first fault struck (routers deployed then count)."""
     deployed_at_first: np.ndarray | None = None
 
-    def before(self, run: Run, t: float, kind: str, ids: np.ndarray) -> None:
+    def before(self, run: FaultedRun, t: float, kind: str, ids: np.ndarray) -> None:
         """Note the state of the network just before nodes ``ids`` fail."""
         m = run.metrics()
         sw = run.swarm
@@ -128,7 +143,7 @@ class FaultBook:
             self.deployed_at_first = sw.deployed & (sw.role == Role.ROUTER)
         self.events.append(_Event(t, kind, [int(i) for i in ids], m.coverage, m.connected_coverage))
 
-    def after(self, run: Run) -> None:
+    def after(self, run: FaultedRun) -> None:
         """Note the network just after the last event's nodes failed (the table already without them).
 
         A fault that cut nobody off (every surviving agent and deployed router still has a path to a base station)
@@ -145,7 +160,7 @@ class FaultBook:
         """Whether some event's damage is not repaired yet."""
         return any(ev.restored_at is None for ev in self.events)
 
-    def observe(self, run: Run) -> None:
+    def observe(self, run: FaultedRun) -> None:
         """After a step: whether every surviving agent and deployed router has a path to a base station again."""
         if not self.restoring or not self._all_linked(run):
             return
@@ -154,7 +169,7 @@ class FaultBook:
                 ev.restored_at = run.t
 
     @staticmethod
-    def _all_linked(run: Run) -> bool:
+    def _all_linked(run: FaultedRun) -> bool:
         """Whether every surviving agent and deployed router has a path to a base station that has not failed."""
         sw, table = run.swarm, run.table
         live_bases = run.live_bases
@@ -166,7 +181,7 @@ class FaultBook:
             return False
         return not len(run.agents) or bool(agents_connected(table, run.agents, live_bases, relays).all())
 
-    def summary(self, run: Run, schedule: FaultSchedule | None) -> dict[str, Any]:
+    def summary(self, run: FaultedRun, schedule: FaultSchedule | None) -> dict[str, Any]:
         """The ``faults`` section of ``summary.json``."""
         sw = run.swarm
         out: dict[str, Any] = {"nodes_failed": int(np.count_nonzero(sw.state == State.FAILED)), "events": []}

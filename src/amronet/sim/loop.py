@@ -15,16 +15,18 @@ The life of a step, in this order and nowhere else (:meth:`Loop.step`):
    stop conditions: all routers settled or the coverage target reached (*terminated*), or the time limit
    (*truncated*) (:meth:`Loop.execute`; the runs of a batch are recorded together, :func:`~amronet.sim.run.metrics_of`).
 
-For self-spreading with its paper rules, the potential field and agent-assisted deployment under the paper's drop
-rule, phases 1–3 run as compiled passes (:mod:`amronet.sim.compiled_step`, :mod:`amronet.sim.compiled_agents`) that
-call the same per-robot functions in the same order: the same result, bit for bit, as the phases one by one
-(``step="reference"``, :mod:`amronet.sim.phases`).
+Where the algorithm offers a fast step for the loop's rules (:meth:`~amronet.algorithms.base.Controller.fast_step`,
+the stepping protocol of :mod:`amronet.algorithms.stepping`), phases 1–3 run as its compiled passes, which call the
+same per-robot functions in the same order: the same result, bit for bit, as the phases one by one
+(``step="reference"``, :mod:`amronet.algorithms.phases`). Between two records the fast step may take a stretch of
+steps in one call; only the loop advances the clock, the neighbour table and the runs' books, before and after.
 
 A :class:`Loop` holds ``G`` runs of one scenario in one set of arrays: their robots block by block, one neighbour
 table that never links robots of different runs, one controller, and every random draw split by run
-(:class:`~amronet.engine.streams.RunStreams`). A single run is the loop with ``G = 1`` (:class:`Simulation`);
-a batch is the same loop with more runs (:class:`~amronet.sim.batch.BatchSimulation`). Each run's books —
-rows, stop reason, metrics — are a :class:`~amronet.sim.run.Run`. All randomness of a run comes from one
+(:class:`~amronet.engine.streams.RunStreams`). A single run is the loop with ``G = 1``
+(:class:`~amronet.sim.simulation.Simulation`); a batch is the same loop with more runs
+(:class:`~amronet.sim.batch.BatchSimulation`). Each run's books — rows, stop reason, metrics — are a
+:class:`~amronet.sim.run.Run`. All randomness of a run comes from one
 ``numpy.random.Generator`` seeded by its seed: the same scenario and seed give the same result, bit for bit,
 alone or in a batch.
 """
@@ -38,7 +40,9 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, RouterStock, Setup, StepInput
+from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, Readings, RouterStock, Setup, StepInput
+from amronet.algorithms.phases import move, sense
+from amronet.algorithms.stepping import AgentBooks, FastStep, StepContext, Watch
 from amronet.engine.motion import path_clear
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.robots import Role, State, Swarm
@@ -55,9 +59,7 @@ from amronet.sim.assemble import (
     medium_needs_rng,
     robot_model,
 )
-from amronet.sim.compiled_step import CompiledStep, compiled_step_for
 from amronet.sim.guard import check_scenario, check_world
-from amronet.sim.phases import move, sense
 from amronet.sim.results import RunResult
 from amronet.sim.run import Metrics, Run, metrics_of
 from amronet.world.occupancy import OccupancyMap
@@ -66,7 +68,7 @@ from amronet.world.trajectories import AgentPaths
 if TYPE_CHECKING:
     from amronet.outputs.recording import Recorder
 
-__all__ = ["Loop", "Metrics", "Simulation", "StepKind", "check_seed", "move", "sense"]
+__all__ = ["Loop", "Metrics", "StepKind", "check_seed", "move", "sense"]
 
 StepKind = Literal["compiled", "reference"]
 """How a loop steps: ``compiled`` where the algorithm has a compiled step, else (and always with ``reference``) phase
@@ -90,10 +92,10 @@ class Loop:
         force: Run even what the resource guard (:mod:`amronet.sim.guard`) calls absurdly long: more than
             ``amronet.limits.MAX_STEPS`` steps or ``MAX_ROBOT_STEPS`` robot-steps (``--force`` on the command line).
         step: ``compiled`` (the default): where the algorithm has one (self-spreading with its paper rules and the
-            potential field, :mod:`amronet.sim.compiled_step`; agent-assisted runs under the paper's drop rule,
-            :mod:`amronet.sim.compiled_agents`), sense, decide and move run as one or two compiled passes;
-            ``reference``: always the phases one by one, through the controller's Python code. Both give the same
-            result bit for bit.
+            potential field and agent-assisted runs under the paper's drop rule: the algorithm's
+            :meth:`~amronet.algorithms.base.Controller.fast_step`), sense, decide and move run as one or two compiled
+            passes; ``reference``: always the phases one by one, through the controller's Python code. Both give the
+            same result bit for bit.
 
     Raises:
         ScenarioError: A seed is invalid, the scenario cannot be set up (see the scenario's fields), or the resource
@@ -140,12 +142,13 @@ class Loop:
         self.steps = 0
         self._places_robots = sc.agents.per_base > 0 and self.groups is None
         """Whether the controller may put robots down in the decide phase (agents releasing routers; never batched)."""
-        self.compiled: CompiledStep | None = compiled_step_for(self) if step == "compiled" else None
-        """The compiled sense-decide-move of this loop, or ``None`` (the phases one by one)."""
+        self.compiled: FastStep | None = (self.controller.fast_step(self.step_context()) if step == "compiled"
+                                          else None)
+        """The algorithm's fast sense-decide-move for this loop, or ``None`` (the phases one by one)."""
         self.phase_seconds = ({"sense+decide+move": 0.0, "radio": 0.0} if self.compiled is not None
                               else {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0})
-        """Wall time spent in each phase (the compiled step's three phases are one; a stretch's steps, radio included,
-        count there too: :mod:`amronet.sim.agent_stretch`, :mod:`amronet.sim.swarm_stretch`)."""
+        """Wall time spent in each phase (a fast step's three phases are one; a stretch's steps, radio included, count
+        there too)."""
         target = sc.sim.coverage_target
         if target is None:  # a replayed mission (agents.trajectories) runs to the end of its paths
             target = None if self.paths is not None else controller_cls.default_coverage_target
@@ -158,6 +161,18 @@ class Loop:
         settled = self._settled_runs()
         for run, now in zip(self.runs, settled, strict=True):
             run.settled_at = 0.0 if now else None
+
+    def step_context(self) -> StepContext:
+        """What an algorithm's fast step is told of this loop (:mod:`amronet.algorithms.stepping`)."""
+        sc, sw = self.scenario, self.swarm
+        return StepContext(omap=self.world.omap, swarm=sw, groups=self.groups, dt=self.dt,
+                           collisions=sc.sim.robot_collisions, faults=bool(sc.faults),
+                           agents=sc.agents.per_base > 0 or bool((sw.role == Role.AGENT).any()),
+                           radio_reach=float(self.medium.reach), keeps_every_pair=self.medium.keeps_every_pair)
+
+    def _now(self) -> StepInput:
+        """The input of the step about to be taken (no readings: a fast step senses itself)."""
+        return StepInput(self.steps, self.t, self.dt, self.table, Readings({}))
 
     def _setup(self, rng: np.random.Generator | RunStreams) -> Setup:
         """What the controller is given: the robots and what the algorithm may know, never the map or scenario."""
@@ -186,7 +201,7 @@ class Loop:
         clock = time.perf_counter
         if self.compiled is not None:
             t0 = clock()
-            self.compiled.step()
+            self.compiled.step(self._now())
             self.phase_seconds["sense+decide+move"] += clock() - t0
             self.after_compiled_step()
             return
@@ -215,6 +230,39 @@ class Loop:
             self._faulty.fault_book.observe(self._faulty)
         for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
             self.phase_seconds[name] += dt
+
+    def _stretch(self, fast: FastStep, limit: int, active: np.ndarray, settled: np.ndarray) -> int:
+        """Offer ``fast`` a stretch of up to ``limit`` steps; advance the clock, the table and the books by what it did.
+
+        Returns how many steps were taken (0: none could be; the loop then takes the next step itself).
+
+        Raises:
+            ValueError: A robot's position became non-finite (what the radio's table refuses).
+        """
+        run = self.runs[0]
+        books = None
+        if self.groups is None and len(run.agents):  # the agents' books, kept by the stretch step by step
+            *arrays, counts, sums = run.connection_books()
+            books = AgentBooks(run.bases, run.relay_mask,
+                               (np.empty(len(run.agents), dtype=np.bool_), *arrays, counts, sums))
+        t0 = time.perf_counter()
+        done = fast.stretch(limit, self._now(), Watch(active, settled, books))
+        if done is None:
+            return 0
+        if books is not None:
+            run.close_connection_books(counts, sums)
+        self.steps += done.steps
+        if done.non_finite:
+            raise ValueError("xy has non-finite coordinates")
+        if done.csr is not None:
+            self.table = self.medium.plain_table(self.swarm.xy.copy(), *done.csr, self.groups)
+        if done.finish is not None:
+            done.finish(self._now())
+        self.phase_seconds["sense+decide+move"] += time.perf_counter() - t0
+        if done.finish is None:
+            return done.steps
+        self.after_compiled_step()
+        return done.steps + 1
 
     def after_compiled_step(self) -> None:
         """The end of a compiled step, once the robots have moved: the radio's table, then the agents' connection."""
@@ -282,7 +330,7 @@ class Loop:
                 active.append(run)
         max_steps = round(sim.time_limit / self.dt)
         unrecorded = all(r is None for r in recorders)
-        stretch = getattr(self.compiled, "stretch", None) if unrecorded else None
+        fast = self.compiled if unrecorded and self.compiled is not None and self.compiled.stretches else None
         ids = np.array([run.index for run in active], dtype=np.int64)  # of the active runs
         unsettled = False  # every active run's books say "not settled" (the last step left them so)
         now_settled = self._settled_runs()
@@ -290,7 +338,7 @@ class Loop:
             # the steps before the next recorded one in one go where the compiled step can: a stretch stops after a
             # step that changed an active run's settled state, so the books below are what each step would leave
             ahead = min(sim.record_every - self.steps % sim.record_every, max_steps - self.steps) - 1
-            if stretch is None or ahead <= 0 or not stretch.run(ahead, ids, now_settled):
+            if fast is None or ahead <= 0 or not self._stretch(fast, ahead, ids, now_settled):
                 self.step()
             now_settled = self._settled_runs()
             at_limit = self.steps >= max_steps
@@ -327,74 +375,3 @@ class Loop:
                 ids = np.array([run.index for run in still], dtype=np.int64)
             active = still
         return [r for r in results if r is not None]
-
-
-class Simulation(Loop):
-    """One seeded run of a scenario, stepped by :meth:`step` or run to its end by :meth:`run`: the loop of one run.
-
-    Args:
-        scenario: The validated scenario.
-        seed: Seed of the run's random generator.
-        omap: Use this map instead of loading the scenario's (for generated or scaled maps).
-        force: Run even what the resource guard calls absurdly long (see :class:`Loop`).
-        step: ``compiled`` or ``reference`` (see :class:`Loop`).
-    """
-
-    def __init__(self, scenario: Scenario, seed: int, omap: OccupancyMap | None = None, *,
-                 force: bool = False, step: StepKind = "compiled") -> None:
-        super().__init__(scenario, [seed], omap, force=force, step=step)
-        self.books = self.runs[0]
-        """The run's books (:class:`~amronet.sim.run.Run`): rows, stop reason, agents' connection."""
-        self.seed = self.books.seed
-        self.rng = self.books.rng
-        self.bases = self.books.bases
-        self.agents = self.books.agents
-        self.coverage_target = self.books.coverage_target
-
-    def run(self, progress: Callable[[float, float], None] | None = None, recorder: Recorder | None = None
-            ) -> RunResult:
-        """Run until a stop condition holds and return its result (see :meth:`Loop.execute`)."""
-        return self.execute(progress, [recorder])[0]
-
-    def metrics(self, method: str | None = None) -> Metrics:
-        """Network metrics now (:meth:`amronet.sim.run.Run.metrics`)."""
-        return self.books.metrics(method)
-
-    @property
-    def stop_reason(self) -> str | None:
-        """Why the run ended (``None`` while it runs)."""
-        return self.books.stop_reason
-
-    @property
-    def terminated(self) -> bool:
-        """``True`` when the run ended because the task ended (settled or target reached), not by time."""
-        return self.books.terminated
-
-    @property
-    def settled_at(self) -> float | None:
-        """Start of the final stretch of time in which no router moved (``None`` while one still moves)."""
-        return self.books.settled_at
-
-    @property
-    def agents_connected_fraction(self) -> float | None:
-        """Mean over all steps of the fraction of agents connected to a base station (``None`` without agents)."""
-        return self.books.agents_connected_fraction
-
-    @property
-    def agents_connected_min(self) -> float:
-        """The lowest fraction of agents connected at any step."""
-        return self.books.agents_connected_min
-
-    def state_counts(self) -> dict[str, int]:
-        """How many robots are in each state."""
-        return self.books.state_counts()
-
-    @property
-    def rows(self) -> list[tuple]:
-        """The recorded rows of the time series so far."""
-        return self.books.rows
-
-    def __repr__(self) -> str:
-        n = {name: int(np.count_nonzero(self.swarm.role == code)) for name, code in
-             (("bases", Role.BASE), ("routers", Role.ROUTER), ("agents", Role.AGENT))}
-        return f"Simulation({self.scenario.name!r}, seed={self.seed}, t={self.t:g} s, {n})"

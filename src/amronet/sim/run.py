@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -22,9 +22,21 @@ if TYPE_CHECKING:
     from amronet.algorithms import Controller
     from amronet.scenario import Scenario
     from amronet.sim.assemble import World
-    from amronet.sim.loop import Loop
 
-__all__ = ["Metrics", "OutageTracker", "Run", "metrics_of"]
+__all__ = ["LoopOfRuns", "Metrics", "OutageTracker", "Run", "metrics_of"]
+
+
+class LoopOfRuns(Protocol):
+    """What a run's books read of the loop that steps it (:class:`~amronet.sim.loop.Loop`)."""
+
+    scenario: Scenario
+    world: World
+    dt: float
+    steps: int
+    medium: RadioMedium
+    swarm: Swarm
+    table: NeighbourTable
+    controller: Controller
 
 STOP_REASONS = ("coverage_target", "settled", "time_limit")
 """Why a run ends: the first two *terminate* it (the task ended), the last *truncates* it."""
@@ -126,7 +138,7 @@ class Run:
         coverage_target: Coverage at which the run ends (``None``: none).
     """
 
-    def __init__(self, loop: Loop, index: int, seed: int, rng: np.random.Generator, robots: slice,
+    def __init__(self, loop: LoopOfRuns, index: int, seed: int, rng: np.random.Generator, robots: slice,
                  coverage_target: float | None) -> None:
         self.loop = loop
         self.index = index

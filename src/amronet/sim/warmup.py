@@ -7,7 +7,8 @@ compile``): it runs, for a few simulated seconds, one scenario per algorithm, ex
 radio model that amronet registers, a batch of the batchable algorithms, runs with faults and packet loss, the
 signal map and a static pattern's placement, and one small run with the threaded kernels of large runs
 (:mod:`amronet.threads`), so that a user's first run finds every kernel it uses compiled. The cases are built
-from the registries: a new explorer, drop rule or radio model is warmed up without a change here.
+by the algorithms themselves (:meth:`~amronet.algorithms.base.Controller.warm_ups`, from their registries: a new
+explorer, drop rule or radio model is warmed up without a change here).
 
 Where ``amronet compile`` did not run (a ``pip install``, a new version of the kernels' source), a sweep or a
 figure on several local workers runs the :data:`COMMON` cases first, spread over its workers
@@ -25,34 +26,23 @@ import multiprocessing
 import time
 from collections.abc import Callable, Collection
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
 
-from amronet.algorithms.base import ALGORITHMS
-from amronet.algorithms.drops.base import DROP_RULES
-from amronet.algorithms.explorers.base import EXPLORERS
-from amronet.algorithms.walks import WALKS
+from amronet.algorithms.base import ALGORITHMS, WarmUp
 from amronet.engine.propagation import LinkBudget
-from amronet.engine.radio import MEDIA, make_medium
+from amronet.engine.radio import make_medium
 from amronet.kernel_cache import compiled, mark_compiled
 from amronet.patterns import place
 from amronet.scenario import load_scenario
 from amronet.sim.batch import run_seeds
-from amronet.sim.loop import Simulation, StepKind
+from amronet.sim.simulation import Simulation
 from amronet.threads import threads_from
 from amronet.world.builtin import FLOOR_CORNERS, resolve_map
 
-__all__ = ["BASE_PRESETS", "COMMON", "WarmupCase", "warm_up", "warm_up_if_cold", "warmup_cases"]
-
-BASE_PRESETS: dict[str, str] = {
-    "agent-assisted": "agent-assisted-office",
-    "self-spreading": "self-spreading-obstacles-6x6",
-    "potential-field": "potential-field-obstacles-6x6",
-    "dssa": "dssa-obstacles-6x6",
-}
-"""The preset each registered algorithm is warmed up on (a test checks that every algorithm has one)."""
+__all__ = ["COMMON", "WarmupCase", "warm_up", "warm_up_if_cold", "warmup_cases"]
 
 COMMON: tuple[str, ...] = (
     "explorer frontier", "algorithm agent-assisted", "algorithm self-spreading", "algorithm potential-field",
@@ -63,34 +53,10 @@ COMMON: tuple[str, ...] = (
 
 _ALL_STAMP, _COMMON_STAMP = "all", "common"
 
-_SECONDS = 3.0
-"""Simulated seconds per warm-up run: enough for every phase of a step to run a few times."""
-
 
 @dataclass(frozen=True)
-class WarmupCase:
-    """One warm-up run: a preset with overrides, for a few simulated seconds.
-
-    Attributes:
-        label: What the case warms up, for the report.
-        preset: The built-in scenario.
-        overrides: Dotted-path fields to replace.
-        seeds: One seed: a single run; several: one batch of them (the batched kernels).
-        seconds: Simulated seconds.
-        threaded: Run the kernels that large runs run on several threads (:mod:`amronet.threads`).
-        step: The loop's step (``reference``: phase by phase, as the runs a compiled step does not cover).
-        first: One of the cases that compile the longest chains of kernels (tens of seconds): with several jobs
-            they start first, so that the other jobs compile the rest meanwhile (74 s instead of 87 s on two cores).
-    """
-
-    label: str
-    preset: str
-    overrides: dict[str, Any] = field(default_factory=dict)
-    seeds: tuple[int, ...] = (1,)
-    seconds: float = _SECONDS
-    threaded: bool = False
-    step: StepKind = "compiled"
-    first: bool = False
+class WarmupCase(WarmUp):
+    """One warm-up run (an algorithm's :class:`~amronet.algorithms.base.WarmUp`), and how to run it."""
 
     def run(self) -> None:
         """Run the case (the result is discarded)."""
@@ -102,15 +68,19 @@ class WarmupCase:
                 Simulation(scenario, self.seeds[0], step=self.step).run()
 
 
-_FIGURES_AGENTS = WarmupCase(
-    "explorer frontier", BASE_PRESETS["agent-assisted"],
-    {"algorithm.params.explorer": "frontier", "sim.dt": 0.25,
-     "base_stations": [{"x": x, "y": y, "region": [1.6, 1.6]}
-                       for x, y in FLOOR_CORNERS]},
-    seconds=40.0, first=True)
-"""The frontier explorer as the figures' agents run it (Fig. 7's four corner bases, their step): the networks meet
-(triangle routers drive to their goals), the frontier repaints what its network covers and agents check their release
-spots within 40 simulated seconds. The longest chain of kernels: it starts first."""
+def _figures_agents(case: WarmupCase) -> WarmupCase:
+    """The frontier explorer as the figures' agents run it (Fig. 7's four corner bases, their step).
+
+    The networks meet (triangle routers drive to their goals), the frontier repaints what its network covers and
+    agents check their release spots within 40 simulated seconds. The longest chain of kernels: it starts first.
+    """
+    bases = [{"x": x, "y": y, "region": [1.6, 1.6]} for x, y in FLOOR_CORNERS]
+    return replace(case, overrides={**case.overrides, "sim.dt": 0.25, "base_stations": bases}, seconds=40.0,
+                   first=True)
+
+
+_FIGURES: dict[str, Callable[[WarmupCase], WarmupCase]] = {"explorer frontier": _figures_agents}
+"""An algorithm's case the figures run in a setting of their own, by label: the figures' variant replaces it."""
 
 
 def _signal_map() -> None:
@@ -132,34 +102,16 @@ _TASKS: dict[int, tuple[str, Callable[[], None]]] = {
 
 
 def warmup_cases() -> list[WarmupCase]:
-    """The warm-up runs, built from the registries (every algorithm, explorer, drop rule, walk and radio model)."""
-    aa, ss = BASE_PRESETS["agent-assisted"], BASE_PRESETS["self-spreading"]
-    cases = [WarmupCase(f"algorithm {name}", BASE_PRESETS[name]) for name in ALGORITHMS]
-    cases += [_FIGURES_AGENTS if name == "frontier" else
-              WarmupCase(f"explorer {name}", aa, {"algorithm.params.explorer": name}) for name in EXPLORERS]
-    cases += [WarmupCase(f"drop rule {name}", aa, {"algorithm.params.drop_rule": name,
-                                                   "algorithm.params.explorer": "frontier"}) for name in DROP_RULES]
-    cases += [WarmupCase(f"walk {name}", ss, {"algorithm.params.walk": name}) for name in WALKS]
-    cases += [WarmupCase(f"radio {name}", ss, {"radio.model": name}) for name in MEDIA]
-    cases += [WarmupCase(f"radio {name}, agents", aa, {"radio.model": name, "algorithm.params.explorer": "frontier"})
-              for name in MEDIA]
-    cases += [
-        WarmupCase("packet loss, link-quality stop rule", ss,
-                   {"radio.model": "multi-wall", "radio.packet_loss": True, "radio.shadowing_db": 4.0,
-                    "algorithm.params.stop_rule": "link-quality", "algorithm.params.triangle_rule": "link-quality"}),
-        WarmupCase("faults and relocation", aa,
-                   {"faults": [{"at": 1.0, "routers": 0.5}], "algorithm.params.repair": "relocate",
-                    "algorithm.params.explorer": "frontier", "sim.coverage_target": "off"}),
-        # two networks that meet within seconds: triangle routers drive to their goal points, in the compiled step
-        # and phase by phase (as in agent-assisted runs with several base stations)
-        *(WarmupCase(f"triangular deployment, {step} step", "self-spreading-6x6",
-                     {"base_stations": [{"x": -1.2, "y": 0.0, "region": [0.6, 0.6]},
-                                        {"x": 1.2, "y": 0.0, "region": [0.6, 0.6]}]}, seconds=20.0, step=step)
-          for step in ("compiled", "reference")),
-        WarmupCase("batch self-spreading", "self-spreading-6x6", seeds=(1, 2)),
-        WarmupCase("batch potential field", "potential-field-6x6", seeds=(1, 2)),
-        WarmupCase("large runs: the threaded kernels", "self-spreading-6x6", threaded=True, first=True),
-    ]
+    """The warm-up runs: every registered algorithm's own (:meth:`~amronet.algorithms.base.Controller.warm_ups`).
+
+    Each algorithm lists the runs that reach its kernels (its rules, explorers, drop rules, walks, radio models, its
+    fast step, batches); the figures' variants replace the cases they run in a setting of their own (:data:`_FIGURES`).
+    """
+    cases = []
+    for controller in ALGORITHMS.values():
+        for spec in controller.warm_ups():
+            case = WarmupCase(**{f.name: getattr(spec, f.name) for f in fields(spec)})
+            cases.append(_FIGURES[case.label](case) if case.label in _FIGURES else case)
     return cases
 
 

@@ -1,0 +1,137 @@
+"""``distance-junction``: MARBLE's beacon rules (DARPA SubT; ``dan-riley/bobcat``, ``src/monitors.py``).
+
+An agent drops a router only while it is **in contact** with a base station (it has a path through the network),
+never within ``base_clear`` of a base node, and then when any of these holds:
+
+* **distance**: it is farther than ``far`` from the nearest known relay;
+* **junction**: its own range scan shows a junction (at least three separate openings: runs of beams that read at
+  least ``open_fraction`` of the sensor range, around the ring) and no relay is within ``junction_clear``;
+* **turn**: its path turned by more than ``turn_angle_deg`` over ``turn_travel`` of travel (the directions of the
+  two halves of its last ``turn_travel`` metres, sampled from odometry) and no relay is within ``turn_clear``.
+
+Distances are straight lines between known positions and are given as fractions of ``r_c``. MARBLE's numbers are for
+tunnel radios of hundreds of metres: drop at 30 m from the nearest beacon, junctions unless one is within 10 m,
+turns unless one is within 15 m, never within 10 m of the anchor, turns of 30 degrees over 4 m. We keep their
+ratios to the drop distance (``far`` 0.9 ``r_c``: ``junction_clear`` 0.3, ``turn_clear`` 0.45, ``base_clear`` 0.3)
+but not the turn's 4 m, which would be 0.12 ``r_c`` here and call every wobble of an indoor path a turn: turns are
+judged over ``turn_travel`` = 0.5 ``r_c``.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from amronet.algorithms.agent_assisted.drops.base import DROP_RULES, AgentView, DropContext, DropRule
+
+__all__ = ["DistanceJunction", "DistanceJunctionParams", "PathTurns", "count_openings"]
+
+Fraction = Annotated[float, Field(strict=True, ge=0, le=2, allow_inf_nan=False)]
+
+
+class DistanceJunctionParams(BaseModel):
+    """Parameters of the distance-junction rule (distances as fractions of ``r_c``).
+
+    Attributes:
+        far: Drop when farther than this from the nearest known relay.
+        junction_clear: At a junction, drop unless a relay is within this.
+        turn_clear: On a turn, drop unless a relay is within this.
+        base_clear: Never drop within this of a base node.
+        turn_angle_deg: A turn changes the heading of the path by more than this, degrees.
+        turn_travel: ... over this much travel.
+        open_fraction: A beam is open when it reads at least this fraction of the sensor range.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    far: Annotated[float, Field(strict=True, gt=0, le=2, allow_inf_nan=False)] = 0.9
+    junction_clear: Fraction = 0.3
+    turn_clear: Fraction = 0.45
+    base_clear: Fraction = 0.3
+    turn_angle_deg: Annotated[float, Field(strict=True, gt=0, lt=180, allow_inf_nan=False)] = 30.0
+    turn_travel: Annotated[float, Field(strict=True, gt=0, le=10, allow_inf_nan=False)] = 0.5
+    open_fraction: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] = 0.95
+
+
+def count_openings(scans: np.ndarray, open_range: float) -> np.ndarray:
+    """Number of separate openings in each ring of range readings ``(A, n_beams)``: circular runs of open beams.
+
+    A ring whose every beam is open (open floor) has one opening; one with none has zero.
+    """
+    is_open = scans >= open_range
+    starts = is_open & ~np.roll(is_open, 1, axis=1)  # an open beam after a closed one starts a run
+    n = starts.sum(axis=1)
+    return np.where(is_open.all(axis=1), 1, n)
+
+
+class PathTurns:
+    """Turns of each agent's path from odometry: the heading change between the two halves of its last stretch.
+
+    Positions are sampled every ``travel / 2`` metres of straight-line progress; a turn is seen when the direction
+    from the oldest to the middle sample and from the middle to the newest differ by more than ``angle``.
+
+    Args:
+        n: Number of agents.
+        travel: Length of the stretch a turn is judged over, metres.
+        angle_deg: Smallest heading change that is a turn, degrees.
+    """
+
+    def __init__(self, n: int, travel: float, angle_deg: float) -> None:
+        self.spacing = travel / 2.0
+        self.cos_angle = float(np.cos(np.radians(angle_deg)))
+        self.samples = np.full((n, 3, 2), np.nan)
+
+    def update(self, xy: np.ndarray) -> np.ndarray:
+        """Feed the agents' positions ``(A, 2)``; which agents are on a turn ``(A,)``."""
+        first = np.isnan(self.samples[:, 2, 0])
+        self.samples[first, 2] = xy[first]
+        moved = np.linalg.norm(xy - self.samples[:, 2], axis=1) >= self.spacing
+        if moved.any():
+            self.samples[moved] = np.concatenate([self.samples[moved, 1:], xy[moved, None, :]], axis=1)
+        a, b, c = self.samples[:, 0], self.samples[:, 1], self.samples[:, 2]
+        u, v = b - a, c - b
+        with np.errstate(invalid="ignore"):
+            cos = (u * v).sum(axis=1) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
+        return np.nan_to_num(cos, nan=1.0) < self.cos_angle
+
+
+@DROP_RULES.register("distance-junction")
+class DistanceJunction(DropRule):
+    """MARBLE's rules: distance from the nearest relay, junctions and turns, only while in contact."""
+
+    Params = DistanceJunctionParams
+    params: DistanceJunctionParams
+    needs_contact = True
+    needs_scans = True
+    near_reference = False
+
+    def __init__(self, params: DistanceJunctionParams, context: DropContext) -> None:
+        super().__init__(params, context)
+        self.turns = PathTurns(context.n_agents, params.turn_travel * context.r_c, params.turn_angle_deg)
+        self.by_cause = {"distance": 0, "junction": 0, "turn": 0}
+
+    def decide(self, view: AgentView) -> np.ndarray:  # noqa: D102
+        p, r_c = self.params, self.context.r_c
+        assert view.in_contact is not None and view.scans is not None
+        turning = self.turns.update(view.xy)
+        near = view.nearest_relay_distance()
+        junction = count_openings(view.scans, p.open_fraction * self.context.sensor_range) >= 3
+        allowed = view.in_contact & view.can_drop & (view.nearest_relay_distance(view.base_xy) > p.base_clear * r_c)
+        by_distance = near > p.far * r_c
+        by_junction = junction & (near > p.junction_clear * r_c)
+        by_turn = turning & (near > p.turn_clear * r_c)
+        drop = allowed & (by_distance | by_junction | by_turn)
+        if drop.any():
+            self.by_cause["distance"] += int(np.count_nonzero(drop & by_distance))
+            self.by_cause["junction"] += int(np.count_nonzero(drop & ~by_distance & by_junction))
+            self.by_cause["turn"] += int(np.count_nonzero(drop & ~by_distance & ~by_junction & by_turn))
+        return drop
+
+    def losing(self, view: AgentView) -> np.ndarray:
+        """About to go beyond ``far`` of every relay: a tethered agent turns back there."""
+        return view.nearest_relay_distance() > self.params.far * self.context.r_c
+
+    def report(self) -> dict[str, object]:  # noqa: D102
+        return {"drops_by_cause": dict(self.by_cause)}

@@ -1,0 +1,217 @@
+"""The compiled step of agent-assisted runs: the agents' sense, tracking, grid update and move in two compiled calls.
+
+An agent-assisted step of a few agents is mostly glue: the sense phase, the controller's ``decide``, the explorer's
+``steer`` and the move phase each call a kernel or two between NumPy calls on small arrays. In most steps no agent
+has to act (release a router, turn back): then :class:`CompiledAgents` does
+
+1. one compiled call (:func:`~amronet.algorithms.agent_assisted.kernels.sense_track_agents`): the agents' range rings,
+their reference
+   tracking and, for the frontier explorer when no agent has to act, their readings in its knowledge grid;
+2. the explorer's steering as it is (its own random draws and kernels; for the frontier explorer the part after
+   the grid update, :meth:`~amronet.algorithms.agent_assisted.explorers.frontier.FrontierExplorer.plan_and_steer`);
+3. one compiled call (:func:`~amronet.algorithms.agent_assisted.kernels.drive_movers`): the agents' moves with the
+collision
+   checks, their distances and the refused moves.
+
+In a step where an agent has to act, the controller's own Python takes over after the tracking
+(:meth:`~amronet.algorithms.agent_assisted.controller.AgentAssisted.decide_tracked`) and the move phase follows as the
+loop runs
+it; while a router put down settles or a triangle router drives to its goal (other robots move), the whole step is
+the loop's phases. Every computation is the one the phases do, in the same order, so the result is the same bit for
+bit (``tests/test_compiled_step.py`` compares both paths).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Any, Protocol
+
+import numpy as np
+
+from amronet.algorithms.agent_assisted.explorers.frontier import FrontierExplorer, KnowledgeGrid
+from amronet.algorithms.agent_assisted.kernels import drive_movers, sense_track_agents
+from amronet.algorithms.base import Command, Readings, StepInput
+from amronet.algorithms.phases import move, sense
+from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surroundings, Watch
+from amronet.engine.sensing import range_scan
+
+__all__ = ["AgentControls", "CompiledAgents"]
+
+
+class AgentControls(Protocol):
+    """What the fast step reads and keeps of its controller: nothing else of it.
+
+    The controller is :class:`~amronet.algorithms.agent_assisted.controller.AgentAssisted`: its names below are
+    the declared interface between the two.
+    """
+
+    params: Any
+    rng: Any
+    dt: float
+    r_c: float
+    r_eff: float
+    agents: np.ndarray
+    agent_model: int
+    agent_speed: float
+    explorer: Any
+    needs_range_readings: bool
+    general_path: bool
+    relocator: Any
+    strips: Any
+    trails: Any
+    settle_at: Any
+    moving_triangles: Any
+    steering: Any
+    current: np.ndarray
+    wants_other: bool
+    left: np.ndarray
+    nearest_d: np.ndarray
+    other_ref: np.ndarray
+    refused: np.ndarray
+    disabled: np.ndarray
+    decide: Callable[[StepInput], Command]
+    decide_tracked: Callable[..., Command]
+    movers_command: Callable[..., Command]
+    deployed_nodes: Callable[[], tuple[np.ndarray, np.ndarray]]
+    served_pairs: Callable[[], Any]
+
+
+class CompiledAgents(FastStep):
+    """Sense, decide and move of an agent-assisted run (see the module docstring).
+
+    Args:
+        controller: The loop's controller.
+        context: The loop's step context; :meth:`applies` must hold.
+    """
+
+    def __init__(self, controller: AgentControls, context: StepContext) -> None:
+        c = controller
+        sw = context.swarm
+        self.swarm, self.omap, self.controller, self.explorer = sw, context.omap, c, c.explorer
+        self.frontier = type(c.explorer) is FrontierExplorer
+        """Whether the readings go into the frontier explorer's grid in the compiled call."""
+        self.knowledge = c.explorer.grid if self.frontier else KnowledgeGrid((0, 1, 0, 1), 1)
+        """The grid the compiled call updates (a stand-in of the same types for other explorers: left alone)."""
+        self.robot_radius = float(c.explorer.robot_radius) if self.frontier else 0.0
+        self.around = Surroundings(context, sw.models[c.agent_model])
+        self.quiet: Any = None
+        """Quiet steps in one compiled call (:class:`.stretch.QuietStretch`, set by the controller where it applies),
+        or ``None``."""
+
+    @staticmethod
+    def applies(controller: AgentControls, context: StepContext) -> bool:
+        """Whether the loop is one agent-assisted run whose agents act by the paper's rule.
+
+        No faults, no batch, the paper's drop rule with its routers relaying at once and tethered agents, no
+        repair, no reverse drops, no routers driving to goals: the steps where nothing but the agents move.
+        """
+        c = controller
+        return (context.groups is None and not context.faults
+                and not c.general_path and c.relocator is None and c.strips is None and c.trails is None
+                and c.needs_range_readings and len(c.agents) > 0)
+
+    def step(self, now: StepInput) -> None:
+        """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
+        c = self.controller
+        if c.settle_at or c.moving_triangles:  # another robot moves or settles: the phases one by one
+            self._phases(now)
+            return
+        n_before = len(self.swarm)
+        scans, n_cand, n_losing = self._sense_track(now)
+        if n_cand or n_losing:  # an agent acts: the controller's own rules, then the move phase
+            self.act(now, n_before, n_cand, n_losing, scans)
+            return
+        if self.frontier:  # the readings are in its grid already
+            self.knowledge.stamp += 1
+        self._steer(scans)
+        self.drive(now)
+
+    @property
+    def stretches(self) -> bool:  # noqa: D102
+        return self.quiet is not None
+
+    def stretch(self, limit: int, now: StepInput, watch: Watch) -> Stretched | None:
+        """Up to ``limit`` quiet steps in one call (:class:`.stretch.QuietStretch`)."""
+        return None if self.quiet is None or watch.agents is None else self.quiet.take(limit, now, watch.agents)
+
+    def _sense_track(self, now: StepInput) -> tuple[np.ndarray, int, int]:
+        """The agents' rings and reference tracking (and, in a quiet step, their readings in the frontier grid)."""
+        c, sw = self.controller, self.swarm
+        table = now.table
+        is_ref, deployed_xy = c.deployed_nodes()
+        grid, a = self.knowledge, self.around
+        several = len(sw.xy) > 1
+        s_csr = a.near(sw.xy, table, float(a.sensor_range + a.largest_radius()))
+        buf_r, buf_c = grid.buffers(a.sensor_range)
+        scans = np.empty((len(c.agents), len(a.angles)))  # fresh, as the sense phase's: an explorer may keep it
+        n_cand, n_losing = sense_track_agents(
+            *a.grid, sw.xy, sw.heading, sw.radius, c.agents, a.angles, a.sensor_range, *s_csr, several, scans,
+            c.current, is_ref, sw.status, table.indptr, table.indices, table.dist, c.wants_other, c.left, c.r_eff,
+            c.nearest_d, c.other_ref, self.frontier, grid.score, grid.seen, float(grid.origin[0]),
+            float(grid.origin[1]), float(grid.resolution), deployed_xy, self.robot_radius, buf_r, buf_c,
+            grid.row_stamp, grid.stamp + 1)
+        return scans, n_cand, n_losing
+
+    def act(self, now: StepInput, n_before: int, n_cand: int, n_losing: int, scans: np.ndarray,
+            readings: Readings | None = None) -> None:
+        """The rest of a step in which an agent acts: the controller's own rules, then the move phase.
+
+        ``readings``: this step's readings when other robots than the agents sense (default: the agents' ``scans``).
+        """
+        c = self.controller
+        self._decide_and_move(now, lambda step: c.decide_tracked(step, n_before, n_cand, n_losing),
+                              readings or Readings({c.agent_model: (c.agents, scans)}))
+
+    def finish(self, now: StepInput, n_before: int, readings: Readings) -> None:
+        """The rest of a step whose agents are steered: the other movers steer, then the move phase (all of them)."""
+        c = self.controller
+        self._decide_and_move(now, lambda step: c.movers_command(step, n_before), readings)
+
+    def readings(self, now: StepInput, scans: np.ndarray, others: np.ndarray) -> Readings:
+        """This step's readings: the agents' ``scans`` and the rings of ``others`` (one model, not the agents').
+
+        The rings of ``others`` as the sense phase casts them (:func:`~amronet.algorithms.phases.sense`).
+        """
+        c = self.controller
+        groups = {c.agent_model: (c.agents, scans)}
+        if len(others):
+            sw = self.swarm
+            model = int(sw.model[others[0]])
+            spec = sw.models[model]
+            groups[model] = (others, range_scan(self.omap, sw.xy, sw.heading, others, spec.sensor_beams,
+                                                spec.sensor_range, radius=sw.radius, table=now.table))
+        return Readings(groups)
+
+    def _steer(self, scans: np.ndarray) -> None:
+        """The explorer's steering as it is (for the frontier explorer the part after the grid update)."""
+        c, sw, a = self.controller, self.swarm, self.around
+        steer = self.explorer.plan_and_steer if self.frontier else self.explorer.steer
+        steer(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], c.rng, sw.xy, c.deployed_nodes()[1])
+
+    def moves(self) -> tuple[np.ndarray, float]:
+        """The agents' move lengths this step and the reach of their collision checks, as the move phase has them."""
+        length = self.explorer.speed(self.controller.agent_speed) * self.controller.dt
+        # (ndarray.max costs more on a few agents)
+        return length, 2.0 * self.around.largest_radius() + 2.0 * max(length.tolist())
+
+    def drive(self, now: StepInput) -> None:
+        """The agents' moves (:func:`~.kernels.drive_movers`), as the move phase does them."""
+        c, sw, a = self.controller, self.swarm, self.around
+        length, reach = self.moves()
+        d_csr = a.near(sw.xy, now.table, reach) if a.collisions else a.no_bodies(len(sw))
+        drive_movers(*a.grid, c.agents, length, sw.xy, sw.heading, sw.radius, a.collisions, *d_csr, reach,
+                     sw.distance, c.refused)
+
+    def _phases(self, now: StepInput) -> None:
+        """The loop's sense, decide and move phases for this step (as :meth:`~amronet.sim.loop.Loop.step` runs them)."""
+        self._decide_and_move(now, self.controller.decide, sense(self.controller, self.swarm, self.omap, now.table))
+
+    def _decide_and_move(self, now: StepInput, decide: Callable[[StepInput], Command], readings: Readings) -> None:
+        """The controller's rules (``decide``, given this step's input) and the move phase, as the loop runs them."""
+        c, sw = self.controller, self.swarm
+        before = sw.xy.copy()
+        command = decide(replace(now, readings=readings))
+        # a router put down this step is not where the table has it: the move phase then searches the bodies afresh
+        moved_table = now.table if np.array_equal(before, sw.xy) else None
+        move(c, command, sw, self.omap, moved_table, now.dt, self.around.collisions)

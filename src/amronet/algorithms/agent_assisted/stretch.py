@@ -1,0 +1,164 @@
+"""Quiet stretches of an agent-assisted run: the steps between two records in one compiled call while nothing happens.
+
+Most steps of an agent-assisted run with the frontier explorer are *quiet*: no agent has to act, every agent
+follows its plan, and only the agents move. With a few agents such a step is mostly Python between a dozen small
+calls (the compiled step's three kernels, the explorer's inputs, the radio's table, the agents' connection).
+:class:`QuietStretch` hands the loop's steps up to the next recorded one to
+:func:`~amronet.algorithms.agent_assisted.stretch_kernels.quiet_stretch`, which does them one after another with the
+same compiled
+functions, and finishes in Python the step at which it stopped, if any, the way
+:class:`~amronet.algorithms.agent_assisted.fast.CompiledAgents` does it. The explorer's fresh headings are drawn for
+the whole
+stretch at once and the generator is put back to where the steps done leave it, so every run's numbers stay the same
+bit for bit (``tests/test_agent_stretch.py``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amronet.algorithms.agent_assisted.stretch_kernels import (
+    ACTS,
+    IDLE,
+    NON_FINITE,
+    TRIANGLES_ACT,
+    TRIANGLES_END,
+    TRIANGLES_LOCAL,
+    TRIANGLES_NONE,
+    quiet_stretch,
+)
+from amronet.algorithms.stepping import AgentBooks, StepContext, Stretched
+from amronet.engine.robots import State
+from amronet.engine.sensing import beam_angles
+from amronet.threads import use_threads
+
+if TYPE_CHECKING:
+    from amronet.algorithms.agent_assisted.fast import CompiledAgents
+    from amronet.algorithms.base import StepInput
+
+__all__ = ["QuietStretch"]
+
+_NO_ROBOTS = np.zeros(0, dtype=np.int64)
+_NO_STEPS = np.zeros(0)
+
+_RULES = {"none": TRIANGLES_NONE, "local": TRIANGLES_LOCAL}
+"""The triangle rules the kernel decides itself; under the others a triangle candidate ends a stretch."""
+
+
+class QuietStretch:
+    """Steps of a :class:`~amronet.algorithms.agent_assisted.fast.CompiledAgents` loop done in one compiled call.
+
+    Args:
+        compiled: The loop's compiled step; :meth:`applies` must hold.
+    """
+
+    def __init__(self, compiled: CompiledAgents, context: StepContext) -> None:
+        self.compiled = compiled
+        self.radio_reach = float(context.radio_reach)
+        self.ends = {"quiet": 0, "acts": 0, "idle": 0, "triangle": 0}
+        """How many stretches ended each way: all steps quiet, an agent acting, an agent without a plan, a triangle
+        router arriving or giving up."""
+        self.triangles_looked_at = 0
+        """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
+        self.triangle_steps = 0
+        """Steps taken in stretches with triangle routers driving to their goals."""
+
+    def _moving(self, length: np.ndarray, r: float) -> tuple | None:
+        """The kernel's ``moving`` tuple: the triangle routers driving to their goals and how they steer.
+
+        ``None`` when their steps cannot be taken in the stretch: routers of several models, or of the agents' model,
+        or whose rings or moves reach beyond the radio's table (the sense and move phases would search anew).
+        """
+        comp = self.compiled
+        c, sw, a = comp.controller, comp.swarm, comp.around
+        steering = c.steering
+        tri = np.flatnonzero(sw.state == State.TRIANGLE) if c.moving_triangles else _NO_ROBOTS
+        largest = a.largest_radius()
+        steer = (steering.goal, steering.anchors, steering.last_to_goal, steering.blocked_steps,
+                 int(steering.give_up_steps), float(steering.min_progress), float(c.r_eff), float(c.dt), largest)
+        if len(tri) == 0:
+            return (_NO_ROBOTS, beam_angles(1), 0.0, _NO_STEPS, *steer)
+        model = int(sw.model[tri[0]])
+        if model == c.agent_model or (sw.model[tri] != model).any():
+            return None
+        spec = sw.models[model]
+        max_step = sw.max_speed[tri] * c.dt
+        # (the step a router takes, turned into the command's speed and back, may exceed max_step by a rounding)
+        reach = 2.0 * largest + 2.0 * max(max(length.tolist()), float(max_step.max()) * (1.0 + 1e-9))
+        if spec.sensor_range + largest > r or (a.collisions and reach > r):
+            return None
+        return (tri, beam_angles(spec.sensor_beams), float(spec.sensor_range), max_step, *steer)
+
+    @staticmethod
+    def applies(compiled: CompiledAgents, context: StepContext) -> bool:
+        """Whether the loop's steps can be taken in stretches: the frontier explorer, a radio that keeps every pair."""
+        return compiled.frontier and context.keeps_every_pair
+
+    def take(self, limit: int, now: StepInput, agent_books: AgentBooks) -> Stretched | None:
+        """Take up to ``limit`` steps (at least one), none of them recorded; ``None`` where none can be taken.
+
+        A stretch starts only where a quiet step may: no router settling, the agents' and the triangle routers'
+        readings and moves within the radio's table, the explorer's deployed nodes painted. The step at which the
+        kernel stops (an agent acts or has no plan, a triangle router arrives or gives up) is left for the loop to
+        finish (:attr:`~amronet.algorithms.stepping.Stretched.finish`). The agents' connection books are kept in
+        ``agent_books``'s arrays, step by step; the loop closes them.
+        """
+        comp = self.compiled
+        c, explorer, a = comp.controller, comp.explorer, comp.around
+        sw, table = comp.swarm, now.table
+        n = len(sw)
+        if c.settle_at or n < 2 or use_threads(n) or table.candidates is not None:
+            return None
+        length, reach = comp.moves()
+        if a.sensor_range + a.largest_radius() > table.r or (a.collisions and reach > table.r):
+            return None
+        moving = self._moving(length, table.r)
+        if moving is None:
+            return None
+        tri = moving[0]
+        m = len(c.agents)
+        is_ref, deployed_xy = c.deployed_nodes()
+        inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)
+        if inputs is None:
+            return None
+        avoid, layers, settings, plans, buffers = inputs
+        grid = comp.knowledge
+        buf_r, buf_c = grid.buffers(a.sensor_range)
+        rng = c.rng
+        state = rng.bit_generator.state
+        uniform = rng.random(limit * m)
+        done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps, looked = quiet_stretch(
+            a.grid, sw.xy, sw.heading, sw.radius, sw.status, sw.distance, c.agents, a.angles, a.sensor_range, length,
+            reach, a.collisions, float(self.radio_reach), (table.indptr, table.indices, table.dist),
+            (c.current, is_ref, c.wants_other, c.left, c.r_eff, c.nearest_d, c.other_ref, c.refused),
+            (_RULES.get(c.params.triangular, TRIANGLES_ACT), float(c.r_c), c.disabled, c.served_pairs()), moving,
+            (grid.score, grid.seen, float(grid.origin[0]), float(grid.origin[1]), float(grid.resolution),
+             grid.row_stamp, grid.stamp), deployed_xy, comp.robot_radius, buf_r, buf_c, explorer.steps, avoid, uniform,
+            layers, settings, plans, buffers, explorer.plans.active, agent_books.bases, agent_books.relay_mask,
+            agent_books.arrays, limit)
+        if how == NON_FINITE:
+            return Stretched(done, csr if done else None, non_finite=True)
+        self.ends[{ACTS: "acts", IDLE: "idle", TRIANGLES_END: "triangle"}.get(how, "quiet")] += 1
+        self.triangles_looked_at += looked
+        self.triangle_steps += done if len(tri) else 0
+        if how not in (ACTS, IDLE, TRIANGLES_END):
+            return Stretched(done, csr if done else None)
+        rng.bit_generator.state = state  # stopped part-way through a step: the generator as those steps leave it,
+        rng.random((done + (how != ACTS)) * m)  # then the rest of the step when the loop has the table
+
+        def finish(step: StepInput) -> None:
+            readings = comp.readings(step, scans, tri)
+            if how == ACTS:
+                comp.act(step, n, n_cand, n_losing, scans, readings)
+                return
+            if how == IDLE:
+                explorer.steer_idle(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], rng, sw.xy,
+                                    deployed_xy)
+            if len(tri):
+                comp.finish(step, n, readings)
+            else:
+                comp.drive(step)
+
+        return Stretched(done, csr if done else None, finish=finish)

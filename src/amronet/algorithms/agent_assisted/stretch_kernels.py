@@ -1,0 +1,251 @@
+"""The kernel of an agent-assisted run's quiet stretch: many whole steps in one compiled call.
+
+A *quiet* step of an agent-assisted run with the frontier explorer is one in which no agent has to act (release a
+router, turn back) and every agent follows a plan: the agents sense, track their references, put their readings
+into the shared grid, plan and steer, and drive; the radio builds the next neighbour table; the agents' connection
+is accounted. Most steps are quiet, and each is a dozen small calls with Python in between, most of a step's time
+when there are a few agents. :func:`quiet_stretch` does up to ``limit`` such steps in a row, each with the same
+compiled functions the step-by-step path calls, in the same order, on the same numbers, so the result is the same
+bit for bit (:mod:`amronet.algorithms.agent_assisted.stretch` drives it; ``tests/test_agent_stretch.py`` compares).
+
+A step in which an agent hears a reference of another network (a triangle candidate) is quiet too when no triangle
+would go ahead by the local rule or none (:func:`~amronet.algorithms.common.triangular.select_triangles`): the
+controller
+then does nothing but what a quiet step does. Under the global rule such a step ends the stretch. Triangle routers
+driving to their goals are steered and moved with the agents, as the controller and the move phase do it, in the
+steps before one of them arrives or gives up.
+
+It stops at the first step that is not quiet, part-way through it, and says where: the Python path finishes that
+step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
+from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
+from amronet.algorithms.common.goto import goal_ends, steer_one
+from amronet.engine.neighbours import search_kernel
+from amronet.engine.network import agents_linked_kernel
+from amronet.engine.sensing import cast_bodies_one, cast_grid_one
+
+__all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL", "TRIANGLES_NONE",
+           "quiet_stretch"]
+
+QUIET = 0
+"""Every step asked for was done."""
+ACTS = 1
+"""The step after the last one done: an agent must act. Sensed and tracked; nothing else done."""
+IDLE = 2
+"""The step after the last one done: an agent has no plan. Sensed, tracked, in the grid and steered by the plans;
+the idle agents' random steering, the move and the radio are left."""
+NON_FINITE = 3
+"""A robot's position became non-finite in the last step done (its radio table was not built)."""
+
+TRIANGLES_END = 4
+"""The step after the last one done: a triangle router driving to its goal arrives or gives up. Sensed, tracked, in
+the grid and steered by the plans; the triangle routers' steering, the move and the radio are left."""
+
+TRIANGLES_NONE = 0
+"""Triangle rule ``none``: a candidate whose references are farther apart than ``r_c`` goes ahead."""
+TRIANGLES_LOCAL = 1
+"""Triangle rule ``local``: and its references are not both disabled."""
+TRIANGLES_ACT = 2
+"""Any other rule: a triangle candidate ends the stretch (the controller decides)."""
+
+
+@njit(cache=True)
+def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, sensor_range, length, reach,
+                  collisions, r, table, tracking, triangles, moving, knowledge, nodes, robot_r, buf_r, buf_c, now,
+                  avoid, uniform, layers, cfg, plans, work, active, bases, network, links, limit):  # pragma: no cover
+    """Up to ``limit`` quiet steps; see the module docstring.
+
+    The arguments, in order: ``grid`` = ``(blocked, clear, ox, oy, res)``, the map's grid for the rings and the moves;
+    the robots' ``xy``, ``heading``, ``radius``, ``status`` and ``distance`` (updated in place); the ``agents``, their
+    ring (``angles``, ``sensor_range``), each one's move per step (``length``), the reach of the moves' collision checks
+    (``reach``) and whether bodies stop moves (``collisions``); the radio's search radius ``r`` and this step's
+    ``table`` ``(indptr, indices, dist)`` (every sensing and driving reach is within ``r``); the controller's
+    ``tracking`` arrays ``(current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused)`` and its
+    ``triangles`` ``(rule, r_c, disabled, served)`` (a ``TRIANGLES_*`` code, the nodes' local-rule flags, the triangles
+    served as rows ``(agent, lower reference, higher reference)``); the triangle routers driving to their goals,
+    ``moving`` = ``(tri, angles, sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up,
+    min_progress, r_keep, dt, largest radius)`` (``tri`` empty: none; the rest as
+    :class:`~amronet.algorithms.common.goto.GoalSteering` keeps and steers them); the shared grid's ``knowledge``
+    ``(score,
+    seen, origin_x, origin_y, resolution, row_stamp, stamp)`` and what its update reads (the deployed ``nodes``, fixed
+    in a quiet stretch, ``robot_r``, the scratch ``buf_r`` and ``buf_c``); the explorer's step count ``now``, avoidance
+    reach ``avoid`` and ``uniform``, ``limit`` times as many uniform draws as there are agents (the fresh headings, step
+    by step); its ``layers`` ``(robots, no_robots, covered, gap, visited)``, the navigation kernel's ``cfg``, ``plans``
+    and ``work`` as plain tuples and the plans' ``active``; the run's ``bases`` and relaying nodes (``network``), and
+    the agents' connection books ``links`` = ``(linked, connected_steps, outages, longest, current, counts, sums)`` with
+    ``counts`` = ``[steps observed, steps all connected, outage going on, connected steps of the fraction]`` and
+    ``sums`` = ``[sum of fractions, window minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`);
+    ``limit``, the most steps to do.
+
+    Returns:
+        ``(steps done, QUIET/ACTS/IDLE/TRIANGLES_END/NON_FINITE, triangle candidates, losing, table, scans, grid
+        stamp, explorer steps, steps with a triangle candidate and none going ahead)``: after ``ACTS``, ``IDLE`` or
+        ``TRIANGLES_END`` ``scans`` are that step's agents' readings, the counts its tracking's.
+    """
+    blocked, clear, ox, oy, res = grid
+    current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused = tracking
+    rule, r_c, disabled, served = triangles
+    score, seen, g_ox, g_oy, g_res, row_stamp, stamp = knowledge
+    robots, no_robots, covered, gap, visited = layers
+    linked, connected_steps, outages, longest, down_for, counts, sums = links
+    indptr, indices, dist = table
+    m = agents.shape[0]
+    n = xy.shape[0]
+    (tri, t_angles, t_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_keep, dt,
+     largest) = moving
+    nt = tri.shape[0]
+    movers = np.empty(m + nt, np.int64)  # the agents, then the triangle routers (the controller's order)
+    lengths = np.empty(m + nt)
+    for j in range(m):
+        movers[j] = agents[j]
+        lengths[j] = length[j]
+    for q in range(nt):
+        movers[m + q] = tri[q]
+    t_scans = np.empty((nt, t_angles.shape[0]))
+    group = np.zeros(n, np.int64)
+    refused_m = np.empty(m, np.bool_)
+    fresh = np.empty(m)
+    no_bodies = (np.zeros(n + 1, np.int64), np.zeros(0, np.int32), np.zeros(0))
+    done = 0
+    looked = 0
+    while done < limit:
+        scans = np.empty((m, angles.shape[0]))
+        n_cand, n_losing = sense_track_agents(
+            blocked, clear, ox, oy, res, xy, heading, radius, agents, angles, sensor_range, indptr, indices, dist,
+            np.bool_(True), scans, current, is_ref, status, indptr, indices, dist, wants_other, left, r_eff, nearest_d,
+            other_ref, np.bool_(True), score, seen, g_ox, g_oy, g_res, nodes, robot_r, buf_r, buf_c, row_stamp,
+            stamp + 1)
+        if n_cand and not n_losing and not _triangle_goes(rule, r_c, disabled, served, agents, current, other_ref, left,
+                                                          xy):
+            # the controller would only look: the rest of sense_track_agents, as in a quiet step
+            looked += 1
+            integrate_agents(xy, heading, agents, angles, sensor_range, scans, score, seen, g_ox, g_oy, g_res, nodes,
+                             robot_r, buf_r, buf_c, row_stamp, stamp + 1)
+        elif n_cand or n_losing:
+            return done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now, looked
+        stamp += 1
+        # the frontier explorer's plan_and_steer
+        for j in range(m):
+            fresh[j] = -np.pi + (2.0 * np.pi) * uniform[done * m + j]
+            refused_m[j] = refused[agents[j]]
+        avoided = np.empty((m, angles.shape[0]))
+        for j in range(m):
+            for k in range(angles.shape[0]):
+                avoided[j, k] = min(scans[j, k], avoid)
+        navigate_kernel((now, np.bool_(False), xy, heading, agents, avoided, angles, refused_m, fresh),
+                        (score, seen, row_stamp, stamp, robots, no_robots, covered, gap, visited), cfg, plans, work)
+        now += 1
+        for j in range(m):
+            if not active[j]:
+                return done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
+        near = reach
+        if nt:  # the triangle routers' rings, then their steering, unless one of them arrives or gives up now
+            for q in range(nt):
+                if goal_ends(tri[q], xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step[q]):
+                    return done, TRIANGLES_END, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
+            for q in range(nt):
+                i = tri[q]
+                cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], t_angles, t_range,
+                              t_scans[q])
+                if n > 1:
+                    cast_bodies_one(i, indptr, indices, dist, xy, heading[i], t_angles, t_range, radius, largest,
+                                    t_scans[q])
+            farthest = 0.0
+            for j in range(m):
+                farthest = max(farthest, lengths[j])
+            for q in range(nt):
+                step, _ = steer_one(tri[q], xy, heading, goal, anchors, t_scans[q], t_angles, t_range, max_step[q],
+                                    r_keep, last_to_goal, blocked_steps, give_up, min_progress)
+                lengths[m + q] = (step / dt) * dt  # the command's speed times the step, as the move phase has it
+                farthest = max(farthest, lengths[m + q])
+            near = 2.0 * largest + 2.0 * farthest  # the move phase's reach, over every mover
+        # the move, then the radio's next table and the agents' connection
+        b_ptr, b_idx, b_dist = (indptr, indices, dist) if collisions else no_bodies
+        drive_movers(blocked, clear, ox, oy, res, movers, lengths, xy, heading, radius, collisions, b_ptr, b_idx,
+                     b_dist, near, distance, refused)
+        ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, np.int64(1))
+        done += 1
+        if not ok:
+            return done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
+        _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
+                 sums)
+    return done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now, looked
+
+
+@njit(cache=True)
+def _triangle_goes(rule, r_c, disabled, served, agents, current, other, left, xy):  # pragma: no cover - numba
+    """Would a triangle go ahead this step? What ``AgentAssisted.decide_tracked`` asks ``select_triangles``.
+
+    The candidates are the agents that hear a reference of another status (``other[m]``) and carry a router, less
+    the triangles they served already; one goes ahead when its references are farther apart than ``r_c`` (the
+    distance as ``numpy.linalg.norm`` computes it) and, by the local rule, not both disabled.
+    """
+    if rule == TRIANGLES_ACT:
+        return True
+    for m in range(agents.shape[0]):
+        a = agents[m]
+        o = other[m]
+        if o < 0 or left[a] < 1:
+            continue
+        cur = current[a]
+        lo = min(cur, o)
+        hi = max(cur, o)
+        fresh = True
+        for k in range(served.shape[0]):
+            if served[k, 0] == a and served[k, 1] == lo and served[k, 2] == hi:
+                fresh = False
+                break
+        if not fresh:
+            continue
+        dx = xy[cur, 0] - xy[o, 0]
+        dy = xy[cur, 1] - xy[o, 1]
+        if math.sqrt(dx * dx + dy * dy) > r_c and (rule == TRIANGLES_NONE or not (disabled[cur] and disabled[o])):
+            return True
+    return False
+
+
+@njit(cache=True)
+def _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
+             sums):  # pragma: no cover - numba
+    """What :meth:`amronet.sim.run.Run.observe_agents` and its :class:`~amronet.sim.run.OutageTracker` do."""
+    agents_linked_kernel(indptr, indices, agents, bases, network, linked)
+    a = linked.shape[0]
+    up = 0
+    for j in range(a):
+        if linked[j]:
+            up += 1
+    counts[0] += 1
+    if up == a:
+        counts[1] += 1
+        for j in range(a):
+            connected_steps[j] += 1
+        if counts[2]:
+            for j in range(a):
+                down_for[j] = 0
+            counts[2] = 0
+    else:
+        for j in range(a):
+            if linked[j]:
+                connected_steps[j] += 1
+                down_for[j] = 0
+            else:
+                if down_for[j] == 0:
+                    outages[j] += 1
+                down_for[j] += 1
+                if down_for[j] > longest[j]:
+                    longest[j] = down_for[j]
+        counts[2] = 1
+    frac = up / a
+    counts[3] += 1
+    sums[0] += frac
+    sums[1] = min(sums[1], frac)
+    sums[2] = min(sums[2], frac)

@@ -1,0 +1,188 @@
+"""Self-spreading's fast step: sense, decide and move in two compiled passes, and stretches of steps in one call.
+
+The loop's step (:meth:`amronet.sim.loop.Loop.step`) calls the sense phase, the controller's ``decide`` and the move
+phase one after another, each a handful of NumPy calls and compiled kernels. For a few dozen robots that glue, not
+the work, is most of a step. :class:`CompiledSpreading` does the same three phases in compiled passes over the arrays
+(the kernels are in :mod:`amronet.algorithms.self_spreading.kernels`), for self-spreading with its paper rules
+(``walk: random``, ``stop_rule: distance``, ``triangle_rule: geometric``, every ``triangular`` mode).
+
+First every exploring router reads its row of the neighbour table (the reference tracking of
+:func:`~amronet.algorithms.common.references.track_row`) and, unless a triangular deployment may start this step (a
+router met a reference of another status, the two references are more than ``r_c`` apart and the local rule does not
+rule it out: then the controller's own Python code settles the explorers,
+:meth:`~amronet.algorithms.self_spreading.controller.SelfSpreading.settle_explorers`), the routers about to lose their
+last reference stop. A kernel then draws the walkers' random numbers from the run's generator (or each from its run's
+generator in a batch) through the generators' C interface (:mod:`amronet.engine.bitgen`), in the order and number the
+controller draws them. Second, the routers still moving read their range rings (grid and bodies), steer (the random
+walk, :func:`~amronet.engine.motion.walk_one`, or the triangle router's go-to-goal,
+:func:`~amronet.algorithms.common.goto.steer_one`) and drive one after another with the collision checks
+(:func:`~amronet.engine.motion.drive_one`). With tens of thousands of movers (:func:`amronet.threads.use_threads`) the
+second pass is split in two: every mover's ring, decision and path against the map on several threads
+(:func:`~amronet.algorithms.self_spreading.kernels.sense_steer_plan_threaded`), then the collision checks against the
+bodies and the moves one after another (:func:`~amronet.algorithms.self_spreading.kernels.commit_moves`): the same
+numbers.
+
+Between two records the steps may be taken in a stretch (:class:`~amronet.algorithms.common.swarm_stretch.SwarmStretch`,
+:func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`), which stops before a step in which a triangular
+deployment may start. Every per-robot computation is the same compiled function the phase-by-phase path calls, in the
+same order, so a run gives the same result bit for bit with either step (``tests/test_compiled_step.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Any, Protocol
+
+import numpy as np
+
+from amronet.algorithms.base import Readings, StepInput
+from amronet.algorithms.common.swarm_stretch import SwarmStretch
+from amronet.algorithms.self_spreading.kernels import (
+    commit_moves,
+    list_movers,
+    sense_steer_drive,
+    sense_steer_plan_threaded,
+    spreading_stretch,
+    track_explorers,
+)
+from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surroundings, Watch
+from amronet.engine.bitgen import draw_normal_uniform
+from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
+from amronet.engine.streams import compiled_streams, normal_then_uniform
+from amronet.threads import LOCK, use_threads
+
+__all__ = ["CompiledSpreading", "SpreadingControls"]
+
+
+class SpreadingControls(Protocol):
+    """What the fast step reads and keeps of its controller: nothing else of it.
+
+    The controller is :class:`~amronet.algorithms.self_spreading.controller.SelfSpreading`: its names below are
+    the declared interface between the two.
+    """
+
+    params: Any
+    rng: Any
+    r_c: float
+    r_eff: float
+    router_model: int
+    several_statuses: bool
+    needs_range_readings: bool
+    walker: Any
+    current: np.ndarray
+    disabled: np.ndarray
+    refused: np.ndarray
+    steering: Any
+    settle_explorers: Callable[..., None]
+    settling_rule: Callable[[], tuple[np.ndarray, np.ndarray]]
+
+
+class CompiledSpreading(FastStep):
+    """Sense, decide and move of a self-spreading loop in two compiled passes (see the module docstring).
+
+    Args:
+        controller: The loop's controller.
+        context: The loop's step context; :meth:`applies` must hold.
+    """
+
+    def __init__(self, controller: SpreadingControls, context: StepContext) -> None:
+        c = controller
+        sw = context.swarm
+        self.swarm, self.controller, self.dt = sw, c, context.dt
+        n = len(sw)
+        model = sw.models[c.router_model]
+        self.around = Surroundings(context, model, sw.role == Role.ROUTER)
+        self.deployed_lookup = state_lookup(DEPLOYED_STATES)
+        self.want_other = c.several_statuses and c.params.triangular != "off"
+        self.local = c.params.triangular == "local"
+        self.r_c = float(c.r_c)
+        self.turn_sigma = float(c.walker.turn_sigma)
+        self.is_ref = np.zeros(n, dtype=np.bool_)
+        self.explorers = np.zeros(n, dtype=np.int64)
+        self.new_current = np.zeros(n, dtype=np.int64)
+        self.nearest = np.zeros(n)
+        self.other = np.zeros(n, dtype=np.int64)
+        self.movers = np.zeros(n, dtype=np.int64)
+        self.walkers = np.zeros(n, dtype=np.int64)
+        self.scans = np.zeros((n, model.sensor_beams))
+        self.length = np.zeros(n)
+        self.slot = np.zeros(n, dtype=np.int64)  # the threaded step's (large runs: amronet.threads)
+        self.free = np.zeros(n, dtype=np.bool_)
+        self.planned = np.zeros((n, 2))
+        self.streams = compiled_streams(c.rng, n)
+        """The draws' ``(bitgens, starts)`` (:mod:`amronet.engine.bitgen`), ``None``: numpy draws them."""
+        self.normal = np.zeros(n)
+        self.uniform = np.zeros(n)
+        self.stretcher = (SwarmStretch(context, c.settling_rule(), self.around)
+                          if self.streams is not None and SwarmStretch.applies(context) else None)
+        """The steps between records in one compiled call (:mod:`amronet.algorithms.common.swarm_stretch`), or
+        ``None`` (the walkers' draws go through numpy, or the stretch does not apply)."""
+        self.stretches = self.stretcher is not None
+
+    @staticmethod
+    def applies(controller: SpreadingControls, context: StepContext) -> bool:
+        """Whether the loop's phases are those this step compiles: self-spreading with its paper rules."""
+        c, p, sw = controller, controller.params, context.swarm
+        if context.faults or context.agents:
+            return False
+        return (p.walk == "random" and p.stop_rule == "distance" and p.triangle_rule == "geometric"
+                and c.needs_range_readings and bool(np.all(sw.model[sw.role == Role.ROUTER] == c.router_model)))
+
+    def step(self, now: StepInput) -> None:
+        """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
+        c, sw, a = self.controller, self.swarm, self.around
+        table = now.table
+        k, candidates, n_movers, n_walkers = track_explorers(
+            sw.state, sw.status, c.current, self.deployed_lookup, self.is_ref, table.indptr, table.indices,
+            table.dist, self.want_other, c.r_eff, sw.xy, self.r_c, self.local, c.disabled, self.explorers,
+            self.new_current, self.nearest, self.other, self.movers, self.walkers)
+        if candidates:  # a triangular deployment may start: the controller's own rules decide
+            current = self.new_current[:k].copy()
+            c.settle_explorers(replace(now, readings=Readings({})), self.explorers[:k].copy(), current,
+                               self.other[:k].copy(), current >= 0, self.nearest[:k] >= c.r_eff)
+            n_movers, n_walkers = list_movers(sw.state, self.movers, self.walkers)
+        if n_movers == 0:
+            c.refused[:] = False
+            return
+        normal, uniform = self.normal[:n_walkers], self.uniform[:n_walkers]
+        if self.streams is None or not draw_normal_uniform(*self.streams, self.walkers[:n_walkers], normal, uniform):
+            normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
+        several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
+        movers = self.movers[:n_movers]
+        s = c.steering
+        if use_threads(n_movers):
+            with LOCK:
+                sense_steer_plan_threaded(
+                    *a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, c.refused, movers, normal, uniform,
+                    self.turn_sigma, a.angles, a.sensor_range, *s_csr, several, s.goal, s.anchors, s.last_to_goal,
+                    s.blocked_steps, s.give_up_steps, s.min_progress, c.r_eff, self.dt, self.scans, self.length,
+                    self.slot, self.free, self.planned)
+            commit_moves(movers, self.length, self.free, self.planned, sw.xy, sw.radius, sw.state, s.goal,
+                         sw.distance, c.refused, drive_bodies, *d_csr)
+            return
+        sense_steer_drive(*a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,
+                          movers, normal, uniform, self.turn_sigma, a.angles, a.sensor_range, *s_csr, several, s.goal,
+                          s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps, s.min_progress, c.r_eff,
+                          self.dt, drive_bodies, *d_csr, self.scans, self.length)
+
+    def stretch(self, limit: int, now: StepInput, watch: Watch) -> Stretched | None:
+        """Up to ``limit`` steps in one call (:func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`)."""
+        if self.stretcher is None:
+            return None
+        return self.stretcher.take(limit, now.table, watch, self._kernel)
+
+    def _kernel(self, limit: int, csr: tuple, radio: tuple, books: tuple) -> tuple:
+        c, a, sw = self.controller, self.around, self.swarm
+        s = c.steering
+        n = len(sw)
+        track = (c.current, self.deployed_lookup, self.is_ref, bool(self.want_other), float(c.r_eff), self.r_c,
+                 bool(self.local), c.disabled, self.explorers, self.new_current, self.nearest, self.other, self.movers,
+                 self.walkers)
+        assert self.streams is not None
+        draws = (*self.streams, self.normal, self.uniform)
+        steer = (c.refused, self.turn_sigma, a.angles, a.sensor_range, True, s.goal, s.anchors, s.last_to_goal,
+                 s.blocked_steps, int(s.give_up_steps), float(s.min_progress), float(self.dt), bool(a.collisions),
+                 *a.no_bodies(n), self.scans, self.length)
+        robots = (sw.xy, sw.heading, sw.state, sw.status, sw.max_speed, sw.radius, sw.distance)
+        return spreading_stretch(limit, a.grid, robots, track, draws, steer, radio, csr, books)
