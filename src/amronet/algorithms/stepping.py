@@ -23,10 +23,10 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from amronet.engine.kernel_data import grid_of
 from amronet.engine.robots import RobotModel, Swarm
 from amronet.engine.sensing import beam_angles, body_table
 from amronet.engine.table import NeighbourTable
-from amronet.world.space import clearance
 
 if TYPE_CHECKING:
     from amronet.world.occupancy import OccupancyMap
@@ -201,8 +201,8 @@ class Surroundings:
         omap, swarm = context.omap, context.swarm
         self.swarm = swarm if movers is None else None
         """The robots whose largest body :meth:`largest_radius` follows (``None``: fixed reaches, it never changes)."""
-        self.grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
-                     float(omap.resolution))
+        self.grid = grid_of(omap)
+        """The map's grid as the kernels read it."""
         self.angles = beam_angles(model.sensor_beams)
         self.sensor_range = float(model.sensor_range)
         self.collisions = context.collisions
