@@ -110,7 +110,7 @@ def result_fingerprint(result) -> dict[str, str]:
     The summary's digest leaves out what was added later without changing results: radio and agents fields at
     their defaults and the ``mission`` section.
     """
-    files = result.files(snapshot=False)
+    files = result.files()
     summary = {k: v for k, v in json.loads(files["summary.json"]).items() if k not in _WALL_FIELDS}
     _drop_default_radio_fields(summary)
     _drop_default_agents_fields(summary)

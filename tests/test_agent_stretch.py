@@ -1,6 +1,8 @@
 """Quiet stretches of agent-assisted runs (amronet.algorithms.agent_assisted.stretch) against the same runs step by
 step."""
 
+import ast
+import inspect
 import json
 
 import numpy as np
@@ -8,10 +10,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from amronet.algorithms.agent_assisted import kernels, stretch_kernels
 from amronet.algorithms.agent_assisted.controller import _pair_key
+from amronet.algorithms.agent_assisted.explorers.frontier import knowledge, planning
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
 from amronet.algorithms.agent_assisted.stretch_kernels import TRIANGLES_LOCAL, TRIANGLES_NONE, _triangle_goes
 from amronet.algorithms.common.triangular import select_triangles
+from amronet.algorithms.stepping import AgentBooks
+from amronet.engine.kernel_data import Csr, Grid
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.radio import NeighbourTable
 from amronet.scenario import load_scenario
@@ -103,7 +109,7 @@ def test_the_kernels_triangle_rule_is_select_triangles(seed, rule):
                                 np.ones(n + m, dtype=bool)).any()
     code = TRIANGLES_NONE if rule == "none" else TRIANGLES_LOCAL
     served_rows = np.array(sorted(served), dtype=np.int64).reshape(-1, 3)
-    assert _triangle_goes(code, 3.0, disabled, served_rows, agents, current, other, left, xy) == expected
+    assert _triangle_goes((code, 3.0, disabled, served_rows), agents, current, other, left, xy) == expected
 
 
 def test_steps_stepped_one_by_one_take_no_stretch():
@@ -132,3 +138,36 @@ def test_a_recorded_run_is_stepped_one_by_one_to_the_same_end():
     assert sum(recorded.compiled.quiet.ends.values()) == 0 and sum(plain.compiled.quiet.ends.values()) > 0
     for key, value in _books(plain).items():
         np.testing.assert_array_equal(_books(recorded)[key], value, err_msg=key)
+
+
+K, S = kernels, stretch_kernels
+UNPACKED = {  # (module, kernel): {tuple it unpacks: the named structure laid out in it}
+    (K, "sense_track_agents"): {"grid": Grid, "robots": K.Robots, "ring": K.Ring, "near": Csr,
+                                "tracking": K.Tracking, "table": Csr},
+    (K, "integrate_agents"): {"robots": K.Robots, "ring": K.Ring, "knowledge": K.Knowledge},
+    (K, "drive_movers"): {"robots": K.Robots},
+    (S, "quiet_stretch"): {"grid": Grid, "robots": K.Robots, "ring": K.Ring, "moves": S.Moves, "radio": S.Radio,
+                           "tracking": K.Tracking, "moving": S.Moving, "knowledge": K.Knowledge,
+                           "cells": knowledge.Cells, "frontier": S.Frontier},
+    (S, "_triangle_goes"): {"triangles": S.Triangles},
+    (S, "_observe"): {"books": AgentBooks, "arrays": S.Links},
+    (knowledge, "integrate_readings"): {"cells": knowledge.Cells},
+    (planning, "search_target"): {"targets": planning.Targets, "claims": planning.Claims},
+}
+
+
+@pytest.mark.parametrize(("module", "name"), list(UNPACKED), ids=lambda v: getattr(v, "__name__", v))
+def test_the_kernels_unpack_their_named_structures_in_the_order_of_their_fields(module, name):
+    # callers hand the named structures over as plain tuples, which the kernels unpack by position: each name unpacked
+    # is the field's, with a prefix of its own, or "_" (unused)
+    kernel = next(node for node in ast.parse(inspect.getsource(module)).body
+                  if isinstance(node, ast.FunctionDef) and node.name == name)
+    unpacked = {stmt.value.id: [target.id for target in stmt.targets[0].elts] for stmt in ast.walk(kernel)
+                if isinstance(stmt, ast.Assign) and isinstance(stmt.targets[0], ast.Tuple)
+                and isinstance(stmt.value, ast.Name) and stmt.value.id in UNPACKED[module, name]}
+    assert set(unpacked) == set(UNPACKED[module, name])
+    for source, names in unpacked.items():
+        fields = UNPACKED[module, name][source]._fields
+        assert len(names) == len(fields), source
+        for got, field in zip(names, fields, strict=True):
+            assert got in ("_", field) or got.endswith("_" + field), (source, got, field)

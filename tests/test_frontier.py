@@ -22,6 +22,8 @@ from amronet.algorithms.agent_assisted.explorers.frontier.knowledge import (
     update_passable,
 )
 from amronet.algorithms.agent_assisted.explorers.frontier.planning import (
+    Claims,
+    Targets,
     kind_at,
     search_buffers,
     search_target,
@@ -98,10 +100,10 @@ def find_path(grid, start, covered, visited=None, robots=None, claims=None, *, c
     every = np.ones(rows, dtype=bool)
     update_window_counts(grid.score, grid.seen, covered, window, every, every, marks, counts)
     path = np.zeros(rows * cols, dtype=np.int64)
-    n, _, kind = search_target(grid.score, grid.seen, mask(grid, visited), traversable(grid, clearance, robots),
-                               counts, gap_weight * gap_to_uncovered(covered), window, start[0], start[1], escape,
-                               claims.reshape(-1, 2), float((claim_radius / grid.resolution) ** 2),
-                               search_buffers(rows * cols), path)
+    targets = Targets(mask(grid, visited), counts, gap_weight * gap_to_uncovered(covered), window)
+    n, _, kind = search_target(grid.score, grid.seen, traversable(grid, clearance, robots), tuple(targets),
+                               tuple(Claims(claims.reshape(-1, 2), float((claim_radius / grid.resolution) ** 2))),
+                               start[0], start[1], escape, search_buffers(rows * cols), path)
     cells = path[:n]
     return np.stack([cells // cols, cells % cols], axis=1), int(kind)
 

@@ -147,9 +147,9 @@ def test_the_search_leaves_its_scratch_buffers_as_it_found_them():
         kept = trav.copy()
         for _ in range(3):
             sr, sc = int(rng.integers(rows)), int(rng.integers(cols))
-            fresh = search_target(score, seen, visited, trav, counts, gap, 2, sr, sc, 3, claims, 1.0,
+            fresh = search_target(score, seen, trav, (visited, counts, gap, 2), (claims, 1.0), sr, sc, 3,
                                   search_buffers(rows * cols), np.zeros(rows * cols, np.int64))
-            reused = search_target(score, seen, visited, trav, counts, gap, 2, sr, sc, 3, claims, 1.0, search,
+            reused = search_target(score, seen, trav, (visited, counts, gap, 2), (claims, 1.0), sr, sc, 3, search,
                                    np.zeros(rows * cols, np.int64))
             assert fresh == reused
             assert (search[0] == -1).all() and (trav == kept).all()

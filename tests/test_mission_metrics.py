@@ -118,7 +118,8 @@ def check_mission(summary: dict) -> dict:
     """The invariants of a run's ``mission`` section; returns it."""
     m = summary["mission"]
     assert MISSION_KEYS <= set(m)
-    assert set(m) - MISSION_KEYS <= {"drop_rule", "triangle_relays", "reverse_drops", "drops_by_cause"}
+    assert set(m) - MISSION_KEYS <= {"drop_rule", "triangle_relays", "reverse_drops", "drops_by_cause",
+                                     "triangle_relays_cut_off"}
     assert m["connected_fraction"] == summary["agents_connected_fraction"]
     per_agent = m["per_agent"]
     assert len(per_agent) == summary["agents"]
@@ -169,7 +170,7 @@ def test_cut_off_agents_have_outages():
     assert m["connected_fraction"] < 1.0 and m["time_all_connected_fraction"] < 1.0
     assert any(a["outages"] > 0 for a in m["per_agent"])
     assert s["agents_connected_min"] < 1.0
-    files = result.files(snapshot=False)
+    files = result.files()
     assert json.loads(files["summary.json"])["mission"] == m
 
 
@@ -198,7 +199,7 @@ def test_no_mission_without_agents():
     result = amronet.run(amronet.load_scenario("self-spreading-6x6", overrides={"sim.time_limit": 3}), seed=1)
     assert result.summary["mission"] is None
     assert result.run.agent_links is None
-    assert json.loads(result.files(snapshot=False)["summary.json"])["mission"] is None
+    assert json.loads(result.files()["summary.json"])["mission"] is None
 
 
 def test_mission_fields_are_columns_of_the_stored_runs(tmp_path):

@@ -7,7 +7,7 @@ from PIL import Image
 from amronet.cli import main
 from amronet.errors import AmronetError
 from amronet.experiments.options import RunOptions
-from amronet.planning import plan, write_plan
+from amronet.planning import Mission, plan, write_plan
 from amronet.sweeps import ResultStore
 
 
@@ -136,7 +136,7 @@ def test_plan_with_radio_drop_rule_and_stock_reports_time_connected_and_warns(tm
     """Issue #19: a short stock under walls leaves agents cut off, and the plan says so."""
     p = plan("office-32x32", [(1.0, 1.0)], r_c=6.0, agents_per_base=2, runs=3,
              options=RunOptions(workers=1, show_progress=False, time_limit=300.0),
-             radio={"model": "multi-wall"}, drop_rule="link-quality", stock=2)
+             mission=Mission(radio={"model": "multi-wall"}, drop_rule="link-quality", stock=2))
     sc = p.scenario
     assert sc["radio"]["model"] == "multi-wall" and sc["algorithm"]["params"]["drop_rule"] == "link-quality"
     assert sc["agents"]["routers_carried"] == 2 and sc["agents"]["when_empty"] == "continue"
@@ -170,7 +170,7 @@ def test_plan_of_a_replayed_mission_counts_every_run_that_followed_the_paths(tmp
     paths = tmp_path / "paths.csv"
     paths.write_text(PATHS_CSV)
     p = plan("office-32x32", [(1.0, 1.0)], r_c=6.0, agents_per_base=2, runs=2,
-             options=RunOptions(workers=1, show_progress=False), trajectories=paths)
+             options=RunOptions(workers=1, show_progress=False), mission=Mission(trajectories=paths))
     assert p.scenario["agents"]["trajectories"] == str(paths.resolve())
     assert all(r["stop_reason"] == "settled" for r in p.runs)  # a replay ends where its paths end
     assert p.distribution["completed"] == 2 and p.recommended is not None and p.recommended >= 1

@@ -465,7 +465,7 @@ def test_bad_radio_input_one_line_exit_2_nothing_written(tmp_path, capsys, sets,
 
 def test_margins_reused_for_still_links_equal_fresh_ones():
     """A medium reuses the margins of links whose ends did not move: over a run they equal a fresh computation."""
-    from amronet.engine.radio import _NO_PREVIOUS, _candidate_margins
+    from amronet.engine.links import NO_PREVIOUS, candidate_margins
 
     sc = load_scenario("self-spreading-obstacles-6x6", overrides={"radio.model": "multi-wall",
                                                                   "radio.shadowing_db": 5.0})
@@ -475,7 +475,7 @@ def test_margins_reused_for_still_links_equal_fresh_ones():
         previous = sim.medium._previous
         sim.step()
         t = sim.table.geometric
-        fresh = _candidate_margins(t.xy, t.indptr, t.indices, t.dist, *_NO_PREVIOUS, *sim.medium.hearing.args())
+        fresh = candidate_margins(t.xy, t.indptr, t.indices, t.dist, *NO_PREVIOUS, sim.medium.hearing.plain())
         np.testing.assert_array_equal(t.link_margin, fresh)
         if previous is not None:
             reused += int(np.count_nonzero((previous[0][:, None] == t.xy[None, :]).all(-1).any(0)))

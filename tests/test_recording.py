@@ -7,8 +7,9 @@ import json
 
 import numpy as np
 import pytest
+from numba import njit
 
-from amronet.engine.radio import MEDIA, UnitDisk
+from amronet.engine.radio import MEDIA, RadioMedium
 from amronet.engine.robots import Role
 from amronet.errors import AmronetError
 from amronet.outputs.recording import Recorder, Recording, decode_positions, encode_positions, load_recording
@@ -100,7 +101,7 @@ def test_growing_swarm_and_agent_trails(agents):
 
 def test_trails_only_recorder_writes_no_recording():
     sim, rec, result = _run("agent-assisted-office", {"sim.time_limit": 20}, full=False)
-    assert "recording.npz" not in result.files(snapshot=False)
+    assert "recording.npz" not in result.files()
     assert len(rec.trails()) == 3
     with pytest.raises(AmronetError, match="--record"):
         rec.npz_bytes(sim)
@@ -123,13 +124,17 @@ def test_encode_decode_wraps_modulo_2_16():
     np.testing.assert_allclose(decode_positions(delta, np.zeros(2), quantum), xy, atol=quantum)
 
 
-@MEDIA.register("test-recording-medium")
-class _EveryOtherLink(UnitDisk):
-    """A medium whose links are not the unit-disk graph: links between even ids only."""
+@njit(cache=True)
+def _half_range_margin(xa, ya, xb, yb, d, sa, sb, floor_db, h):
+    """A toy radio heard within half of ``r_c`` only (10 dB per ``r_c``)."""
+    return 10.0 * (0.5 * h.r_c - d) / h.r_c
 
-    def keep(self, xy, indptr, indices, dist):
-        rows = np.repeat(np.arange(len(xy)), np.diff(indptr))
-        return (rows % 2 == 0) & (indices % 2 == 0)
+
+@MEDIA.register("test-recording-medium")
+class _HalfRange(RadioMedium):
+    """A medium whose links are not the unit-disk graph: pairs within half of ``r_c`` only."""
+
+    link_margin = _half_range_margin
 
 
 def test_other_media_store_their_links():
@@ -138,7 +143,12 @@ def test_other_media_store_their_links():
     loaded = _load(result.files()["recording.npz"])
     assert loaded.link_offsets is not None and len(loaded.link_offsets) == loaded.frames + 1
     np.testing.assert_array_equal(loaded.links(loaded.frames - 1), sim.table.pairs)
-    assert np.all(loaded.links(0) % 2 == 0)
+    xy = loaded.frame(0)["xy"]
+    pairs = loaded.links(0)
+    gap = np.linalg.norm(xy[pairs[:, 0]] - xy[pairs[:, 1]], axis=1)
+    assert len(pairs) and gap.max() < 0.51 * loaded.r_c  # the medium's links (positions are quantised)
+    near = np.linalg.norm(xy[:, None] - xy[None], axis=2)
+    assert np.count_nonzero(np.triu(near < loaded.r_c, 1)) > len(pairs)
 
 
 def test_errors_name_the_problem(tmp_path):

@@ -8,6 +8,7 @@ import pytest
 import amronet
 from amronet.engine.robots import Role
 from amronet.outputs.files import MANIFEST
+from amronet.viz.run_snapshot import run_snapshot_png
 
 
 @pytest.fixture(scope="module")
@@ -55,10 +56,11 @@ def test_runs_with_agents_add_the_agents_connected_column(agent_result):
 
 
 def test_files_and_save(result, tmp_path):
-    files = result.files(snapshot=True)
+    files = result.files(snapshot=run_snapshot_png(result))
     assert sorted(files) == ["network.json", "snapshot.png", "summary.json", "timeseries.csv"]
     assert files["snapshot.png"].startswith(b"\x89PNG\r\n\x1a\n")
     assert json.loads(files["summary.json"]) == json.loads(json.dumps(result.summary))
-    out = result.save(tmp_path / "r", snapshot=False)
+    assert "snapshot.png" not in result.files()
+    out = result.save(tmp_path / "r")
     assert sorted(p.name for p in out.iterdir()) == sorted([MANIFEST, "network.json", "summary.json",
                                                             "timeseries.csv"])

@@ -85,9 +85,9 @@ def test_same_seed_same_positions_different_seed_differs():
     a = Simulation(sc, 7).run()
     b = Simulation(sc, 7).run()
     c = Simulation(sc, 8).run()
-    assert a.files(snapshot=False)["network.json"] == b.files(snapshot=False)["network.json"]
+    assert a.files()["network.json"] == b.files()["network.json"]
     assert a.timeseries_csv() == b.timeseries_csv()
-    assert a.files(snapshot=False)["network.json"] != c.files(snapshot=False)["network.json"]
+    assert a.files()["network.json"] != c.files()["network.json"]
 
 
 def test_band_narrower_than_a_step_is_rejected():

@@ -55,7 +55,7 @@ def test_explicit_default_rules_change_nothing(doc, seed, time_limit):
     explicit = sc.with_overrides({"algorithm.params.stop_rule": "distance",
                                   "algorithm.params.triangle_rule": "geometric"})
     a, b = Simulation(sc, seed).run(), Simulation(explicit, seed).run()
-    assert a.files(snapshot=False)["network.json"] == b.files(snapshot=False)["network.json"]
+    assert a.files()["network.json"] == b.files()["network.json"]
     assert a.timeseries_csv() == b.timeseries_csv()
 
 

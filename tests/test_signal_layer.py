@@ -165,7 +165,7 @@ def test_signal_snapshots_of_the_recording_and_of_the_network_agree(walls_run):
 
 def test_default_snapshot_is_the_picture_of_old(disk_run, tmp_path):
     """Unit disk, default layer: the very picture the coverage tint within r_c gave before the signal layer."""
-    from amronet.viz import snapshot_figure
+    from amronet.viz import Nodes, Shading, snapshot_figure
     from amronet.viz.decorations import save_figure
     from amronet.viz.recorded import frame_title
 
@@ -177,10 +177,10 @@ def test_default_snapshot_is_the_picture_of_old(disk_run, tmp_path):
     fr = rec.frame(f)
     old_covered = CoverageArea(rec.omap, rec.reachable).covered_mask(fr["xy"][fr["kind"] != Role.AGENT], rec.r_c)
     np.testing.assert_array_equal(rec.covered(f), old_covered)
-    fig = snapshot_figure(
-        rec.omap, xy=fr["xy"], kind=np.array(ROLE_NAMES)[fr["kind"]], state=np.array(STATE_NAMES)[fr["state"]],
-        status=fr["status"].astype(np.int64), r_c=rec.r_c, links=rec.links(f), covered=old_covered,
-        reachable=rec.reachable, title=frame_title(rec, f), dpi=120, trails=rec.trails(f))
+    nodes = Nodes(xy=fr["xy"], kind=np.array(ROLE_NAMES)[fr["kind"]], state=np.array(STATE_NAMES)[fr["state"]],
+                  status=fr["status"].astype(np.int64), r_c=rec.r_c, links=rec.links(f), trails=rec.trails(f))
+    fig = snapshot_figure(rec.omap, nodes, Shading(covered=old_covered, reachable=rec.reachable),
+                          title=frame_title(rec, f), dpi=120)
     save_figure(fig, tmp_path / "old.svg", "svg", 120, facecolor="white")
     old = (tmp_path / "old.svg").read_bytes()
     assert (tmp_path / "default.svg").read_bytes() == old

@@ -88,7 +88,8 @@ def test_controllers_get_a_setup_without_map_or_scenario():
     omap = sim.world.omap
     assert ctl.area == AreaKnowledge(extent=omap.extent,
                                      free_area_m2=float(np.count_nonzero(omap.free)) * omap.resolution**2)
-    assert set(Setup.__dataclass_fields__) == {"robots", "r_c", "dt", "rng", "area", "stock", "paths"}
+    assert set(Setup.__dataclass_fields__) == {"robots", "r_c", "dt", "rng", "area", "stock", "paths",
+                                               "links_by_distance"}
 
 
 def test_agents_get_their_stock_and_a_hand_that_checks_the_floor():

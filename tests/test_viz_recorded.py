@@ -27,7 +27,7 @@ SVG = "{http://www.w3.org/2000/svg}"
 def _recording(preset: str, overrides: dict, every: int = 10) -> Recording:
     sim = Simulation(load_scenario(preset, overrides), 1)
     result = sim.run(recorder=Recorder(every))
-    with np.load(io.BytesIO(result.files(snapshot=False)["recording.npz"])) as data:
+    with np.load(io.BytesIO(result.files()["recording.npz"])) as data:
         return Recording.from_arrays({k: data[k] for k in data.files})
 
 

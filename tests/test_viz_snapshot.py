@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 from PIL import Image
 
-from amronet.viz import MAP_COLOURS, draw_map, save_map_picture, save_snapshot, snapshot_figure
+from amronet.viz import MAP_COLOURS, Nodes, Shading, draw_map, save_map_picture, save_snapshot, snapshot_figure
 from amronet.viz.decorations import nice_length
 from amronet.viz.nodestyle import link_style
 from amronet.world import OCCUPIED, UNKNOWN, OccupancyMap
@@ -27,28 +27,21 @@ def omap() -> OccupancyMap:
 
 
 @pytest.fixture
-def nodes() -> dict:
+def nodes() -> Nodes:
     xy = np.array([[0.5, 0.5], [1.5, 0.8], [2.5, 1.0], [3.5, 3.5], [1.0, 4.0], [2.0, 1.8]])
-    return {
-        "xy": xy,
-        "kind": np.array(["base", "router", "router", "router", "agent", "router"]),
-        "state": np.array(["base", "reference", "triangle-settled", "triangle", "agent", "explore"]),
-        "status": np.array([0, 0, 1, 1, 0, -1]),
-        "links": np.array([[0, 1], [1, 2], [2, 5]]),
-        "r_c": 0.8,
-    }
+    return Nodes(
+        xy=xy,
+        kind=np.array(["base", "router", "router", "router", "agent", "router"]),
+        state=np.array(["base", "reference", "triangle-settled", "triangle", "agent", "explore"]),
+        status=np.array([0, 0, 1, 1, 0, -1]),
+        links=np.array([[0, 1], [1, 2], [2, 5]]),
+        r_c=0.8,
+    )
 
 
-def _empty_nodes(r_c: float) -> dict:
+def _empty_nodes(r_c: float) -> Nodes:
     s = np.array([], dtype=str)
-    return {
-        "xy": np.zeros((0, 2)),
-        "kind": s,
-        "state": s,
-        "status": np.zeros(0, int),
-        "links": [],
-        "r_c": r_c,
-    }
+    return Nodes(xy=np.zeros((0, 2)), kind=s, state=s, status=np.zeros(0, int), links=[], r_c=r_c)
 
 
 def _read(path: Path) -> np.ndarray:
@@ -69,10 +62,10 @@ def _light_red(img: np.ndarray) -> np.ndarray:
 
 
 def test_png_written_to_size_and_not_blank(tmp_path, omap, nodes):
-    a = save_snapshot(tmp_path / "a.png", omap, dpi=DPI, **nodes)
-    b = save_snapshot(tmp_path / "b.png", omap, dpi=2 * DPI, **nodes)
+    a = save_snapshot(tmp_path / "a.png", omap, nodes, dpi=DPI)
+    b = save_snapshot(tmp_path / "b.png", omap, nodes, dpi=2 * DPI)
     img_a, img_b = _read(a), _read(b)
-    fig = snapshot_figure(omap, dpi=DPI, **nodes)
+    fig = snapshot_figure(omap, nodes, dpi=DPI)
     w_in, h_in = fig.get_size_inches()
     assert img_a.shape[:2] == (round(h_in * DPI), round(w_in * DPI))
     assert abs(img_b.shape[0] - 2 * img_a.shape[0]) <= 1 and abs(img_b.shape[1] - 2 * img_a.shape[1]) <= 1
@@ -80,8 +73,8 @@ def test_png_written_to_size_and_not_blank(tmp_path, omap, nodes):
 
 
 def test_layout_does_not_depend_on_content(omap, nodes):
-    with_nodes = snapshot_figure(omap, dpi=DPI, **nodes)
-    without = snapshot_figure(omap, dpi=DPI, **_empty_nodes(nodes["r_c"]))
+    with_nodes = snapshot_figure(omap, nodes, dpi=DPI)
+    without = snapshot_figure(omap, _empty_nodes(nodes.r_c), dpi=DPI)
     assert np.allclose(with_nodes.axes[0].get_position().extents, without.axes[0].get_position().extents)
 
 
@@ -109,11 +102,10 @@ def assert_scale_bar_outside_the_map(fig: Figure) -> None:
 
 @pytest.mark.parametrize("shape", [(100, 100), (40, 200), (200, 40), (10, 10)])
 def test_scale_bar_is_outside_the_map(omap, nodes, shape):
-    square = snapshot_figure(omap, dpi=DPI, **nodes)
+    square = snapshot_figure(omap, nodes, dpi=DPI)
     assert_scale_bar_outside_the_map(square)
     # its length is to scale: a fifth of the map's width, rounded, in data units
-    fig = snapshot_figure(OccupancyMap("m", 0.05, (0.0, 0.0), np.zeros(shape, np.int8)), dpi=DPI,
-                          **_empty_nodes(0.5))
+    fig = snapshot_figure(OccupancyMap("m", 0.05, (0.0, 0.0), np.zeros(shape, np.int8)), _empty_nodes(0.5), dpi=DPI)
     assert_scale_bar_outside_the_map(fig)
     bar = _scale_bar(fig).get_window_extent(fig.canvas.get_renderer())
     (x0, _), (x1, _) = fig.axes[0].transData.transform([(0, 0), (nice_length(shape[1] * 0.05), 0)])
@@ -121,13 +113,13 @@ def test_scale_bar_is_outside_the_map(omap, nodes, shape):
 
 
 def test_nodes_are_drawn_where_they_are(tmp_path, omap, nodes):
-    with_nodes = save_snapshot(tmp_path / "n.png", omap, dpi=DPI, **nodes)
-    without = save_snapshot(tmp_path / "e.png", omap, dpi=DPI, **_empty_nodes(nodes["r_c"]))
+    with_nodes = save_snapshot(tmp_path / "n.png", omap, nodes, dpi=DPI)
+    without = save_snapshot(tmp_path / "e.png", omap, _empty_nodes(nodes.r_c), dpi=DPI)
     img_n, img_e = _read(with_nodes), _read(without)
     assert img_n.shape == img_e.shape
-    fig = snapshot_figure(omap, dpi=DPI, **nodes)
+    fig = snapshot_figure(omap, nodes, dpi=DPI)
     for i in (0, 1, 3, 4):  # base, reference, triangle, agent
-        r, c = _pixel(fig, nodes["xy"][i])
+        r, c = _pixel(fig, nodes.xy[i])
         win = (slice(r - 3, r + 4), slice(c - 3, c + 4))
         assert np.abs(img_n[win] - img_e[win]).max() > 60, f"node {i} not visible"
     # far from every node and disk (top-left free area) the two pictures agree
@@ -139,10 +131,10 @@ def test_nodes_are_drawn_where_they_are(tmp_path, omap, nodes):
 def test_uncovered_shading(tmp_path, omap, nodes):
     reachable = omap.free.copy()
     none_covered = save_snapshot(
-        tmp_path / "u.png", omap, dpi=DPI, covered=np.zeros(omap.shape, bool), reachable=reachable, **nodes
+        tmp_path / "u.png", omap, nodes, Shading(covered=np.zeros(omap.shape, bool), reachable=reachable), dpi=DPI
     )
     all_covered = save_snapshot(
-        tmp_path / "c.png", omap, dpi=DPI, covered=np.ones(omap.shape, bool), reachable=reachable, **nodes
+        tmp_path / "c.png", omap, nodes, Shading(covered=np.ones(omap.shape, bool), reachable=reachable), dpi=DPI
     )
     assert _light_red(_read(none_covered)).sum() > 100
     assert _light_red(_read(all_covered)).sum() == 0
@@ -157,17 +149,17 @@ def test_legend_explains_covered_and_uncovered_ground(omap, nodes):
     reachable = omap.free.copy()
     half = np.zeros(omap.shape, bool)
     half[:, :50] = True
-    labels = _legend(snapshot_figure(omap, dpi=DPI, covered=half, reachable=reachable, **nodes))
+    labels = _legend(snapshot_figure(omap, nodes, Shading(covered=half, reachable=reachable), dpi=DPI))
     assert labels.index(covered_label) + 1 == labels.index("reachable, uncovered")
-    legend = snapshot_figure(omap, dpi=DPI, covered=half, **nodes).legends[0]
+    legend = snapshot_figure(omap, nodes, Shading(covered=half), dpi=DPI).legends[0]
     handle = next(h for h, t in zip(legend.legend_handles, legend.get_texts(), strict=True)
                   if t.get_text() == covered_label)
     assert tuple(handle.get_facecolor()[:3]) == (1.0, 1.0, 1.0)  # plain, like the covered ground
-    all_covered = _legend(snapshot_figure(omap, dpi=DPI, covered=np.ones(omap.shape, bool), **nodes))
+    all_covered = _legend(snapshot_figure(omap, nodes, Shading(covered=np.ones(omap.shape, bool)), dpi=DPI))
     assert covered_label in all_covered and "reachable, uncovered" not in all_covered
-    none_covered = _legend(snapshot_figure(omap, dpi=DPI, covered=np.zeros(omap.shape, bool), **nodes))
+    none_covered = _legend(snapshot_figure(omap, nodes, Shading(covered=np.zeros(omap.shape, bool)), dpi=DPI))
     assert covered_label not in none_covered and "reachable, uncovered" in none_covered
-    assert covered_label not in _legend(snapshot_figure(omap, dpi=DPI, **nodes))  # no coverage given
+    assert covered_label not in _legend(snapshot_figure(omap, nodes, dpi=DPI))  # no coverage given
 
 
 def test_unreachable_shading_and_draw_map(omap):
@@ -186,13 +178,13 @@ def test_unreachable_shading_and_draw_map(omap):
 
 
 def test_svg_output(tmp_path, omap, nodes):
-    path = save_snapshot(tmp_path / "s.svg", omap, dpi=DPI, title="hello svg", **nodes)
+    path = save_snapshot(tmp_path / "s.svg", omap, nodes, dpi=DPI, title="hello svg")
     text = path.read_text()
     assert text.lstrip().startswith("<?xml") and "<svg" in text
     map_svg = save_map_picture(omap, tmp_path / "m.svg", dpi=DPI)
     assert "<svg" in map_svg.read_text()
     # byte-identical from one render to the next: no random clip-path ids, no date
-    assert save_snapshot(tmp_path / "s2.svg", omap, dpi=DPI, title="hello svg", **nodes).read_bytes() == \
+    assert save_snapshot(tmp_path / "s2.svg", omap, nodes, dpi=DPI, title="hello svg").read_bytes() == \
         path.read_bytes()
     assert save_map_picture(omap, tmp_path / "m2.svg", dpi=DPI).read_bytes() == map_svg.read_bytes()
     assert "<dc:date>" not in text
@@ -225,13 +217,15 @@ def test_map_picture(tmp_path, omap):
 )
 def test_bad_arguments_raise(tmp_path, omap, nodes, change, name):
     with pytest.raises(ValueError, match=f"^{name} "):
-        save_snapshot(tmp_path / "x.png", omap, dpi=DPI, **{**nodes, **change})
+        shading = {k: v for k, v in change.items() if k in Shading._fields}
+        drawn = nodes._replace(**{k: v for k, v in change.items() if k not in shading})
+        save_snapshot(tmp_path / "x.png", omap, drawn, Shading(**shading), dpi=DPI)
     assert not (tmp_path / "x.png").exists()
 
 
 def test_bad_suffix_raises(tmp_path, omap, nodes):
     with pytest.raises(ValueError, match=r"^path "):
-        save_snapshot(tmp_path / "x.jpg", omap, **nodes)
+        save_snapshot(tmp_path / "x.jpg", omap, nodes)
     with pytest.raises(ValueError, match=r"^path "):
         save_map_picture(omap, tmp_path / "x.pdf")
 
@@ -253,7 +247,7 @@ def test_links_thin_out_when_there_are_many(omap):
     links = np.column_stack([i[near], j[near]])
     assert len(links) > 10_000
     n = len(xy)
-    fig = snapshot_figure(omap, dpi=DPI, xy=xy, kind=np.full(n, "router"), state=np.full(n, "reference"),
-                          status=np.zeros(n, int), links=links, r_c=0.2)
+    fig = snapshot_figure(omap, Nodes(xy=xy, kind=np.full(n, "router"), state=np.full(n, "reference"),
+                                      status=np.zeros(n, int), links=links, r_c=0.2), dpi=DPI)
     coll = next(c for c in fig.axes[0].collections if c.get_zorder() == 2)
     assert coll.get_linewidth()[0] <= 0.2 and coll.get_edgecolor()[0][3] <= 0.25

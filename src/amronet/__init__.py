@@ -7,10 +7,9 @@ Example:
     True
 """
 
-__version__ = "0.1.0"
-
 from amronet.kernel_cache import configure as _configure_kernel_cache
 from amronet.threads import configure as _configure_threads
+from amronet.version import __version__
 
 _configure_kernel_cache()  # before any module with kernels is imported (see amronet.kernel_cache)
 _configure_threads()  # a fork-safe thread pool for the few threaded kernels (see amronet.threads)

@@ -95,6 +95,11 @@ class Setup:
         stock: The routers agents carry (``None`` without agents).
         paths: The agents' given paths (``agents.trajectories``; agent ``a`` is the ``a``-th agent of ``robots``),
             or ``None``: the agents explore. Only a controller with :attr:`Controller.follows_paths` is given any.
+        links_by_distance: Whether the radio links every pair within ``r_c`` and no other (the unit disk without
+            packet loss): then a node within ``r_c`` is heard, and a rule that keeps a robot within ``r_c`` of a node
+            keeps their link. Otherwise (walls, shadowing, packet loss) only the neighbour table says who hears whom.
+            A robot would learn this from its own table row; it is told once so that the rules can skip link tests
+            that cannot fail (and keep the paper's timing, bit for bit) where it holds.
     """
 
     robots: Swarm
@@ -104,6 +109,7 @@ class Setup:
     area: AreaKnowledge
     stock: RouterStock | None = None
     paths: AgentPaths | None = None
+    links_by_distance: bool = True
 
 
 @dataclass(frozen=True)
@@ -162,6 +168,7 @@ class Controller(ABC):
         self.dt = setup.dt
         self.rng = setup.rng
         self.area = setup.area
+        self.links_by_distance = setup.links_by_distance
 
     @classmethod
     def start_range(cls, params: BaseModel, r_c: float) -> float:

@@ -13,9 +13,9 @@ import os
 import sys
 from pathlib import Path
 
-from amronet import __version__
 from amronet.cli.common import add_executor_arguments, make_executor_from_args
 from amronet.errors import AmronetError
+from amronet.version import __version__
 
 __all__ = ["main"]
 
@@ -44,7 +44,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
     result = sim.run(progress=progress, recorder=recorder)
     if not quiet and sys.stderr.isatty():
         print(file=sys.stderr)
-    result.save(args.out, snapshot=not args.no_snapshot)
+    if args.no_snapshot:
+        snapshot = None
+    else:
+        from amronet.viz.run_snapshot import run_snapshot_png  # matplotlib: imported only when a picture is drawn
+
+        snapshot = run_snapshot_png(result)
+    result.save(args.out, snapshot=snapshot)
     s = result.summary
     if not quiet:
         model = s["scenario"]["radio"]["model"]

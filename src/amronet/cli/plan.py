@@ -17,10 +17,13 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from amronet.cli.common import add_executor_arguments, make_executor_from_args, parse_base
 from amronet.errors import AmronetError
+
+if TYPE_CHECKING:
+    from amronet.planning import Mission
 
 __all__ = ["add_parsers", "cmd_plan"]
 
@@ -44,7 +47,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                              executor=executor, show_progress=not args.quiet and not args.json,
                              retry_failed=args.retry_failed)
         p = plan(args.map, bases, r_c=args.rc, agents_per_base=args.agents, runs=args.runs,
-                 confidence=args.confidence, options=options, **_mission_options(args))
+                 confidence=args.confidence, options=options, mission=_mission(args))
     picture = None
     if args.out:
         write_plan(p, args.out, keep=keep)
@@ -61,8 +64,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0 if p.recommended is not None else 1
 
 
-def _mission_options(args: argparse.Namespace) -> dict[str, Any]:
+def _mission(args: argparse.Namespace) -> Mission:
     """The radio, drop rule and stock options as :func:`amronet.planning.plan` takes them."""
+    from amronet.planning import Mission
     from amronet.scenario import parse_override
 
     radio: dict[str, Any] = {}
@@ -80,9 +84,9 @@ def _mission_options(args: argparse.Namespace) -> dict[str, Any]:
         except AmronetError as exc:
             raise AmronetError(f"--drop: {exc}") from None
         drop[key] = value
-    return {"radio": radio or None, "drop_rule": args.drop_rule, "drop": drop or None, "stock": args.stock,
-            "when_empty": args.when_empty, "settle_s": args.settle_s, "reverse_drop": args.reverse_drop,
-            "trajectories": args.trajectories}
+    return Mission(radio=radio or None, drop_rule=args.drop_rule, drop=drop or None, stock=args.stock,
+                   when_empty=args.when_empty, settle_s=args.settle_s, reverse_drop=args.reverse_drop,
+                   trajectories=args.trajectories)
 
 
 def _drop_keys(rule: str | None) -> str:

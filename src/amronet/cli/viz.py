@@ -98,7 +98,7 @@ def _snapshot_from_network(folder: Path, dpi: float, layer: str = "coverage") ->
 
     from amronet.scenario import load_scenario
     from amronet.sim.assemble import build_medium, build_world
-    from amronet.viz import snapshot_figure
+    from amronet.viz import Nodes, Shading, snapshot_figure
     from amronet.viz.signal import SPAN_DB
 
     if not (folder / "summary.json").is_file() or not (folder / "network.json").is_file():
@@ -148,10 +148,8 @@ def _snapshot_from_network(folder: Path, dpi: float, layer: str = "coverage") ->
                        "threshold_dbm": medium.budget.threshold_dbm}
         else:
             shading = {"covered": medium.covered_mask(world.coverage, network_xy)}
-        return snapshot_figure(
-            world.omap, xy=xy, kind=kind, state=state, status=status, r_c=r_c, links=medium.update(xy).pairs,
-            reachable=world.reachable, title=title, dpi=dpi, **shading,
-        )  # fmt: skip
+        drawn = Nodes(xy=xy, kind=kind, state=state, status=status, r_c=r_c, links=medium.update(xy).pairs)
+        return snapshot_figure(world.omap, drawn, Shading(reachable=world.reachable, **shading), title=title, dpi=dpi)
     except ValueError as exc:  # an unknown kind or state, a negative r_c...
         raise _damaged(folder / "network.json", str(exc).splitlines()[0]) from None
 

@@ -216,14 +216,16 @@ def commit_one(i, x0, y0, nx, ny, xy, radius, bodies, indptr, indices, dist, nea
 
 
 @njit(cache=True, inline="always")
-def drive_one(blocked, clear, ox, oy, res, i, heading, length, xy, radius, bodies, indptr, indices, dist,
-              near):  # pragma: no cover - numba
+def drive_one(grid, i, heading, length, xy, radius, bodies, csr, near):  # pragma: no cover - numba
     """Move robot ``i`` by ``length`` along ``heading`` if it may (see :func:`drive`); ``(refused, travelled)``.
 
-    A move is refused when its path meets an obstacle (:func:`plan_one`), or (with ``bodies``) when it brings the
-    body closer to a neighbour it overlaps at the end (:func:`commit_one`; neighbours from the CSR ``indptr,
-    indices, dist``, those farther than ``near`` skipped).
+    A move is refused when its path meets an obstacle of the map's :class:`~amronet.engine.kernel_data.Grid`
+    (:func:`plan_one`), or (with ``bodies``) when it brings the body closer to a neighbour it overlaps at the end
+    (:func:`commit_one`; neighbours from the :class:`~amronet.engine.kernel_data.Csr` ``csr``, those farther than
+    ``near`` skipped).
     """
+    blocked, clear, ox, oy, res = grid  # by position: a plain tuple in the fields' order serves as well
+    indptr, indices, dist = csr
     x0 = xy[i, 0]
     y0 = xy[i, 1]
     free, nx, ny = plan_one(blocked, clear, ox, oy, res, x0, y0, heading, length, radius[i])
@@ -233,12 +235,10 @@ def drive_one(blocked, clear, ox, oy, res, i, heading, length, xy, radius, bodie
 
 
 @njit(cache=True)
-def _drive(blocked, clear, ox, oy, res, movers, heading, length, xy, radius, bodies, indptr, indices, dist, near,
-           refused, travelled):  # pragma: no cover - numba
+def _drive(grid, movers, heading, length, xy, radius, bodies, csr, near, refused, travelled):  # pragma: no cover
     """Move robots one after another (:func:`drive_one`)."""
     for m in range(movers.shape[0]):
-        refused[m], travelled[m] = drive_one(blocked, clear, ox, oy, res, movers[m], heading[m], length[m], xy,
-                                             radius, bodies, indptr, indices, dist, near)
+        refused[m], travelled[m] = drive_one(grid, movers[m], heading[m], length[m], xy, radius, bodies, csr, near)
 
 
 def integrate(
@@ -315,7 +315,8 @@ def drive(
         indptr, indices, dist = body_table(xy, reach, table)
     else:
         indptr, indices, dist = np.zeros(len(xy) + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0)
-    _drive(omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
-           float(omap.resolution), movers, heading, length, xy, radius, bodies, indptr, indices, dist, reach, refused,
-           travelled)
+    # the Grid and the Csr as plain tuples in their fields' order: numba dispatches them faster than named ones
+    grid = (omap.blocked.view(np.uint8), clearance(omap), float(omap.origin[0]), float(omap.origin[1]),
+            float(omap.resolution))
+    _drive(grid, movers, heading, length, xy, radius, bodies, (indptr, indices, dist), reach, refused, travelled)
     return refused, travelled

@@ -16,26 +16,58 @@ calibrated so that without walls and shadowing the median link reaches exactly `
 * ``multi-wall`` (COST 231 / Motley-Keenan): log-distance plus ``wall_db`` per wall crossed
   (:mod:`amronet.engine.walls`), with optional shadowing.
 
-A link exists when its RSSI is at or above the usable threshold (delivery ratio 0.9). With ``packet_loss`` on, an
-existing link with delivery ratio ``p`` drops out of a step's table with probability ``1 - p`` (one draw per link
-and step, from a stream of its own so that the controllers' draws are unchanged).
+A link exists when its margin over the usable threshold (delivery ratio 0.9) is ``>= 0``. With ``packet_loss``
+on, an existing link with delivery ratio ``p`` drops out of a step's table with probability ``1 - p`` (one draw per
+link and step, from a stream of its own so that the controllers' draws are unchanged).
 
-New models subclass :class:`RadioMedium`, override :meth:`RadioMedium.margins` (link quality) or
-:meth:`RadioMedium.keep` (a rule that drops links) and register with ``@MEDIA.register(name)``.
+**A new model** is one class, one registry line and its margin kernel: a compiled function
+``margin(xa, ya, xb, yb, d, sa, sb, floor_db, h)`` giving the margin (dB over the threshold) of the link between
+two points ``d`` apart, for the radio's :class:`~amronet.engine.hearing.HearingInputs` ``h`` (its link budget, the
+map's walls, the shadowing field; ``sa``, ``sb`` the field at the two ends; see :mod:`amronet.engine.hearing`)::
+
+    @njit(cache=True)
+    def cone_margin(xa, ya, xb, yb, d, sa, sb, floor_db, h):
+        return 10.0 * (h.r_c - d) / h.r_c
+
+    @MEDIA.register("cone")
+    class Cone(RadioMedium):
+        link_margin = cone_margin
+
+That one kernel decides the neighbour table, coverage (``radio.model: cone`` in a scenario: runs, coverage,
+agents' connection, the signal layer and ``amronet radio-map`` follow it) and the signal map. No link may be longer
+than :attr:`RadioMedium.reach` (the table's search radius: ``r_c`` without shadowing; override it for a model that
+reaches farther). A model may declare the fast paths it supports (class attributes):
+
+* :attr:`~RadioMedium.margin_bound`: a compiled upper bound of its margin (see :mod:`amronet.engine.hearing`):
+  coverage and the signal map skip blocks of cells that cannot be heard. Without one every cell within reach is
+  tested, and the signal map tests the whole map (or give :meth:`~RadioMedium.signal_reach`).
+* :attr:`~RadioMedium.every_pair_is_link`: every pair within reach is a link whose margin follows from its length
+  by the link budget (the unit disk): the table needs no margin kernel, and the compiled stretches, which search
+  the neighbours themselves, may run.
+* :attr:`~RadioMedium.disk_coverage`: a cell is heard exactly when its centre is within ``r_c`` of a node (Eq. (1)
+  of the paper): coverage in closed form, both methods, all runs of a batch in one call.
+
+A model that lacks one of them takes the slower path, and the first time it does in a process it says so in the
+log (logger ``amronet.engine.radio``, one warning per model).
 """
 
 from __future__ import annotations
 
-from typing import ClassVar
+import logging
+import math
+from collections.abc import Callable
+from typing import Any, ClassVar
 
 import numpy as np
-from numba import njit
 
 from amronet.engine.coverage import CoverageArea
-from amronet.engine.hearing import Hearing, best_margin_grid, cell_field, heard_box, heard_cells, link_margin
+from amronet.engine.coverage_heard import HeardCells
+from amronet.engine.hearing import HearingInputs, path_loss_bound, path_loss_margin
+from amronet.engine.links import NO_PREVIOUS, keep_entries, losses
+from amronet.engine.margin_kernels import MarginKernels, margin_kernels
 from amronet.engine.neighbours import GroupIds, neighbour_csr_checked
-from amronet.engine.propagation import LinkBudget, delivery_ratio
-from amronet.engine.shadowing import ShadowingField, _cell_value
+from amronet.engine.propagation import LinkBudget
+from amronet.engine.shadowing import ShadowingField
 from amronet.engine.table import NeighbourTable
 from amronet.registry import Registry
 from amronet.world.occupancy import OccupancyMap
@@ -43,114 +75,17 @@ from amronet.world.occupancy import OccupancyMap
 __all__ = ["DEFAULT_WALL_DB", "MEDIA", "LogDistance", "MultiWall", "NeighbourTable", "RadioMedium", "UnitDisk",
            "make_medium"]
 
-
-_BOX_CACHE_BYTES = 256 * 2**20
-"""Above this many cells of boxes, a medium keeps none (coverage is then computed afresh each time)."""
+LOG = logging.getLogger(__name__)
 
 DEFAULT_WALL_DB: float = 6.9
 """Loss per wall crossed when none is given: COST 231's heavy internal wall (dB)."""
 
-
-@njit(cache=True)
-def _mirror(indptr, indices):  # pragma: no cover - numba
-    """For every entry ``(i, j)`` of a symmetric CSR with sorted rows, the position of its entry ``(j, i)``.
-
-    Visiting the rows in order, the entries ``(j, i)`` with ``i < j`` of row ``j`` come up in column order, so a
-    cursor per row finds each one in constant time.
-    """
-    n = indptr.shape[0] - 1
-    out = np.empty(indices.shape[0], np.int64)
-    cursor = indptr[:-1].copy()
-    for i in range(n):
-        for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
-            if j > i:
-                f = cursor[j]
-                cursor[j] = f + 1
-                out[e] = f
-                out[f] = e
-    return out
-
-
-@njit(cache=True, inline="always")
-def _find(indptr, indices, i, j):  # pragma: no cover - numba
-    """Position of entry ``(i, j)`` in a CSR with sorted rows, -1 if absent."""
-    lo = indptr[i]
-    hi = indptr[i + 1]
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if indices[mid] < j:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo if lo < indptr[i + 1] and indices[lo] == j else -1
-
-
-@njit(cache=True)
-def _candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indices, prev_margin, r_c, n10, wall_db,
-                       walls, jump, ox, oy, res, shadow, sx0, sy0, sh, corr,
-                       clip):  # pragma: no cover - numba
-    """Margin of every candidate link, computed once per pair (walking from the lower id) and mirrored.
-
-    A pair whose two ends stand exactly where they stood in the previous table (``prev_*``) and were a candidate
-    there takes its margin from it: a margin depends on the two positions alone, so it is the same number.
-    """
-    out = np.empty(indices.shape[0])
-    cursor = indptr[:-1].copy()  # see _mirror
-    n_prev = prev_xy.shape[0]
-    for i in range(indptr.shape[0] - 1):
-        xa = xy[i, 0]
-        ya = xy[i, 1]
-        still_i = i < n_prev and xa == prev_xy[i, 0] and ya == prev_xy[i, 1]
-        sa = _cell_value(shadow, sx0, sy0, sh, xa, ya) if clip > 0.0 else 0.0
-        for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
-            if j < i:
-                continue
-            xb = xy[j, 0]
-            yb = xy[j, 1]
-            f = -1
-            if still_i and j < n_prev and xb == prev_xy[j, 0] and yb == prev_xy[j, 1]:
-                f = _find(prev_indptr, prev_indices, i, j)
-            if f >= 0:
-                m = prev_margin[f]
-            else:
-                sb = _cell_value(shadow, sx0, sy0, sh, xb, yb) if clip > 0.0 else 0.0
-                m = link_margin(xa, ya, xb, yb, dist[e], sa, sb, 0.0, r_c, n10, wall_db, walls, jump, ox, oy, res,
-                                shadow, sx0, sy0, sh, corr, clip)
-            out[e] = m
-            f = cursor[j]
-            cursor[j] = f + 1
-            out[f] = m
-    return out
-
-
-@njit(cache=True)
-def _keep(indptr, indices, dist, margin, keep):  # pragma: no cover - numba
-    """The CSR arrays ``(indptr, indices, dist, margin)`` of the entries in ``keep``."""
-    n = indptr.shape[0] - 1
-    m = 0
-    for e in range(keep.shape[0]):
-        if keep[e]:
-            m += 1
-    out_ptr = np.zeros(n + 1, np.int64)
-    out_idx = np.empty(m, indices.dtype)
-    out_dist = np.empty(m)
-    out_margin = np.empty(m)
-    k = 0
-    for i in range(n):
-        for e in range(indptr[i], indptr[i + 1]):
-            if keep[e]:
-                out_idx[k] = indices[e]
-                out_dist[k] = dist[e]
-                out_margin[k] = margin[e]
-                k += 1
-        out_ptr[i + 1] = k
-    return out_ptr, out_idx, out_dist, out_margin
+_ANNOUNCED: set[tuple[type, tuple[str, ...]]] = set()
+"""The models whose slower paths the log has been told of in this process, with those paths."""
 
 
 class RadioMedium:
-    """Base class of radio propagation models.
+    """Base class of radio models: the link budget's law (:func:`~amronet.engine.hearing.path_loss_margin`).
 
     Args:
         budget: The link budget (range, power, path loss, walls, shadowing), or just ``r_c`` (the model's defaults
@@ -164,15 +99,33 @@ class RadioMedium:
     Attributes:
         budget: As given.
         shadowing: The run's shadowing field (``None`` without shadowing).
+        hearing: The inputs of the margin kernel.
     """
 
     name = "abstract"
+    link_margin: ClassVar[Callable] = staticmethod(path_loss_margin)
+    """The margin kernel (see the module doc); a class that gives its own and no bound has none."""
+    margin_bound: ClassVar[Callable | None] = staticmethod(path_loss_bound)
+    """A compiled upper bound of :attr:`link_margin` (fast path: blocks of cells skipped), or ``None``."""
+    every_pair_is_link: ClassVar[bool] = False
+    """Fast path: every pair within :attr:`reach` is a link, its margin that of its length (no margin kernel)."""
+    disk_coverage: ClassVar[bool] = False
+    """Fast path: a cell is heard exactly when its centre is within ``r_c`` of a node (Eq. (1))."""
     default_exponent: ClassVar[float] = 2.5
     """Path-loss exponent when the scenario gives none."""
     default_shadowing_db: ClassVar[float] = 0.0
     """Shadowing when the scenario gives none."""
     uses_walls: ClassVar[bool] = False
     uses_shadowing: ClassVar[bool] = False
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        own = vars(cls)
+        if "link_margin" in own and "margin_bound" not in own:
+            cls.margin_bound = None  # a bound belongs to its margin
+        for name in ("link_margin", "margin_bound"):  # compiled functions bind like methods: store them static
+            if own.get(name) is not None and not isinstance(own[name], staticmethod):
+                setattr(cls, name, staticmethod(own[name]))
 
     def __init__(self, budget: LinkBudget | float, omap: OccupancyMap | None = None,
                  rng: np.random.Generator | None = None, packet_loss: bool = False) -> None:
@@ -194,13 +147,15 @@ class RadioMedium:
             raise ValueError("packet loss needs the run's generator")
         self._groups: GroupIds | None = None
         """The group ids last checked (:meth:`_group_ids`)."""
-        self._grids: dict[tuple, tuple] = {}
-        self._boxes: dict[int, tuple] = {}
-        """Per coverage area, the node positions met lately: ``[cells heard or None, first call, last call]``. A
-        position met again two calls after it was first met (a node that stays) keeps its cells, so a step in
-        which few nodes moved recomputes only theirs. Cells depend on a node and a cell alone: the result is the
-        same with or without the cache."""
-        self.hearing = Hearing.from_budget(budget if self.uses_walls else _no_walls(budget), omap, self.shadowing)
+        self._previous: tuple | None = None
+        """The last candidate table with margins ``(xy, indptr, indices, margin)``: links between nodes that have not
+        moved since keep their margin (most of a deployed network stands still while agents and explorers move)."""
+        self.hearing = HearingInputs.from_budget(budget, omap, self.shadowing, walls=self.uses_walls)
+        self._plain = self.hearing.plain()
+        self._kernels: MarginKernels | None = None
+        self._told = False
+        """Whether :meth:`_announce` ran."""
+        self._heard: HeardCells | None = None
 
     @property
     def r_c(self) -> float:
@@ -210,18 +165,34 @@ class RadioMedium:
     @property
     def reach(self) -> float:
         """The radius within which links are searched: no link is longer."""
-        return self.hearing.reach if self.shadowing is not None else self.budget.r_c
+        return self.budget.reach if self.shadowing is not None else self.budget.r_c
 
-    def margins(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray) -> np.ndarray | None:
-        """Margin over the threshold of every candidate link (CSR order, symmetric).
+    @property
+    def kernels(self) -> MarginKernels:
+        """The compiled kernels of this model's margin kernel."""
+        if self._kernels is None:
+            self._kernels = margin_kernels(type(self).link_margin, type(self).margin_bound)
+        return self._kernels
 
-        ``None``: the distances decide (every candidate is a link and margins follow from the distance).
+    @property
+    def keeps_every_pair(self) -> bool:
+        """Whether a table is every pair the search finds within :attr:`reach`, as it is (the unit disk).
+
+        So it is for a single run without failed nodes when the model declares :attr:`every_pair_is_link` and no
+        link is lost: :meth:`update` then builds :meth:`plain_table`, and the compiled stretches may search the
+        neighbours themselves.
         """
-        return None
+        return self.every_pair_is_link and not self.packet_loss
 
-    def keep(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray) -> np.ndarray | None:
-        """Mask of candidate links (CSR order) a model drops by a rule of its own; ``None`` keeps them. Symmetric."""
-        return None
+    def signal_reach(self, floor_db: float) -> float:
+        """The farthest a link with a margin of at least ``floor_db`` may reach (``inf``: unknown, the whole map).
+
+        The link budget's law for its own margin kernel; a model with another gives its own or none.
+        """
+        if type(self).link_margin is not path_loss_margin:
+            return math.inf
+        h = self.hearing
+        return h.r_c * 10.0 ** ((h.clip - floor_db) / h.n10)
 
     def update(self, xy: np.ndarray, groups: np.ndarray | None = None, silent: np.ndarray | None = None
                ) -> NeighbourTable:
@@ -233,41 +204,40 @@ class RadioMedium:
         xy = np.array(xy, dtype=float)
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
+        if not self.keeps_every_pair:
+            self._announce()
         b = self.budget
         indptr, indices, dist = neighbour_csr_checked(xy, self.reach, self._group_ids(groups, len(xy)))
-        margin = self.margins(xy, indptr, indices, dist)
+        margin = self._margins(xy, indptr, indices, dist)
         candidates = None
         keep = None if margin is None else margin >= 0.0
-        extra = self.keep(xy, indptr, indices, dist)
-        if extra is not None:
-            keep = extra if keep is None else keep & extra
         if silent is not None and silent.any():
             rows = np.repeat(np.arange(len(xy)), np.diff(indptr))
             heard = ~(silent[rows] | silent[indices])
             keep = heard if keep is None else keep & heard
         if self.packet_loss:
-            lost = self._losses(indptr, indices, b.margin_db(dist) if margin is None else margin)
+            lost = losses(self._loss_rng, indptr, indices, b.margin_db(dist) if margin is None else margin)
             keep = ~lost if keep is None else keep & ~lost
         if keep is not None and not keep.all():
             candidates = NeighbourTable(xy=xy, r=self.reach, indptr=indptr, indices=indices, dist=dist,
                                         groups=groups, threshold_dbm=b.threshold_dbm, exponent=b.exponent,
                                         link_margin=margin)
             full = b.margin_db(dist) if margin is None else margin
-            indptr, indices, dist, kept = _keep(indptr, indices, dist, full, keep)
+            indptr, indices, dist, kept = keep_entries(indptr, indices, dist, full, keep)
             margin = None if margin is None else kept
         # by position, in the order of the fields (keywords cost more than the rest of a small table's update)
         return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm, margin, b.exponent,
                               candidates)
 
-    @property
-    def keeps_every_pair(self) -> bool:
-        """Whether a table is every pair the search finds within :attr:`reach`, as it is (the unit disk).
-
-        So it is for a single run without failed nodes when the model has no margins and drops no link by a rule or
-        by loss: :meth:`update` then builds :meth:`plain_table`.
-        """
-        return (type(self).margins is RadioMedium.margins and type(self).keep is RadioMedium.keep
-                and not self.packet_loss)
+    def _margins(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray
+                 ) -> np.ndarray | None:
+        """Margin of every candidate link (CSR order, symmetric); ``None``: every candidate is a link, by its length."""
+        if self.every_pair_is_link:
+            return None
+        prev = self._previous if self._previous is not None else NO_PREVIOUS
+        margin = self.kernels.candidate_margins(xy, indptr, indices, dist, *prev, self._plain)
+        self._previous = (xy, indptr, indices, margin)
+        return margin
 
     def plain_table(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray,
                     groups: np.ndarray | None = None) -> NeighbourTable:
@@ -286,16 +256,23 @@ class RadioMedium:
             known = self._groups = GroupIds.of(groups, n)
         return known
 
-    def _losses(self, indptr: np.ndarray, indices: np.ndarray, margin: np.ndarray) -> np.ndarray:
-        """Which entries drop out this step: one draw per link (pair), shared by its two entries."""
-        rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
-        upper = np.flatnonzero(indices > rows)
-        mirror = _mirror(indptr, indices)
-        lost = np.zeros(len(indices), dtype=bool)
-        drop = self._loss_rng.random(len(upper)) >= delivery_ratio(margin[upper])
-        lost[upper] = drop
-        lost[mirror[upper]] = drop
-        return lost
+    def _announce(self) -> None:
+        """Say in the log, once per model in a process, which slower paths it takes (see the module doc)."""
+        if self._told:
+            return
+        self._told = True
+        slower = []
+        if not self.keeps_every_pair:
+            why = "packet loss drops links at random" if self.every_pair_is_link else "no every_pair_is_link"
+            slower.append(f"no compiled stretches, steps are taken one at a time ({why})")
+        if not self.disk_coverage:
+            slower.append("coverage is decided cell by cell, run by run (no disk_coverage)")
+        if type(self).margin_bound is None:
+            slower.append("coverage and the signal map test every cell within reach (no margin_bound)")
+        key = (type(self), tuple(slower))
+        if slower and key not in _ANNOUNCED:
+            _ANNOUNCED.add(key)
+            LOG.warning("radio model %s takes slower paths: %s", self.name, "; ".join(slower))
 
     # -- where the nodes are heard ---------------------------------------------------------------------------
     def run_coverages(self, area: CoverageArea, xy: np.ndarray, network: np.ndarray, linked: np.ndarray,
@@ -311,91 +288,52 @@ class RadioMedium:
             method: The coverage method.
 
         Returns:
-            ``(coverage, linked coverage)`` per run, the same numbers as :meth:`coverage`; ``None`` where the model
-            has no faster way than run by run (the caller then asks :meth:`coverage` run by run).
+            ``(coverage, linked coverage)`` per run, the same numbers as :meth:`coverage`, in one compiled call under
+            :attr:`disk_coverage` (the raster method); ``None`` otherwise (the caller then asks run by run).
         """
+        if self.disk_coverage and method == "raster":
+            return area.run_fractions(xy, network, linked, blocks, self.r_c)
         return None
 
     def coverage(self, area: CoverageArea, xy: np.ndarray, method: str = "raster") -> float:
         """Coverage under this radio: the fraction of ``area`` where a receiver would hear a node of ``xy``.
 
-        For the unit disk this is Eq. (1) (:meth:`CoverageArea.fraction`, either method). Other models decide cell
-        by cell at the cell centres (the raster method).
+        Under :attr:`disk_coverage` this is Eq. (1) (:meth:`CoverageArea.fraction`, either method). Other models
+        decide cell by cell at the cell centres (the raster method).
 
         Raises:
-            ValueError: ``method`` is ``exact`` for a model other than the unit disk.
+            ValueError: ``method`` is ``exact`` for a model without :attr:`disk_coverage`.
         """
+        if self.disk_coverage:
+            return area.fraction(xy, self.r_c, method=method)
         if method != "raster":
             raise ValueError(f"coverage method {method!r} is only defined for the unit disk; use raster")
-        return self._heard(area, xy).sum() / area.n_cells
+        return self.covered_mask(area, xy).sum() / area.n_cells
 
     def covered_mask(self, area: CoverageArea, xy: np.ndarray) -> np.ndarray:
         """Boolean mask of the cells of ``area`` where a receiver would hear a node of ``xy``."""
-        return self._heard(area, xy)
-
-    def _heard(self, area: CoverageArea, xy: np.ndarray) -> np.ndarray:
-        xy = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
-        if not np.isfinite(xy).all():
-            raise ValueError("xy must be finite")
-        covered = np.zeros(area.mask.shape, dtype=bool)
-        grid = self._grid(area.omap)
-        args = self.hearing.args()
-        cache = self._boxes.get(id(area))
-        if cache is None or cache[0] is not area:  # a new area: a fresh cache of boxes (see _boxes)
-            cache = self._boxes[id(area)] = (area, {}, [0])
-        _, boxes, calls = cache
-        calls[0] += 1
-        now = calls[0]
-        size = 0
-        moving = []
-        for k, key in enumerate(map(tuple, xy.tolist())):
-            entry = boxes.get(key)
-            if entry is None:  # a position not met before: marked with the others below
-                boxes[key] = [None, now, now]
-                moving.append(k)
-                continue
-            entry[2] = now
-            if entry[0] is None and entry[1] <= now - 2:  # met two calls ago or earlier: it stays, keep its cells
-                entry[0] = heard_box(key[0], key[1], area.mask, *grid[:3], self.reach, *grid[3:], *args)
-            if entry[0] is None:
-                moving.append(k)
-                continue
-            i0, j0, piece = entry[0]
-            size += piece.size
-            covered[i0:i0 + piece.shape[0], j0:j0 + piece.shape[1]] |= piece
-        if moving:  # one pass that skips the cells covered already
-            heard_cells(xy[moving], area.mask, *grid[:3], self.reach, covered, *grid[3:], *args)
-        for key in [k for k, e in boxes.items() if e[2] < now - 2 or size > _BOX_CACHE_BYTES]:
-            del boxes[key]  # positions not met in the last three calls
-        return covered
-
-    def _grid(self, omap: OccupancyMap) -> tuple:
-        """``(gox, goy, gres, cell_s, block_s)`` of a map's cells for the kernels, cached per grid."""
-        key = (omap.shape, float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution))
-        if key not in self._grids:
-            h = self.hearing
-            self._grids[key] = (*key[1:], *cell_field(omap.shape, *key[1:], h.shadow, h.sx0, h.sy0, h.sh, h.clip))
-        return self._grids[key]
+        if self.disk_coverage:
+            return area.covered_mask(xy, self.r_c)
+        self._announce()
+        return self.heard.covered(area, xy, self.reach)
 
     def signal_dbm(self, omap: OccupancyMap, xy: np.ndarray, floor_db: float = -30.0) -> np.ndarray:
         """Best RSSI (dBm) at every cell centre of ``omap`` over the nodes ``xy``.
 
         NaN where every node is more than ``-floor_db`` dB below the usable threshold (or there are no nodes).
         """
-        xy = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
-        if not np.isfinite(xy).all():
-            raise ValueError("xy must be finite")
-        out = np.full(omap.shape, -np.inf)
-        grid = self._grid(omap)
-        best_margin_grid(xy, *grid[:3], out, float(floor_db), *grid[3:], *self.hearing.args())
+        if type(self).margin_bound is None:
+            self._announce()
+        out = self.heard.best_margins(omap, xy, floor_db, self.signal_reach(floor_db))
         out[~np.isfinite(out)] = np.nan
         return out + self.budget.threshold_dbm
 
-
-def _no_walls(budget: LinkBudget) -> LinkBudget:
-    return LinkBudget(r_c=budget.r_c, tx_dbm=budget.tx_dbm, pl0_db=budget.pl0_db, exponent=budget.exponent,
-                      wall_db=0.0, shadowing_db=budget.shadowing_db, shadowing_corr_m=budget.shadowing_corr_m,
-                      shadowing_clip=budget.shadowing_clip)
+    @property
+    def heard(self) -> HeardCells:
+        """Coverage and signal maps by the margin kernel (with its cache of the cells of nodes that stay)."""
+        if self._heard is None:
+            self._heard = HeardCells(self.hearing, self.kernels)
+        return self._heard
 
 
 MEDIA: Registry[type[RadioMedium]] = Registry("radio model")
@@ -404,43 +342,26 @@ MEDIA: Registry[type[RadioMedium]] = Registry("radio model")
 
 @MEDIA.register("unit-disk")
 class UnitDisk(RadioMedium):
-    """Unit disk graph: two nodes are linked exactly when their distance is at most ``r_c`` (the paper's)."""
+    """Unit disk graph: two nodes are linked exactly when their distance is at most ``r_c`` (the paper's).
 
-    def coverage(self, area: CoverageArea, xy: np.ndarray, method: str = "raster") -> float:
-        """Eq. (1) of the paper, by either method (:meth:`CoverageArea.fraction`)."""
-        return area.fraction(xy, self.r_c, method=method)
+    Its signal map is the link budget's law without walls and shadowing.
+    """
 
-    def covered_mask(self, area: CoverageArea, xy: np.ndarray) -> np.ndarray:
-        """The cells whose centre lies within ``r_c`` of a node (:meth:`CoverageArea.covered_mask`)."""
-        return area.covered_mask(xy, self.r_c)
-
-    def run_coverages(self, area: CoverageArea, xy: np.ndarray, network: np.ndarray, linked: np.ndarray,
-                      blocks: np.ndarray, method: str = "raster") -> list[tuple[float, float]] | None:
-        """The raster method in one compiled call for all runs (:meth:`CoverageArea.run_fractions`)."""
-        return area.run_fractions(xy, network, linked, blocks, self.r_c) if method == "raster" else None
-
-
-_NO_PREVIOUS = (np.zeros((0, 2)), np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0))
+    every_pair_is_link = True
+    disk_coverage = True
 
 
 class _PathLoss(RadioMedium):
-    """Models whose links are decided by their margin: distance, shadowing and, with walls, the walls crossed.
-
-    The medium remembers its last candidate table: links between nodes that have not moved since keep their margin
-    (most of a deployed network stands still while agents and explorers move).
-    """
+    """Models whose links are decided by their margin: distance, shadowing and, with walls, the walls crossed."""
 
     uses_shadowing = True
-    _previous: tuple | None = None
 
-    def margins(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray) -> np.ndarray | None:
+    def _margins(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray
+                 ) -> np.ndarray | None:
         h = self.hearing
         if h.clip == 0.0 and h.wall_db == 0.0:
             return None  # no shadowing, no walls: the unit disk, decided by distance
-        prev = self._previous if self._previous is not None else _NO_PREVIOUS
-        margin = _candidate_margins(xy, indptr, indices, dist, *prev, *h.args())
-        self._previous = (xy, indptr, indices, margin)
-        return margin
+        return super()._margins(xy, indptr, indices, dist)
 
 
 @MEDIA.register("log-distance")

@@ -18,14 +18,28 @@ is longer than ``r_c * 10 ** (clip * sigma / (10 n))``, the radius within which 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-__all__ = ["ShadowingField", "link_shadowing"]
+__all__ = ["FieldGrid", "ShadowingField", "field_at", "link_shadowing"]
 
 _CELLS_PER_CORR = 8
 _MAX_SIDE = 512
+
+
+class FieldGrid(NamedTuple):
+    """A shadowing field as the kernels read it: the values of a square grid and where it lies."""
+
+    values: np.ndarray
+    """The field's values ``(rows, cols)`` in dB, row 0 at ``y0``."""
+    x0: float
+    """x of the grid's lower-left corner, metres."""
+    y0: float
+    """y of the grid's lower-left corner, metres."""
+    h: float
+    """Cell size, metres."""
 
 
 class ShadowingField:
@@ -60,6 +74,11 @@ class ShadowingField:
         xy = np.asarray(xy, dtype=float)
         return _lookup(self.grid, self.x0, self.y0, self.h, xy[:, 0], xy[:, 1])
 
+    @property
+    def kernel_grid(self) -> FieldGrid:
+        """The field as the kernels read it."""
+        return FieldGrid(self.grid, self.x0, self.y0, self.h)
+
 
 def _gaussian_field(ny: int, nx: int, h: float, corr: float, rng: np.random.Generator) -> np.ndarray:
     """A unit-variance field ``(ny, nx)`` with correlation ``exp(-distance / corr)`` (circulant embedding)."""
@@ -80,6 +99,12 @@ def _cell_value(grid, x0, y0, h, x, y):  # pragma: no cover - numba
     i = min(max(i, 0), grid.shape[0] - 1)
     j = min(max(j, 0), grid.shape[1] - 1)
     return grid[i, j]
+
+
+@njit(cache=True, inline="always")
+def field_at(field, x, y):  # pragma: no cover - numba
+    """``S`` at ``(x, y)`` of a :class:`FieldGrid` (the value of the grid cell holding it; clamped at the edges)."""
+    return _cell_value(field.values, field.x0, field.y0, field.h, x, y)
 
 
 @njit(cache=True)

@@ -22,13 +22,14 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from amronet import __version__, limits
+from amronet import limits
 from amronet.engine.robots import Role
 from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
 from amronet.sim.loop import StepKind, check_seed
 from amronet.sim.simulation import Simulation
 from amronet.threads import threads_for
+from amronet.version import __version__
 from amronet.world.builtin import resolve_map
 from amronet.world.space import clearance
 

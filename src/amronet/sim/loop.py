@@ -187,7 +187,7 @@ class Loop:
         area = AreaKnowledge(extent=omap.extent,
                              free_area_m2=float(np.count_nonzero(omap.free)) * (omap.resolution**2))
         return Setup(robots=self.swarm, r_c=sc.radio.r_c, dt=self.dt, rng=rng, area=area, stock=stock,
-                     paths=self.paths)
+                     paths=self.paths, links_by_distance=self.medium.keeps_every_pair)
 
     @property
     def t(self) -> float:

@@ -2,12 +2,12 @@
 
 Files are written atomically as a set, and never over files amronet did not write
 (:mod:`amronet.outputs.files`): an interrupted or failed run leaves either the previous output or the complete new
-one, never half-written files.
+one, never half-written files. The picture ``snapshot.png`` is drawn by the caller
+(:mod:`amronet.viz.run_snapshot`) and handed in as bytes: results know nothing of pictures.
 """
 
 from __future__ import annotations
 
-import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,10 +15,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from amronet import __version__
 from amronet.engine.network import connected_to
 from amronet.engine.robots import ROLE_NAMES, STATE_NAMES, Role, State
 from amronet.outputs.files import write_files_atomically
+from amronet.version import __version__
 
 if TYPE_CHECKING:
     from amronet.outputs.recording import Recorder
@@ -119,50 +119,31 @@ class RunResult:
             lines.append(line + (f",{ts['agents_connected'][k]:.6f}" if agents else ""))
         return "\n".join(lines) + "\n"
 
-    def snapshot_png(self, dpi: int = 120) -> bytes:
-        """The deployment picture as PNG bytes."""
-        from amronet.viz import snapshot_figure  # matplotlib: imported only when a picture is drawn
+    def files(self, snapshot: bytes | None = None) -> dict[str, bytes]:
+        """Name → content of every output file.
 
-        sim = self.run
-        sw = sim.swarm
-        r_c = sim.scenario.radio.r_c
-        covered = sim.medium.covered_mask(sim.world.coverage, sw.xy[sim.relay_mask])
-        s = self.summary
-        title = (f"{s['algorithm']} on {s['map']}, seed {s['seed']}: {s['nodes_total']} nodes, "
-                 f"coverage {100 * s['coverage']:.1f} %, t = {s['sim_time_s']:g} s")
-        fig = snapshot_figure(
-            sim.world.omap,
-            xy=sw.xy,
-            kind=np.array(ROLE_NAMES)[sw.role],
-            state=np.array(STATE_NAMES)[sw.state],
-            status=sw.status,
-            r_c=r_c,
-            links=sim.table.pairs,
-            covered=covered,
-            reachable=sim.world.reachable,
-            title=title,
-            dpi=dpi,
-            trails=self.recorder.trails() if self.recorder is not None else None,
-        )
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=dpi)
-        return buf.getvalue()
-
-    def files(self, snapshot: bool = True) -> dict[str, bytes]:
-        """Name → content of every output file."""
+        Args:
+            snapshot: The deployment picture as PNG bytes, written as ``snapshot.png``
+                (:func:`amronet.viz.run_snapshot.run_snapshot_png` draws it); ``None``: no picture.
+        """
         out = {
             "summary.json": (json.dumps(self.summary, indent=2) + "\n").encode(),
             "timeseries.csv": self.timeseries_csv().encode(),
             "network.json": (json.dumps(self.network, indent=1) + "\n").encode(),
         }
-        if snapshot:
-            out["snapshot.png"] = self.snapshot_png()
+        if snapshot is not None:
+            out["snapshot.png"] = snapshot
         if self.recorder is not None and self.recorder.full:
             out["recording.npz"] = self.recorder.npz_bytes(self.run)
         return out
 
-    def save(self, out_dir: str | Path, snapshot: bool = True) -> Path:
-        """Write the output files into ``out_dir`` atomically (see the module docstring)."""
+    def save(self, out_dir: str | Path, snapshot: bytes | None = None) -> Path:
+        """Write the output files into ``out_dir`` atomically (see the module docstring).
+
+        Args:
+            out_dir: The run's folder.
+            snapshot: The deployment picture's PNG bytes (see :meth:`files`); ``None``: no ``snapshot.png``.
+        """
         return write_files_atomically(Path(out_dir), self.files(snapshot=snapshot))
 
 

@@ -21,12 +21,12 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from amronet import __version__
 from amronet.errors import AmronetError
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 from amronet.sim.batch import run_seeds
 from amronet.threads import serial_only
+from amronet.version import __version__
 
 __all__ = [
     "SUMMARY_EXTRAS",

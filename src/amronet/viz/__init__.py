@@ -3,7 +3,10 @@
 from amronet.viz.snapshot import (
     KINDS,
     MAP_COLOURS,
+    NO_SHADING,
     STATES,
+    Nodes,
+    Shading,
     draw_map,
     save_map_picture,
     save_snapshot,
@@ -13,7 +16,10 @@ from amronet.viz.snapshot import (
 __all__ = [
     "KINDS",
     "MAP_COLOURS",
+    "NO_SHADING",
     "STATES",
+    "Nodes",
+    "Shading",
     "draw_map",
     "save_map_picture",
     "save_snapshot",

@@ -13,6 +13,7 @@ colour bar.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib import colormaps
@@ -30,10 +31,14 @@ from matplotlib.patches import Patch
 from amronet.viz.decorations import GAP, legend_patch
 from amronet.world.occupancy import OccupancyMap
 
+if TYPE_CHECKING:
+    from amronet.outputs.recording import Recording
+
 __all__ = [
     "CMAP",
     "COLORBAR_SPACE",
     "SPAN_DB",
+    "SignalLayer",
     "add_signal_colorbar",
     "blank_handle",
     "coarse_grid",
@@ -194,3 +199,54 @@ def coarse_grid(omap: OccupancyMap, max_side: int) -> tuple[OccupancyMap, int]:
     centre_c = np.minimum(np.arange(c) * k + k // 2, cols - 1)
     cells = np.ascontiguousarray(omap.cells[np.ix_(centre_r, centre_c)])
     return OccupancyMap(omap.name, omap.resolution * k, omap.origin, cells), k
+
+
+_SIGNAL_PIXELS = 2.0
+"""An animation's signal grid has cells of at least this many pixels a side (a signal map costs per cell)."""
+
+
+class SignalLayer:
+    """The signal of a recording's frames on an animation's axes: an image and the threshold contour.
+
+    The signal is evaluated on a grid with cells of at least :data:`_SIGNAL_PIXELS` pixels a side
+    (:func:`coarse_grid`), and again only when the routers and base nodes moved since the last
+    frame drawn.
+    """
+
+    def __init__(self, rec: Recording, ax: Axes, threshold: float) -> None:
+        self.rec, self.ax, self.threshold = rec, ax, threshold
+        box = ax.get_window_extent()
+        self.grid, self.k = coarse_grid(rec.omap, max(round(max(box.width, box.height) / _SIGNAL_PIXELS), 1))
+        x0, _, y0, _ = rec.omap.extent
+        rows, cols = self.grid.shape
+        self.extent = (x0, x0 + cols * self.grid.resolution, y0, y0 + rows * self.grid.resolution)
+        self.counted = rec.omap.free & rec.reachable
+        centre_r = np.minimum(np.arange(rows) * self.k + self.k // 2, rec.omap.shape[0] - 1)
+        centre_c = np.minimum(np.arange(cols) * self.k + self.k // 2, rec.omap.shape[1] - 1)
+        self.shown = self.counted[np.ix_(centre_r, centre_c)]
+        limits = ax.get_xlim(), ax.get_ylim()
+        # the image has the map's cells (the coarse values repeated), so that walls keep their exact shape
+        self.image = ax.imshow(np.zeros((*rec.omap.shape, 4), np.uint8), extent=rec.omap.extent, origin="lower",
+                               interpolation="antialiased", zorder=0.5)
+        ax.set_xlim(*limits[0])
+        ax.set_ylim(*limits[1])
+        self.contour = None
+        self._key: bytes | None = None
+
+    def update(self, f: int) -> None:
+        """Show frame ``f``'s signal (evaluated again only when the routers and base nodes moved)."""
+        xy = np.ascontiguousarray(self.rec.network_xy(f))
+        key = xy.tobytes()
+        if key == self._key:
+            return
+        self._key = key
+        signal = self.rec.signal(f, grid=self.grid, floor_db=-SPAN_DB)
+        rows, cols = self.rec.omap.shape
+        fine = np.repeat(np.repeat(signal, self.k, axis=0), self.k, axis=1)
+        fine = np.pad(fine, ((0, rows - fine.shape[0]), (0, cols - fine.shape[1])), mode="edge")
+        self.image.set_data(signal_rgba(fine, self.threshold, self.counted))
+        if self.contour is not None:
+            self.contour.remove()
+        self.contour = draw_threshold(self.ax, self.extent, signal, self.threshold, self.shown)
+        if self.contour is not None:
+            self.contour.set_animated(True)

@@ -1,29 +1,36 @@
-"""Pictures of maps and deployments: the occupancy grid to scale, routers, their disks and links.
+"""Deployment pictures: the map to scale with the routers, their disks, links and trails, or a signal layer.
 
-Everything is drawn on a ``matplotlib.figure.Figure`` with an Agg canvas, never through ``pyplot``, so the
-functions work headless and from several threads at once. The figure layout is fixed in inches (it depends
-only on the map's size, not on what is drawn), so successive snapshots of one run line up pixel for pixel.
+The map itself, its colours and the fixed layout are :mod:`amronet.viz.maps`'s (re-exported here). A picture
+takes the map, its :class:`Nodes` and a :class:`Shading` of the free cells.
 
 Example:
-    >>> save_snapshot("snap.png", omap, xy=xy, kind=kind, state=state, status=status,
-    ...               r_c=1.0, links=links)  # doctest: +SKIP
+    >>> save_snapshot("snap.png", omap, Nodes(xy=xy, kind=kind, state=state, status=status, r_c=1.0,
+    ...                                       links=links))  # doctest: +SKIP
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
-from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import EllipseCollection, LineCollection
 from matplotlib.figure import Figure
-from matplotlib.image import AxesImage
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
 
-from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch, save_figure
+from amronet.viz.decorations import add_legend, add_scale_bar, legend_patch
+from amronet.viz.maps import (
+    MAP_COLOURS,
+    MAP_LUT,
+    check_picture_path,
+    draw_map,
+    map_image,
+    map_patch,
+    new_map_figure,
+    save_map_picture,
+    save_picture,
+)
 from amronet.viz.nodestyle import (
     DEPLOYED,
     DISK_EDGE_ALPHA,
@@ -49,177 +56,70 @@ from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 __all__ = [
     "KINDS",
     "MAP_COLOURS",
+    "MAP_LUT",
+    "NO_SHADING",
     "STATES",
+    "Nodes",
+    "Shading",
     "draw_map",
     "link_style",
+    "map_image",
+    "map_patch",
+    "new_map_figure",
     "save_map_picture",
     "save_snapshot",
     "snapshot_figure",
 ]
 
-MAP_COLOURS: dict[str, tuple[int, int, int]] = {
-    "free": (255, 255, 255),
-    "occupied": (30, 30, 30),
-    "unknown": (150, 150, 150),
-    "unreachable": (240, 230, 205),
-    "uncovered": (250, 185, 185),
-}
-"""RGB colours (0-255) of the map's cell categories."""
 
-_LABELS = {
-    "free": "free",
-    "occupied": "occupied",
-    "unknown": "unknown",
-    "unreachable": "free, unreachable",
-    "uncovered": "reachable, uncovered",
-    "covered": "covered: within $r_c$ of any\nrouter or base (moving too)",
-}
-_CATEGORIES = ("free", "occupied", "unknown", "unreachable", "uncovered")
-MAP_LUT = np.array([MAP_COLOURS[c] for c in _CATEGORIES], dtype=np.uint8)
+class Nodes(NamedTuple):
+    """The nodes of a deployment picture.
 
-# Fixed layout, in inches.
-_AX_LONG_SIDE = 6.0
-_AX_MIN_SIDE = 1.5
-_MARGIN_LEFT, _MARGIN_BOTTOM, _MARGIN_TOP = 0.8, 0.6, 0.45
-_MIN_FIG_HEIGHT = 4.6
-
-
-def map_image(omap: OccupancyMap, reachable: np.ndarray | None, covered: np.ndarray | None) -> np.ndarray:
-    """Return the ``uint8`` RGB image ``(rows, cols, 3)`` of the map with the optional shadings."""
-    cells = omap.cells
-    cat = np.zeros(cells.shape, dtype=np.uint8)
-    cat[cells == OCCUPIED] = 1
-    cat[cells == UNKNOWN] = 2
-    free = cells == FREE
-    counted = free
-    if reachable is not None:
-        cat[free & ~reachable] = 3
-        counted = free & reachable
-    if covered is not None:
-        cat[counted & ~covered] = 4
-    return MAP_LUT[cat]
-
-
-def draw_map(
-    ax: Axes,
-    omap: OccupancyMap,
-    *,
-    reachable: np.ndarray | None = None,
-    covered: np.ndarray | None = None,
-) -> AxesImage:
-    """Draw an occupancy map to scale in metres on ``ax``.
-
-    Free cells are white, occupied near-black, unknown mid-grey. The image uses ``omap.extent`` with
-    ``origin='lower'``, so data coordinates are world metres.
-
-    Args:
-        ax: The axes to draw on.
-        omap: The map.
-        reachable: Optional boolean mask ``omap.shape``; free cells outside it are tinted pale beige, so the
-            reader sees which free space does not count.
-        covered: Optional boolean mask ``omap.shape``; counted free cells (reachable ones, or all free cells
-            when ``reachable`` is None) that are not covered are tinted light red, so holes stand out.
-
-    Returns:
-        The image artist.
-
-    Raises:
-        ValueError: If a mask has the wrong shape or is not boolean.
+    Attributes:
+        xy: Node positions ``(N, 2)`` in metres.
+        kind: ``(N,)`` strings in `KINDS`.
+        state: ``(N,)`` strings in `STATES`.
+        status: ``(N,)`` integers: the base station a node belongs to, -1 for none yet.
+        r_c: Communication radius in metres (the disks' radius).
+        links: ``(M, 2)`` integer index pairs into ``xy``.
+        trails: Optional node index → path ``(k, 2)`` in metres (agents' trails), drawn as thin lines in the
+            node's status colour.
     """
-    reachable = check_mask("reachable", reachable, omap.shape)
-    covered = check_mask("covered", covered, omap.shape)
-    im = ax.imshow(
-        map_image(omap, reachable, covered),
-        extent=omap.extent,
-        origin="lower",
-        interpolation="nearest",
-        zorder=0,
-    )
-    ax.set_aspect("equal")
-    ax.set_xlim(omap.extent[0], omap.extent[1])
-    ax.set_ylim(omap.extent[2], omap.extent[3])
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    return im
+
+    xy: np.ndarray
+    kind: np.ndarray
+    state: np.ndarray
+    status: np.ndarray
+    r_c: float
+    links: np.ndarray
+    trails: Mapping[int, np.ndarray] | None = None
 
 
-def new_map_figure(omap: OccupancyMap, right: float, dpi: float) -> tuple[Figure, Axes]:
-    """Create an Agg figure whose axes hold the map to scale, with ``right`` inches free for a legend."""
-    w, h = omap.size_m
-    scale = _AX_LONG_SIDE / max(w, h)
-    ax_w, ax_h = max(w * scale, _AX_MIN_SIDE), max(h * scale, _AX_MIN_SIDE)
-    fig_w = _MARGIN_LEFT + ax_w + right
-    fig_h = max(_MARGIN_BOTTOM + ax_h + _MARGIN_TOP, _MIN_FIG_HEIGHT)
-    bottom = (fig_h - ax_h - _MARGIN_TOP + _MARGIN_BOTTOM) / 2  # centre the axes vertically
-    fig = Figure(figsize=(fig_w, fig_h), dpi=dpi, facecolor="white")
-    FigureCanvasAgg(fig)
-    ax = fig.add_axes((_MARGIN_LEFT / fig_w, bottom / fig_h, ax_w / fig_w, ax_h / fig_h))
-    return fig, ax
+class Shading(NamedTuple):
+    """What a deployment picture shades the map's free cells with, under the nodes (each optional).
 
-
-def map_patch(category: str) -> Patch:
-    """Legend patch of one map cell category (``covered`` is free space drawn plain, like ``free``)."""
-    colour = MAP_COLOURS["free" if category == "covered" else category]
-    return legend_patch(tuple(c / 255 for c in colour), _LABELS[category])
-
-
-def _format_of(path: str | Path) -> str:
-    """Return ``"png"`` or ``"svg"`` from the suffix of ``path``, or raise ``ValueError``."""
-    fmt = Path(path).suffix.lower().lstrip(".")
-    if fmt not in ("png", "svg"):
-        raise ValueError(f"path must end in .png or .svg, got {Path(path).name!r}")
-    return fmt
-
-
-def _save(fig: Figure, path: str | Path, dpi: float) -> Path:
-    """Write ``fig`` as PNG or SVG according to the suffix of ``path``."""
-    path = Path(path)
-    save_figure(fig, path, _format_of(path), dpi, bbox_inches=None, facecolor="white")
-    return path
-
-
-def save_map_picture(omap: OccupancyMap, path: str | Path, *, dpi: float = 150) -> Path:
-    """Write a picture of the map alone, to scale, with a title and a legend of cell types.
-
-    The title reads ``"{name}: {w:.1f} m x {h:.1f} m, {res} m/cell"``.
-
-    Args:
-        omap: The map.
-        path: Output file; ``.png`` or ``.svg``.
-        dpi: Resolution of the PNG (and of the map raster inside an SVG).
-
-    Returns:
-        The path written.
-
-    Raises:
-        ValueError: If the suffix of ``path`` is neither ``.png`` nor ``.svg``.
+    Attributes:
+        reachable: Boolean mask ``omap.shape``; free cells outside it are tinted pale beige.
+        covered: Boolean mask ``omap.shape`` of covered cells; reachable (or, without ``reachable``, free) cells
+            not covered are tinted light red.
+        signal: Best RSSI (dBm) per cell ``omap.shape`` (``RadioMedium.signal_dbm``), NaN where blank: drawn
+            instead of the coverage tint (``covered`` is then ignored) and of the disks, on the scale of
+            :mod:`amronet.viz.signal`, with the threshold contour and a colour bar.
+        threshold_dbm: The radio's usable threshold; needed with ``signal``.
     """
-    _format_of(path)
-    fig, ax = new_map_figure(omap, right=1.3, dpi=dpi)
-    draw_map(ax, omap)
-    w, h = omap.size_m
-    ax.set_title(f"{omap.name}: {w:.1f} m x {h:.1f} m, {omap.resolution:g} m/cell", fontsize=10)
-    add_legend(fig, ax, [map_patch(c) for c in ("free", "occupied", "unknown")])
-    return _save(fig, path, dpi)
+
+    reachable: np.ndarray | None = None
+    covered: np.ndarray | None = None
+    signal: np.ndarray | None = None
+    threshold_dbm: float | None = None
 
 
-def snapshot_figure(
-    omap: OccupancyMap,
-    *,
-    xy: np.ndarray,
-    kind: np.ndarray,
-    state: np.ndarray,
-    status: np.ndarray,
-    r_c: float,
-    links: np.ndarray,
-    covered: np.ndarray | None = None,
-    reachable: np.ndarray | None = None,
-    title: str = "",
-    dpi: float = 150,
-    trails: Mapping[int, np.ndarray] | None = None,
-    signal: np.ndarray | None = None,
-    threshold_dbm: float | None = None,
-) -> Figure:
+NO_SHADING = Shading()
+"""The map's free cells plain."""
+
+
+def snapshot_figure(omap: OccupancyMap, nodes: Nodes, shading: Shading = NO_SHADING, *, title: str = "",
+                    dpi: float = 150) -> Figure:
     """Build the deployment picture as an Agg figure (see `save_snapshot` for the arguments).
 
     Returns:
@@ -228,9 +128,11 @@ def snapshot_figure(
     Raises:
         ValueError: If an argument has the wrong shape or an unknown value.
     """
-    xy, kind, state, status, links = validate_nodes(xy, kind, state, status, links, float(r_c))
-    reachable = check_mask("reachable", reachable, omap.shape)
-    covered = check_mask("covered", covered, omap.shape)
+    r_c, trails = float(nodes.r_c), nodes.trails
+    xy, kind, state, status, links = validate_nodes(nodes.xy, nodes.kind, nodes.state, nodes.status, nodes.links, r_c)
+    reachable = check_mask("reachable", shading.reachable, omap.shape)
+    covered = check_mask("covered", shading.covered, omap.shape)
+    signal, threshold_dbm = shading.signal, shading.threshold_dbm
     if signal is not None:
         signal = _check_signal(signal, threshold_dbm, omap.shape)
         covered = None
@@ -318,24 +220,8 @@ def _check_signal(signal: np.ndarray, threshold_dbm: float | None, shape: tuple[
     return signal
 
 
-def save_snapshot(
-    path: str | Path,
-    omap: OccupancyMap,
-    *,
-    xy: np.ndarray,
-    kind: np.ndarray,
-    state: np.ndarray,
-    status: np.ndarray,
-    r_c: float,
-    links: np.ndarray,
-    covered: np.ndarray | None = None,
-    reachable: np.ndarray | None = None,
-    title: str = "",
-    dpi: float = 150,
-    trails: Mapping[int, np.ndarray] | None = None,
-    signal: np.ndarray | None = None,
-    threshold_dbm: float | None = None,
-) -> Path:
+def save_snapshot(path: str | Path, omap: OccupancyMap, nodes: Nodes, shading: Shading = NO_SHADING, *,
+                  title: str = "", dpi: float = 150) -> Path:
     """Write the deployment picture: map, communication disks, links and nodes.
 
     Base stations and deployed routers (``reference``, ``triangle-settled``) get a translucent disk of radius
@@ -348,23 +234,10 @@ def save_snapshot(
     Args:
         path: Output file; ``.png`` or ``.svg``.
         omap: The map.
-        xy: Node positions ``(N, 2)`` in metres.
-        kind: ``(N,)`` strings in `KINDS`.
-        state: ``(N,)`` strings in `STATES`.
-        status: ``(N,)`` integers: the base station a node belongs to, -1 for none yet.
-        r_c: Communication radius in metres.
-        links: ``(M, 2)`` integer index pairs into ``xy``.
-        covered: Optional boolean mask ``omap.shape`` of covered cells; reachable (or, without
-            ``reachable``, free) cells not covered are tinted light red.
-        reachable: Optional boolean mask ``omap.shape``; free cells outside it are tinted pale beige.
+        nodes: The nodes, their links and trails (:class:`Nodes`).
+        shading: What the free cells are shaded with (:class:`Shading`; default none).
         title: Figure title; by default the map's name and the numbers of routers and agents.
         dpi: Resolution of the PNG (and of the map raster inside an SVG).
-        trails: Optional node index → path ``(k, 2)`` in metres (agents' trails), drawn as thin lines in the
-            node's status colour.
-        signal: Optional best RSSI (dBm) per cell ``omap.shape`` (``RadioMedium.signal_dbm``), NaN where blank:
-            drawn instead of the coverage tint (``covered`` is then ignored) and of the disks, on the scale of
-            :mod:`amronet.viz.signal`, with the threshold contour and a colour bar.
-        threshold_dbm: The radio's usable threshold; needed with ``signal``.
 
     Returns:
         The path written.
@@ -372,21 +245,5 @@ def save_snapshot(
     Raises:
         ValueError: If an argument has the wrong shape or an unknown value, or the suffix is not .png/.svg.
     """
-    _format_of(path)
-    fig = snapshot_figure(
-        omap,
-        xy=xy,
-        kind=kind,
-        state=state,
-        status=status,
-        r_c=r_c,
-        links=links,
-        covered=covered,
-        reachable=reachable,
-        title=title,
-        dpi=dpi,
-        trails=trails,
-        signal=signal,
-        threshold_dbm=threshold_dbm,
-    )
-    return _save(fig, path, dpi)
+    check_picture_path(path)
+    return save_picture(snapshot_figure(omap, nodes, shading, title=title, dpi=dpi), path, dpi)

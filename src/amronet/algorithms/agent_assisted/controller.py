@@ -30,97 +30,42 @@ Choices the paper leaves open, and ours:
   reference it turns back toward its current reference instead of going on, so it never loses its connection.
 * When the two references of a triangle are within ``r_c`` of each other no router is sent: they are linked.
 * The run stops when the reachable free space is covered (``sim.coverage_target``; 0.99 when not set).
+* Under a radio whose links are not decided by distance alone (walls, shadowing, packet loss), a triangle router
+  settles only where its table row holds one of its references, or else drives back to where it last heard one
+  (:mod:`amronet.algorithms.agent_assisted.movers`).
+
+The controller is split by responsibility: its parameters (:mod:`.params`), releasing routers (:mod:`.releases`),
+the drop rule's view and the realism switches (:mod:`.drop_switches`) and the released routers that move
+(:mod:`.movers`) are mixed into :class:`AgentAssisted` here.
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
-
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 
-from amronet.algorithms.agent_assisted.drops import DROP_RULES, AgentView, DropContext, validate_drop_params
+from amronet.algorithms.agent_assisted.drop_switches import DropSwitches
+from amronet.algorithms.agent_assisted.drops import DROP_RULES, DropContext, validate_drop_params
 from amronet.algorithms.agent_assisted.drops.trail import Trails
 from amronet.algorithms.agent_assisted.explorers import EXPLORERS, Explorer, PathFollower
 from amronet.algorithms.agent_assisted.kernels import track_agents
+from amronet.algorithms.agent_assisted.movers import Movers
+from amronet.algorithms.agent_assisted.params import DEFAULT_COVERAGE_TARGET, AgentAssistedParams
+from amronet.algorithms.agent_assisted.releases import Releasing, _pair_key, _segments_clear
 from amronet.algorithms.agent_assisted.relocate import Relocator
 from amronet.algorithms.agent_assisted.strip_driving import StripDrivers
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
 from amronet.algorithms.common.goto import GoalSteering
-from amronet.algorithms.common.references import best_reference_margin, check_loss_band
-from amronet.algorithms.common.triangular import TriangularMode, select_triangles, triangle_goal
+from amronet.algorithms.common.references import check_loss_band
+from amronet.algorithms.common.triangular import select_triangles
 from amronet.algorithms.stepping import FastStep, StepContext
-from amronet.engine.network import agents_connected
 from amronet.engine.robots import Role, State
 from amronet.errors import ScenarioError
 
-__all__ = ["AgentAssisted", "AgentAssistedParams"]
-
-DEFAULT_COVERAGE_TARGET = 0.99
-
-
-class AgentAssistedParams(BaseModel):
-    """Parameters of agent-assisted router deployment.
-
-    Attributes:
-        triangular: ``off``, ``none``, ``global`` or ``local`` (see :mod:`amronet.algorithms.common.triangular`).
-        loss_margin: Width of the "about to lose" band as a fraction of ``r_c``.
-        explorer: Exploration strategy of the agents (:data:`amronet.algorithms.agent_assisted.explorers.EXPLORERS`).
-        turn_noise: Heading noise of the agents' random exploration, radians per square-root second.
-        avoid_range: Sonar readings nearer than this (metres) make an agent turn away.
-        give_up_steps: Consecutive blocked steps after which a triangle router stops short of its goal.
-        release_gap: Gap in metres between an agent's body and the router it releases.
-        drop_rule: When an agent puts a router down (:data:`amronet.algorithms.agent_assisted.drops.DROP_RULES`); the
-        paper's
-            ``last-reference`` by default.
-        drop: The drop rule's own parameters (e.g. ``{drop_margin_db: 3}`` for ``link-quality``).
-        repair: ``none``, or ``relocate``: deployed routers that a failure cut off move to bridge the cut
-            (:mod:`amronet.algorithms.agent_assisted.relocate`).
-        repair_confirm_s: How long a neighbour must be missing before a router counts it as lost, seconds.
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    triangular: TriangularMode = "local"
-    loss_margin: Annotated[float, Field(strict=True, gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
-    explorer: str = "random"
-    turn_noise: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.5
-    avoid_range: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 0.6
-    give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
-    release_gap: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.02
-    drop_rule: str = "last-reference"
-    drop: dict[str, Any] = Field(default_factory=dict)
-    repair: Literal["none", "relocate"] = "none"
-    repair_confirm_s: Annotated[float, Field(strict=True, ge=0, le=600, allow_inf_nan=False)] = 1.0
-
-    @model_validator(mode="after")
-    def _check_drop_rule(self) -> AgentAssistedParams:
-        rule = DROP_RULES.get(self.drop_rule)
-        if rule is None:
-            raise ValueError(f"@algorithm.params.drop_rule@unknown drop rule {self.drop_rule!r}; choose one of: "
-                             + ", ".join(sorted(DROP_RULES)))
-        validate_drop_params(rule, self.drop, "algorithm.params.drop")
-        return self
-
-
-def _pair_key(agent: int, ref_i: int, ref_j: int) -> tuple[int, int, int]:
-    """The key of a triangle served by ``agent`` for the references ``ref_i`` and ``ref_j`` (either order)."""
-    return (agent, min(ref_i, ref_j), max(ref_i, ref_j))
-
-
-def _segments_clear(p: np.ndarray, ends: np.ndarray, r: float, xy: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """Which segments ``p -> ends[m]`` a body of radius ``r`` can be carried along without touching a body."""
-    seg = ends - p
-    length2 = np.maximum(np.einsum("ij,ij->i", seg, seg), 1e-300)
-    rel = xy - p
-    t = np.clip((rel @ seg.T) / length2[None, :], 0.0, 1.0)
-    closest = p[None, None, :] + t[:, :, None] * seg[None, :, :]
-    d = np.linalg.norm(xy[:, None, :] - closest, axis=2)
-    return (d >= r + radius[:, None]).all(axis=0)
+__all__ = ["DEFAULT_COVERAGE_TARGET", "AgentAssisted", "AgentAssistedParams", "_pair_key", "_segments_clear"]
 
 
 @ALGORITHMS.register("agent-assisted")
-class AgentAssisted(Controller):
+class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
     """Controller of agents that carry and release routers."""
 
     Params = AgentAssistedParams
@@ -162,6 +107,8 @@ class AgentAssisted(Controller):
             self.explorer = PathFollower(setup.paths, self.explorer, self.dt, self.agent_speed, sw.radius[self.agents])
         self.moving_triangles = 0
         """Released triangle routers that have not reached their goal yet."""
+        self.triangles_cut_off = 0
+        """Triangle routers that settled hearing neither reference (the link test at settling, :mod:`.movers`)."""
         self.nearest_d = np.empty(len(self.agents))
         """Per agent, the distance to its nearest reference in range, as the last tracking found it."""
         self.other_ref = np.empty(len(self.agents), dtype=np.int64)
@@ -229,9 +176,7 @@ class AgentAssisted(Controller):
         self.current = pad(self.current, -1)
         self.disabled = pad(self.disabled, False)
         self.refused = pad(self.refused, False)
-        st = self.steering
-        st.goal, st.anchors = pad(st.goal, 0.0), pad(st.anchors, -1)
-        st.last_to_goal, st.blocked_steps = pad(st.last_to_goal, np.inf), pad(st.blocked_steps, 0)
+        self.steering.grow(n_new)
         if self.relocator is not None:
             self.relocator.grow(n_new)
 
@@ -371,148 +316,13 @@ class AgentAssisted(Controller):
             self._back_up(view)
         return self.movers_command(step, n_before)
 
-    def movers_command(self, step: StepInput, n_before: int) -> Command:
-        """The end of :meth:`decide` once the agents are steered: the other movers steer; the command for them all.
-
-        The triangle, strip and relocating routers steer; the command moves them with the agents. A compiled step
-        that steers the agents itself (:mod:`amronet.algorithms.agent_assisted.stretch`) finishes a step here.
-        """
-        sw = self.swarm
-        agents = self.agents
-        speed = self.explorer.speed(self.agent_speed)
-        movers, speeds = [agents], [speed]
-
-        # triangle routers released before this step drive to their goals
-        if self.moving_triangles:
-            tri = np.flatnonzero(sw.state[:n_before] == State.TRIANGLE)
-            if len(tri):
-                model = int(sw.model[tri[0]])
-                tri_scans = step.readings.of(tri, model)
-                length, done = self.steering.steer(tri, sw.xy, sw.heading, tri_scans, sw.models[model].sensor_range,
-                                                   sw.max_speed[tri] * self.dt, self.r_eff)
-                if done.any():
-                    sw.state[tri[done]] = State.TRIANGLE_SETTLED
-                    self.moving_triangles -= int(np.count_nonzero(done))
-                    self._nodes_changed()
-                movers.append(tri)
-                speeds.append(length / self.dt)
-        if self.strips is not None and self.strips.moving:
-            moving, model = self._sensed_in(step, n_before, State.STRIP)
-            if len(moving):
-                length = self.strips.drive(moving, step.readings.of(moving, model), sw.models[model].sensor_range,
-                                           sw.max_speed[moving] * self.dt)
-                movers.append(moving)
-                speeds.append(length / self.dt)
-        if self.relocator is not None:
-            moving, length = self._relocate(step, n_before)
-            if len(moving):
-                movers.append(moving)
-                speeds.append(length / self.dt)
-        if len(movers) == 1:
-            return Command(agents, speed)
-        return Command(np.concatenate(movers), np.concatenate(speeds))
-
-    def _sensed_in(self, step: StepInput, n_before: int, state: int) -> tuple[np.ndarray, int]:
-        """Routers in ``state`` sensed this step (those that entered it this step move from the next); their model."""
-        sw = self.swarm
-        moving = np.flatnonzero(sw.state[:n_before] == state)
-        if not len(moving):
-            return moving, 0
-        model = int(sw.model[moving[0]])
-        sensed = step.readings.groups.get(model, (np.zeros(0, dtype=np.int64), None))[0]
-        return moving[np.isin(moving, sensed)], model
-
-    def _relocate(self, step: StepInput, n_before: int) -> tuple[np.ndarray, np.ndarray]:
-        """The relocation repair: start and stop relocations, steer the routers that relocate (sensed this step)."""
-        assert self.relocator is not None
-        sw = self.swarm
-        started, stopped = self.relocator.update(step.t, step.table, sw)
-        if len(started) or len(stopped):
-            sw.state[started] = State.RELOCATING
-            sw.state[stopped] = State.REFERENCE
-            self._nodes_changed()
-        moving, model = self._sensed_in(step, n_before, State.RELOCATING)
-        if not len(moving):
-            return moving, np.zeros(0)
-        length, done = self.relocator.steering.steer(moving, sw.xy, sw.heading, step.readings.of(moving, model),
-                                                     sw.models[model].sensor_range, sw.max_speed[moving] * self.dt,
-                                                     self.r_eff)
-        if done.any():  # arrived or blocked: it stays where it is and serves as a reference again
-            sw.state[moving[done]] = State.REFERENCE
-            self._nodes_changed()
-        return moving, length
-
-    # -- the drop rule's view and the realism switches ----------------------------------------------------------
-    def _view(self, step: StepInput, current: np.ndarray) -> AgentView:
-        """What the agents know this step (:class:`~amronet.algorithms.agent_assisted.drops.AgentView`)."""
-        sw, agents, rule = self.swarm, self.agents, self.drop_rule
-        is_ref, ref_xy = self.deployed_nodes()
-        settling = sw.state == State.DROPPED
-        relay_xy = np.concatenate([ref_xy, sw.xy[settling]]) if self.settle_at else ref_xy
-        contact = None
-        if rule.needs_contact or self.reverse_after_s is not None:
-            contact = agents_connected(step.table, agents, self.bases, sw.relaying)
-        best = (best_reference_margin(step.table, agents, is_ref) if not rule.reads_positions
-                else np.full(len(agents), -np.inf))
-        return AgentView(
-            t=step.t, current=current, nearest_d=self.nearest_d, best_margin=best, xy=sw.xy[agents],
-            heading=sw.heading[agents], relay_xy=relay_xy, base_xy=sw.xy[self.bases], in_contact=contact,
-            scans=step.readings.of(agents, self.agent_model) if rule.needs_scans else None,
-            can_drop=(self.left[agents] >= 1) & (self.pending_until <= step.t))
-
-    def _toward(self, m: int, view: AgentView) -> int:
-        """The node agent ``m`` puts a router down next to or turns back to (-1: none).
-
-        Its current reference, or when it hears none, the nearest known relay.
-        """
-        if view.current[m] >= 0:
-            return int(view.current[m])
-        deployed = np.flatnonzero(self.deployed_nodes()[0])
-        if len(deployed) == 0:
-            return -1
-        d = np.linalg.norm(self.swarm.xy[deployed] - view.xy[m], axis=1)
-        return int(deployed[np.argmin(d)])
-
-    def _settle_dropped(self, t: float) -> None:
-        """Routers whose settling time is over start to relay and serve as references."""
-        ready = [i for i, at in self.settle_at.items() if at <= t]
-        if ready:
-            self.swarm.state[ready] = State.REFERENCE
-            for i in ready:
-                del self.settle_at[i]
-                if self.strips is not None:
-                    self.strips.settled(i)
-            self._nodes_changed()
-
-    def _reverse_drops(self, view: AgentView, drop: np.ndarray) -> np.ndarray:
-        """Agents backing up that are in contact again drop there (MARBLE's reverse drop)."""
-        assert view.in_contact is not None
-        return drop | (self.reversing & view.in_contact & view.can_drop)
-
-    def _back_up(self, view: AgentView | None) -> None:
-        """MARBLE's reverse drop: an agent out of contact for ``reverse_after_s`` backs up along its own path."""
-        assert self.trails is not None and view is not None and view.in_contact is not None
-        sw, agents = self.swarm, self.agents
-        contact = view.in_contact
-        self.contact_since[contact] = view.t
-        self.reversing &= ~contact
-        self.trails.update(sw.xy[agents], ~self.reversing)
-        start = ~contact & ~self.reversing & (view.t - self.contact_since > self.reverse_after_s)
-        self.reversing |= start & (self.left[agents] >= 1)
-        for m in np.flatnonzero(self.reversing):
-            target = self.trails.back(int(m), sw.xy[agents[m]])
-            if target is None:  # back at the start of its path and still cut off: give up backing
-                self.reversing[m] = False
-                self.contact_since[m] = view.t
-                continue
-            d = target - sw.xy[agents[m]]
-            sw.heading[agents[m]] = np.arctan2(d[1], d[0])
-
     def mission_report(self) -> dict[str, object]:
         """Relays used and who put them down, the drop rule and what it counted (the summary's ``mission``)."""
         out: dict[str, object] = {"drop_rule": self.params.drop_rule, "relays_used": int(self.released),
                                   "released_per_agent": [int(k) for k in self.released_by],
                                   "triangle_relays": len(self.triangles_released)}
+        if self.triangles_cut_off:
+            out["triangle_relays_cut_off"] = self.triangles_cut_off
         if self.reverse_after_s is not None:
             out["reverse_drops"] = self.reverse_drops
         if self.relocator is not None:
@@ -526,89 +336,3 @@ class AgentAssisted(Controller):
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
         self.refused[:] = False
         self.refused[movers] = refused
-
-    # -- releasing routers (cold: a handful of events per run) ---------------------------------------------
-    def _release_spot(self, agent: int, toward: int) -> np.ndarray | None:
-        """Where ``agent`` puts a router down, next to itself toward ``toward``; ``None`` when no spot is free.
-
-        First the ring right next to the agent (12 directions, nearest to the reference's first), then two rings
-        farther out (24 directions) whose straight line from the agent must also pass clear of every body. A
-        spot must be within ``r_c`` of the reference, clear of walls along the way and clear of every body.
-        """
-        sw = self.swarm
-        p = sw.xy[agent]
-        ref = sw.xy[toward]
-        r = self.router_model.radius
-        gap = sw.radius[agent] + r + self.params.release_gap
-        base = np.arctan2(ref[1] - p[1], ref[0] - p[0])
-        others = np.delete(np.arange(len(sw)), agent)
-        turns = np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6]) * (np.pi / 6)
-        cand = p + gap * np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
-        within = self.r_c if self.drop_rule.near_reference else np.inf
-        ok = np.linalg.norm(cand - ref, axis=1) <= within
-        ok &= self.path_clear(np.repeat(p[None], len(cand), axis=0), cand, np.full(len(cand), r))
-        if len(others):
-            d = np.linalg.norm(cand[:, None, :] - sw.xy[None, others, :], axis=2)
-            ok &= (d >= r + sw.radius[others][None, :]).all(axis=1)
-        hit = np.flatnonzero(ok)
-        if len(hit):
-            return cand[hit[0]]
-        # farther out: the agent's own ring is full (other bodies, walls)
-        turns = np.concatenate([[0.0], np.repeat(np.arange(1, 12), 2) * np.array([1.0, -1.0] * 11), [12.0]]) * (
-            np.pi / 12)
-        step = 2.0 * r + self.params.release_gap
-        dirs = np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
-        cand = np.concatenate([p + (gap + k * step) * dirs for k in (1, 2)])
-        ok = np.linalg.norm(cand - ref, axis=1) <= within
-        ok[ok] &= self.path_clear(np.repeat(p[None], int(ok.sum()), axis=0), cand[ok], np.full(int(ok.sum()), r))
-        if len(others) and ok.any():
-            ok[ok] &= _segments_clear(p, cand[ok], r, sw.xy[others], sw.radius[others])
-        hit = np.flatnonzero(ok)
-        return cand[hit[0]] if len(hit) else None
-
-    def _add_router(self, agent: int, toward: int, state: int) -> int | None:
-        """Release a router from ``agent`` next to itself toward ``toward``; its index, or ``None`` (no free spot)."""
-        sw = self.swarm
-        spot = self._release_spot(agent, toward)
-        if spot is None:
-            return None
-        new = sw.extend(self.router_model, Role.ROUTER, state, spot[None], np.array([sw.status[agent]]),
-                        heading=np.array([sw.heading[agent]]))
-        self._grow(len(new))
-        self._nodes_changed()
-        self.left[agent] -= 1
-        self.released += 1
-        self.released_by[np.searchsorted(self.agents, agent)] += 1
-        return int(new[0])
-
-    def _release_reference(self, agent: int, current: int, t: float) -> int | None:
-        """Put a reference router down (settling first for ``settle_s`` when set); its index, ``None``: no free spot.
-
-        Under a rule whose routers drive on to a goal (``strip-goals``) it starts for its goal, once settled.
-        """
-        new = self._add_router(agent, current, State.REFERENCE if self.settle_s <= 0 else State.DROPPED)
-        if new is None:
-            return None
-        if self.settle_s > 0:
-            self.settle_at[new] = t + self.settle_s
-            if self.strips is not None:
-                self.strips.waiting[new] = current
-        elif self.strips is not None:
-            self.strips.start(new, current)
-        return new
-
-    def _release_triangle(self, agent: int, ref_i: int, ref_j: int) -> None:
-        sw = self.swarm
-        new = self._add_router(agent, ref_i, State.TRIANGLE)
-        if new is None:
-            return  # no free spot next to the agent: the pair is not served yet, tried again next step
-        key = _pair_key(agent, ref_i, ref_j)
-        self._served.add(key)
-        self.triangles_released.append(key)
-        self.moving_triangles += 1
-        goal = triangle_goal(sw.xy[[ref_i]], sw.xy[[ref_j]], sw.xy[[agent]], self.r_eff)
-        self.steering.start(np.array([new]), goal, np.array([[ref_i, ref_j]]))
-        if self.params.triangular == "local":
-            self.disabled[[new, ref_i, ref_j]] = True
-
-

@@ -30,7 +30,14 @@ from typing import Any, Protocol
 import numpy as np
 
 from amronet.algorithms.agent_assisted.explorers.frontier import FrontierExplorer, KnowledgeGrid
-from amronet.algorithms.agent_assisted.kernels import drive_movers, sense_track_agents
+from amronet.algorithms.agent_assisted.kernels import (
+    Knowledge,
+    Ring,
+    Robots,
+    Tracking,
+    drive_movers,
+    sense_track_agents,
+)
 from amronet.algorithms.base import Command, Readings, StepInput
 from amronet.algorithms.phases import move, sense
 from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surroundings, Watch
@@ -94,7 +101,17 @@ class CompiledAgents(FastStep):
         self.knowledge = c.explorer.grid if self.frontier else KnowledgeGrid((0, 1, 0, 1), 1)
         """The grid the compiled call updates (a stand-in of the same types for other explorers: left alone)."""
         self.robot_radius = float(c.explorer.robot_radius) if self.frontier else 0.0
-        self.around = Surroundings(context, sw.models[c.agent_model])
+        self.around = a = Surroundings(context, sw.models[c.agent_model])
+        self.grid = tuple(a.grid)
+        """The map's grid as the kernels take it (a plain tuple: see :mod:`.kernels`)."""
+        self.ring = tuple(Ring(a.angles, a.sensor_range))
+        """The agents' ring as the kernels take it."""
+        self._robots = Robots(sw.xy, sw.heading, sw.radius, sw.status, sw.distance)
+        self._robots_plain = tuple(self._robots)
+        self._tracking: Tracking | None = None
+        self._tracking_plain: tuple = ()
+        self._knowledge: Knowledge | None = None
+        self._knowledge_plain: tuple = ()
         self.quiet: Any = None
         """Quiet steps in one compiled call (:class:`.stretch.QuietStretch`, set by the controller where it applies),
         or ``None``."""
@@ -135,22 +152,54 @@ class CompiledAgents(FastStep):
         """Up to ``limit`` quiet steps in one call (:class:`.stretch.QuietStretch`)."""
         return None if self.quiet is None or watch.agents is None else self.quiet.take(limit, now, watch.agents)
 
+    def robots(self) -> tuple:
+        """The robots' arrays as the kernels take them (:class:`.kernels.Robots`, a plain tuple).
+
+        Built again when the swarm's arrays are replaced (routers released).
+        """
+        sw, kept = self.swarm, self._robots
+        if (kept.xy is not sw.xy or kept.heading is not sw.heading or kept.radius is not sw.radius
+                or kept.status is not sw.status or kept.distance is not sw.distance):
+            self._robots = Robots(sw.xy, sw.heading, sw.radius, sw.status, sw.distance)
+            self._robots_plain = tuple(self._robots)
+        return self._robots_plain
+
+    def tracking(self, is_ref: np.ndarray) -> tuple:
+        """The controller's reference tracking as the kernels take it (:class:`.kernels.Tracking`, a plain tuple).
+
+        Built again when the controller's arrays are replaced (robots added) or the deployed nodes change.
+        """
+        c, kept = self.controller, self._tracking
+        if (kept is None or kept.is_ref is not is_ref or kept.current is not c.current or kept.left is not c.left
+                or kept.refused is not c.refused):
+            self._tracking = Tracking(c.current, is_ref, c.wants_other, c.left, c.r_eff, c.nearest_d, c.other_ref,
+                                      c.refused)
+            self._tracking_plain = tuple(self._tracking)
+        return self._tracking_plain
+
+    def knowledge_for(self, nodes: np.ndarray, sensor_range: float) -> tuple:
+        """The frontier grid and what its update reads as the kernels take them (:class:`.kernels.Knowledge`).
+
+        ``nodes``: the deployed nodes' positions. Built again when they or the grid's scratch cell lists change.
+        """
+        grid, kept = self.knowledge, self._knowledge
+        buf_r, buf_c = grid.buffers(sensor_range)
+        if kept is None or kept.nodes is not nodes or kept.buf_r is not buf_r:
+            self._knowledge = Knowledge(grid.cells, nodes, self.robot_radius, buf_r, buf_c)
+            self._knowledge_plain = tuple(self._knowledge)
+        return self._knowledge_plain
+
     def _sense_track(self, now: StepInput) -> tuple[np.ndarray, int, int]:
         """The agents' rings and reference tracking (and, in a quiet step, their readings in the frontier grid)."""
-        c, sw = self.controller, self.swarm
+        c, sw, a = self.controller, self.swarm, self.around
         table = now.table
         is_ref, deployed_xy = c.deployed_nodes()
-        grid, a = self.knowledge, self.around
-        several = len(sw.xy) > 1
-        s_csr = a.near(sw.xy, table, float(a.sensor_range + a.largest_radius()))
-        buf_r, buf_c = grid.buffers(a.sensor_range)
+        near = a.near(sw.xy, table, float(a.sensor_range + a.largest_radius()))
         scans = np.empty((len(c.agents), len(a.angles)))  # fresh, as the sense phase's: an explorer may keep it
         n_cand, n_losing = sense_track_agents(
-            *a.grid, sw.xy, sw.heading, sw.radius, c.agents, a.angles, a.sensor_range, *s_csr, several, scans,
-            c.current, is_ref, sw.status, table.indptr, table.indices, table.dist, c.wants_other, c.left, c.r_eff,
-            c.nearest_d, c.other_ref, self.frontier, grid.score, grid.seen, float(grid.origin[0]),
-            float(grid.origin[1]), float(grid.resolution), deployed_xy, self.robot_radius, buf_r, buf_c,
-            grid.row_stamp, grid.stamp + 1)
+            self.grid, self.robots(), c.agents, self.ring, near, scans, self.tracking(is_ref),
+            (table.indptr, table.indices, table.dist), self.frontier, self.knowledge_for(deployed_xy, a.sensor_range),
+            self.knowledge.stamp + 1)
         return scans, n_cand, n_losing
 
     def act(self, now: StepInput, n_before: int, n_cand: int, n_losing: int, scans: np.ndarray,
@@ -199,9 +248,8 @@ class CompiledAgents(FastStep):
         """The agents' moves (:func:`~.kernels.drive_movers`), as the move phase does them."""
         c, sw, a = self.controller, self.swarm, self.around
         length, reach = self.moves()
-        d_csr = a.near(sw.xy, now.table, reach) if a.collisions else a.no_bodies(len(sw))
-        drive_movers(*a.grid, c.agents, length, sw.xy, sw.heading, sw.radius, a.collisions, *d_csr, reach,
-                     sw.distance, c.refused)
+        near = a.near(sw.xy, now.table, reach) if a.collisions else a.no_bodies(len(sw))
+        drive_movers(self.grid, self.robots(), c.agents, length, a.collisions, near, reach, c.refused)
 
     def _phases(self, now: StepInput) -> None:
         """The loop's sense, decide and move phases for this step (as :meth:`~amronet.sim.loop.Loop.step` runs them)."""

@@ -68,11 +68,7 @@ class Relocator:
 
     def grow(self, n_new: int) -> None:
         """Make room for ``n_new`` robots added at the end (routers released)."""
-        st = self.steering
-        st.goal = np.concatenate([st.goal, np.zeros((n_new, 2))])
-        st.anchors = np.concatenate([st.anchors, np.full((n_new, 1), -1, dtype=np.int64)])
-        st.last_to_goal = np.concatenate([st.last_to_goal, np.full(n_new, np.inf)])
-        st.blocked_steps = np.concatenate([st.blocked_steps, np.zeros(n_new, dtype=np.int64)])
+        self.steering.grow(n_new)
         self.n += n_new
 
     def _watched(self, sw: Swarm) -> np.ndarray:

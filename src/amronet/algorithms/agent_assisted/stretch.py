@@ -27,6 +27,11 @@ from amronet.algorithms.agent_assisted.stretch_kernels import (
     TRIANGLES_END,
     TRIANGLES_LOCAL,
     TRIANGLES_NONE,
+    Frontier,
+    Moves,
+    Moving,
+    Radio,
+    Triangles,
     quiet_stretch,
 )
 from amronet.algorithms.stepping import AgentBooks, StepContext, Stretched
@@ -65,8 +70,8 @@ class QuietStretch:
         self.triangle_steps = 0
         """Steps taken in stretches with triangle routers driving to their goals."""
 
-    def _moving(self, length: np.ndarray, r: float) -> tuple | None:
-        """The kernel's ``moving`` tuple: the triangle routers driving to their goals and how they steer.
+    def _moving(self, length: np.ndarray, r: float) -> Moving | None:
+        """The kernel's :class:`~.stretch_kernels.Moving`: the triangle routers driving to their goals, how they steer.
 
         ``None`` when their steps cannot be taken in the stretch: routers of several models, or of the agents' model,
         or whose rings or moves reach beyond the radio's table (the sense and move phases would search anew).
@@ -79,7 +84,7 @@ class QuietStretch:
         steer = (steering.goal, steering.anchors, steering.last_to_goal, steering.blocked_steps,
                  int(steering.give_up_steps), float(steering.min_progress), float(c.r_eff), float(c.dt), largest)
         if len(tri) == 0:
-            return (_NO_ROBOTS, beam_angles(1), 0.0, _NO_STEPS, *steer)
+            return Moving(_NO_ROBOTS, beam_angles(1), 0.0, _NO_STEPS, *steer)
         model = int(sw.model[tri[0]])
         if model == c.agent_model or (sw.model[tri] != model).any():
             return None
@@ -89,7 +94,7 @@ class QuietStretch:
         reach = 2.0 * largest + 2.0 * max(max(length.tolist()), float(max_step.max()) * (1.0 + 1e-9))
         if spec.sensor_range + largest > r or (a.collisions and reach > r):
             return None
-        return (tri, beam_angles(spec.sensor_beams), float(spec.sensor_range), max_step, *steer)
+        return Moving(tri, beam_angles(spec.sensor_beams), float(spec.sensor_range), max_step, *steer)
 
     @staticmethod
     def applies(compiled: CompiledAgents, context: StepContext) -> bool:
@@ -117,7 +122,7 @@ class QuietStretch:
         moving = self._moving(length, table.r)
         if moving is None:
             return None
-        tri = moving[0]
+        tri = moving.tri
         m = len(c.agents)
         is_ref, deployed_xy = c.deployed_nodes()
         inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)
@@ -125,19 +130,19 @@ class QuietStretch:
             return None
         avoid, layers, settings, plans, buffers = inputs
         grid = comp.knowledge
-        buf_r, buf_c = grid.buffers(a.sensor_range)
+        knowledge = comp.knowledge_for(deployed_xy, a.sensor_range)
         rng = c.rng
         state = rng.bit_generator.state
         uniform = rng.random(limit * m)
+        # every structure as a plain tuple (see .kernels)
+        frontier = Frontier(explorer.steps, grid.stamp, avoid, uniform, *layers, settings, plans, buffers,
+                            explorer.plans.active)
+        triangles = Triangles(_RULES.get(c.params.triangular, TRIANGLES_ACT), float(c.r_c), c.disabled,
+                              c.served_pairs())
         done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps, looked = quiet_stretch(
-            a.grid, sw.xy, sw.heading, sw.radius, sw.status, sw.distance, c.agents, a.angles, a.sensor_range, length,
-            reach, a.collisions, float(self.radio_reach), (table.indptr, table.indices, table.dist),
-            (c.current, is_ref, c.wants_other, c.left, c.r_eff, c.nearest_d, c.other_ref, c.refused),
-            (_RULES.get(c.params.triangular, TRIANGLES_ACT), float(c.r_c), c.disabled, c.served_pairs()), moving,
-            (grid.score, grid.seen, float(grid.origin[0]), float(grid.origin[1]), float(grid.resolution),
-             grid.row_stamp, grid.stamp), deployed_xy, comp.robot_radius, buf_r, buf_c, explorer.steps, avoid, uniform,
-            layers, settings, plans, buffers, explorer.plans.active, agent_books.bases, agent_books.relay_mask,
-            agent_books.arrays, limit)
+            comp.grid, comp.robots(), comp.ring, tuple(Moves(c.agents, length, reach, a.collisions)),
+            tuple(Radio(self.radio_reach, table.indptr, table.indices, table.dist)), comp.tracking(is_ref),
+            tuple(triangles), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
         if how == NON_FINITE:
             return Stretched(done, csr if done else None, non_finite=True)
         self.ends[{ACTS: "acts", IDLE: "idle", TRIANGLES_END: "triangle"}.get(how, "quiet")] += 1

@@ -22,19 +22,20 @@ step.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
-from amronet.algorithms.common.goto import goal_ends, steer_one
+from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
 from amronet.engine.neighbours import search_kernel
 from amronet.engine.network import agents_linked_kernel
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
 __all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL", "TRIANGLES_NONE",
-           "quiet_stretch"]
+           "Frontier", "Links", "Moves", "Moving", "Radio", "StretchEnd", "Triangles", "quiet_stretch"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -58,50 +59,171 @@ TRIANGLES_ACT = 2
 """Any other rule: a triangle candidate ends the stretch (the controller decides)."""
 
 
+class Moves(NamedTuple):
+    """The agents and their moves."""
+
+    agents: np.ndarray
+    """The agents ``(A,)``."""
+    length: np.ndarray
+    """Each one's move per step ``(A,)``."""
+    reach: float
+    """The reach of the moves' collision checks."""
+    collisions: bool
+    """Whether bodies stop moves."""
+
+
+class Radio(NamedTuple):
+    """The radio's search radius ``r`` and this step's neighbour table (every sensing and driving reach is in ``r``)."""
+
+    r: float
+    indptr: np.ndarray
+    indices: np.ndarray
+    dist: np.ndarray
+
+
+class Triangles(NamedTuple):
+    """The triangle rule's inputs (:func:`_triangle_goes`)."""
+
+    rule: int
+    """A ``TRIANGLES_*`` code."""
+    r_c: float
+    """A candidate goes ahead when its references are farther apart than this."""
+    disabled: np.ndarray
+    """The nodes' local-rule flags ``(N,)``."""
+    served: np.ndarray
+    """The triangles served as rows ``(agent, lower reference, higher reference)``."""
+
+
+class Moving(NamedTuple):
+    """The triangle routers driving to their goals, and how they steer.
+
+    ``goal`` to ``min_progress`` as :class:`~amronet.algorithms.common.goto.GoalSteering` keeps them.
+    """
+
+    tri: np.ndarray
+    """The routers ``(T,)`` (empty: none)."""
+    angles: np.ndarray
+    """Their ring's beam angles."""
+    sensor_range: float
+    """Their ring's range."""
+    max_step: np.ndarray
+    """Each one's longest step ``(T,)``."""
+    goal: np.ndarray
+    anchors: np.ndarray
+    last_to_goal: np.ndarray
+    blocked_steps: np.ndarray
+    give_up: int
+    min_progress: float
+    r_keep: float
+    """A move may take a router no farther than this from an anchor (or than it is)."""
+    dt: float
+    largest: float
+    """The largest body radius."""
+
+
+class Frontier(NamedTuple):
+    """The frontier explorer's state and inputs for its navigation kernel, step after step.
+
+    ``robots``, ``no_robots``, ``covered``, ``gap`` and ``visited`` are its layers, as in
+    :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.MapLayers`.
+    """
+
+    now: int
+    """Its step count."""
+    stamp: int
+    """The knowledge grid's stamp."""
+    avoid: float
+    """Its avoidance reach."""
+    uniform: np.ndarray
+    """``limit`` times as many uniform draws as there are agents (the fresh headings, step by step)."""
+    robots: np.ndarray
+    no_robots: np.ndarray
+    covered: np.ndarray
+    gap: np.ndarray
+    visited: np.ndarray
+    settings: tuple
+    """Its :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.NavSettings` (a plain tuple)."""
+    plans: tuple
+    """Its :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.AgentPlans` (a plain tuple)."""
+    buffers: tuple
+    """Its :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.NavBuffers` (a plain tuple)."""
+    active: np.ndarray
+    """The plans' ``active``."""
+
+
+class Links(NamedTuple):
+    """The agents' connection books (:attr:`amronet.algorithms.stepping.AgentBooks.arrays`), kept step by step.
+
+    Per agent: whether it is linked (scratch), its connected steps, outages, longest outage and the outage going on.
+    """
+
+    linked: np.ndarray
+    connected_steps: np.ndarray
+    outages: np.ndarray
+    longest: np.ndarray
+    down_for: np.ndarray
+    counts: np.ndarray
+    """``[steps observed, steps all connected, outage going on, connected steps of the fraction]``."""
+    sums: np.ndarray
+    """``[sum of fractions, window minimum, minimum]``."""
+
+
+class StretchEnd(NamedTuple):
+    """What :func:`quiet_stretch` did."""
+
+    steps: int
+    """Steps done whole."""
+    how: int
+    """``QUIET``, ``ACTS``, ``IDLE``, ``TRIANGLES_END`` or ``NON_FINITE``."""
+    n_cand: int
+    """After ``ACTS``, ``IDLE`` or ``TRIANGLES_END``: that step's triangle candidates, as its tracking counts them."""
+    n_losing: int
+    """And its agents about to lose their last reference."""
+    table: tuple
+    """The neighbour table's rows ``(indptr, indices, dist)`` after the steps done."""
+    scans: np.ndarray
+    """After ``ACTS``, ``IDLE`` or ``TRIANGLES_END``: that step's agents' readings."""
+    stamp: int
+    """The knowledge grid's stamp."""
+    explorer_steps: int
+    """The explorer's step count."""
+    looked: int
+    """Steps with a triangle candidate and none going ahead."""
+
+
 @njit(cache=True)
-def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, sensor_range, length, reach,
-                  collisions, r, table, tracking, triangles, moving, knowledge, nodes, robot_r, buf_r, buf_c, now,
-                  avoid, uniform, layers, cfg, plans, work, active, bases, network, links, limit):  # pragma: no cover
+def quiet_stretch(grid, robots, ring, moves, radio, tracking, triangles, moving, knowledge, frontier, books,
+                  limit):  # pragma: no cover - numba
     """Up to ``limit`` quiet steps; see the module docstring.
 
-    The arguments, in order: ``grid`` = ``(blocked, clear, ox, oy, res)``, the map's grid for the rings and the moves;
-    the robots' ``xy``, ``heading``, ``radius``, ``status`` and ``distance`` (updated in place); the ``agents``, their
-    ring (``angles``, ``sensor_range``), each one's move per step (``length``), the reach of the moves' collision checks
-    (``reach``) and whether bodies stop moves (``collisions``); the radio's search radius ``r`` and this step's
-    ``table`` ``(indptr, indices, dist)`` (every sensing and driving reach is within ``r``); the controller's
-    ``tracking`` arrays ``(current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused)`` and its
-    ``triangles`` ``(rule, r_c, disabled, served)`` (a ``TRIANGLES_*`` code, the nodes' local-rule flags, the triangles
-    served as rows ``(agent, lower reference, higher reference)``); the triangle routers driving to their goals,
-    ``moving`` = ``(tri, angles, sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up,
-    min_progress, r_keep, dt, largest radius)`` (``tri`` empty: none; the rest as
-    :class:`~amronet.algorithms.common.goto.GoalSteering` keeps and steers them); the shared grid's ``knowledge``
-    ``(score,
-    seen, origin_x, origin_y, resolution, row_stamp, stamp)`` and what its update reads (the deployed ``nodes``, fixed
-    in a quiet stretch, ``robot_r``, the scratch ``buf_r`` and ``buf_c``); the explorer's step count ``now``, avoidance
-    reach ``avoid`` and ``uniform``, ``limit`` times as many uniform draws as there are agents (the fresh headings, step
-    by step); its ``layers`` ``(robots, no_robots, covered, gap, visited)``, the navigation kernel's ``cfg``, ``plans``
-    and ``work`` as plain tuples and the plans' ``active``; the run's ``bases`` and relaying nodes (``network``), and
-    the agents' connection books ``links`` = ``(linked, connected_steps, outages, longest, current, counts, sums)`` with
-    ``counts`` = ``[steps observed, steps all connected, outage going on, connected steps of the fraction]`` and
-    ``sums`` = ``[sum of fractions, window minimum, minimum]`` (:meth:`amronet.sim.run.Run.connection_books`);
-    ``limit``, the most steps to do.
+    Every argument but ``limit`` is a named structure, as a plain tuple: the map's
+    :class:`~amronet.engine.kernel_data.Grid`; the robots (:class:`~amronet.algorithms.agent_assisted.kernels.Robots`,
+    updated in place) and the agents' :class:`~amronet.algorithms.agent_assisted.kernels.Ring`; the agents' moves
+    (:class:`Moves`); the :class:`Radio`; the controller's
+    :class:`~amronet.algorithms.agent_assisted.kernels.Tracking` and :class:`Triangles`; the triangle routers driving to
+    their goals (:class:`Moving`); the frontier explorer's shared grid
+    (:class:`~amronet.algorithms.agent_assisted.kernels.Knowledge`; the deployed nodes are fixed in a quiet stretch) and
+    its state (:class:`Frontier`); the agents' connection books
+    (:class:`~amronet.algorithms.stepping.AgentBooks`, its arrays a :class:`Links`,
+    :meth:`amronet.sim.run.Run.connection_books`). ``limit``: the most steps to do.
 
     Returns:
-        ``(steps done, QUIET/ACTS/IDLE/TRIANGLES_END/NON_FINITE, triangle candidates, losing, table, scans, grid
-        stamp, explorer steps, steps with a triangle candidate and none going ahead)``: after ``ACTS``, ``IDLE`` or
-        ``TRIANGLES_END`` ``scans`` are that step's agents' readings, the counts its tracking's.
+        A :class:`StretchEnd`.
     """
+    xy, heading, radius, _, _ = robots
+    angles, _ = ring
+    agents, length, reach, collisions = moves
+    r, indptr, indices, dist = radio
+    current, _, _, left, _, _, other_ref, refused = tracking
+    (tri, t_angles, t_sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress,
+     r_keep, dt, largest) = moving
+    cells, _, _, _, _ = knowledge
+    score, seen, _, _, _, row_stamp = cells
+    (now, stamp, avoid, uniform, layer_robots, no_robots, covered, gap, visited, settings, plans, buffers,
+     active) = frontier
     blocked, clear, ox, oy, res = grid
-    current, is_ref, wants_other, left, r_eff, nearest_d, other_ref, refused = tracking
-    rule, r_c, disabled, served = triangles
-    score, seen, g_ox, g_oy, g_res, row_stamp, stamp = knowledge
-    robots, no_robots, covered, gap, visited = layers
-    linked, connected_steps, outages, longest, down_for, counts, sums = links
-    indptr, indices, dist = table
     m = agents.shape[0]
     n = xy.shape[0]
-    (tri, t_angles, t_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_keep, dt,
-     largest) = moving
     nt = tri.shape[0]
     movers = np.empty(m + nt, np.int64)  # the agents, then the triangle routers (the controller's order)
     lengths = np.empty(m + nt)
@@ -119,19 +241,15 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
     looked = 0
     while done < limit:
         scans = np.empty((m, angles.shape[0]))
-        n_cand, n_losing = sense_track_agents(
-            blocked, clear, ox, oy, res, xy, heading, radius, agents, angles, sensor_range, indptr, indices, dist,
-            np.bool_(True), scans, current, is_ref, status, indptr, indices, dist, wants_other, left, r_eff, nearest_d,
-            other_ref, np.bool_(True), score, seen, g_ox, g_oy, g_res, nodes, robot_r, buf_r, buf_c, row_stamp,
-            stamp + 1)
-        if n_cand and not n_losing and not _triangle_goes(rule, r_c, disabled, served, agents, current, other_ref, left,
-                                                          xy):
+        table = (indptr, indices, dist)
+        n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, table, scans, tracking, table,
+                                              np.bool_(True), knowledge, stamp + 1)
+        if n_cand and not n_losing and not _triangle_goes(triangles, agents, current, other_ref, left, xy):
             # the controller would only look: the rest of sense_track_agents, as in a quiet step
             looked += 1
-            integrate_agents(xy, heading, agents, angles, sensor_range, scans, score, seen, g_ox, g_oy, g_res, nodes,
-                             robot_r, buf_r, buf_c, row_stamp, stamp + 1)
+            integrate_agents(robots, agents, ring, scans, knowledge, stamp + 1)
         elif n_cand or n_losing:
-            return done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now, looked
+            return StretchEnd(done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now, looked)
         stamp += 1
         # the frontier explorer's plan_and_steer
         for j in range(m):
@@ -142,53 +260,55 @@ def quiet_stretch(grid, xy, heading, radius, status, distance, agents, angles, s
             for k in range(angles.shape[0]):
                 avoided[j, k] = min(scans[j, k], avoid)
         navigate_kernel((now, np.bool_(False), xy, heading, agents, avoided, angles, refused_m, fresh),
-                        (score, seen, row_stamp, stamp, robots, no_robots, covered, gap, visited), cfg, plans, work)
+                        (score, seen, row_stamp, stamp, layer_robots, no_robots, covered, gap, visited), settings,
+                        plans, buffers)
         now += 1
         for j in range(m):
             if not active[j]:
-                return done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
+                return StretchEnd(done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked)
         near = reach
         if nt:  # the triangle routers' rings, then their steering, unless one of them arrives or gives up now
             for q in range(nt):
-                if goal_ends(tri[q], xy, goal, last_to_goal, blocked_steps, give_up, min_progress, max_step[q]):
-                    return done, TRIANGLES_END, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
+                if goal_ends(tri[q], xy, Steering(goal, anchors, last_to_goal, blocked_steps, give_up, min_progress),
+                             max_step[q]):
+                    return StretchEnd(done, TRIANGLES_END, 0, 0, (indptr, indices, dist), scans, stamp, now, looked)
             for q in range(nt):
                 i = tri[q]
-                cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], t_angles, t_range,
+                cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], t_angles, t_sensor_range,
                               t_scans[q])
                 if n > 1:
-                    cast_bodies_one(i, indptr, indices, dist, xy, heading[i], t_angles, t_range, radius, largest,
+                    cast_bodies_one(i, indptr, indices, dist, xy, heading[i], t_angles, t_sensor_range, radius, largest,
                                     t_scans[q])
             farthest = 0.0
             for j in range(m):
                 farthest = max(farthest, lengths[j])
             for q in range(nt):
-                step, _ = steer_one(tri[q], xy, heading, goal, anchors, t_scans[q], t_angles, t_range, max_step[q],
-                                    r_keep, last_to_goal, blocked_steps, give_up, min_progress)
+                step, _ = steer_one(tri[q], xy, heading,
+                                    Steering(goal, anchors, last_to_goal, blocked_steps, give_up, min_progress),
+                                    t_scans[q], t_angles, t_sensor_range, max_step[q], r_keep)
                 lengths[m + q] = (step / dt) * dt  # the command's speed times the step, as the move phase has it
                 farthest = max(farthest, lengths[m + q])
             near = 2.0 * largest + 2.0 * farthest  # the move phase's reach, over every mover
         # the move, then the radio's next table and the agents' connection
-        b_ptr, b_idx, b_dist = (indptr, indices, dist) if collisions else no_bodies
-        drive_movers(blocked, clear, ox, oy, res, movers, lengths, xy, heading, radius, collisions, b_ptr, b_idx,
-                     b_dist, near, distance, refused)
+        bodies = (indptr, indices, dist) if collisions else no_bodies
+        drive_movers(grid, robots, movers, lengths, collisions, bodies, near, refused)
         ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, np.int64(1))
         done += 1
         if not ok:
-            return done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked
-        _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
-                 sums)
-    return done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now, looked
+            return StretchEnd(done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked)
+        _observe(indptr, indices, agents, books)
+    return StretchEnd(done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now, looked)
 
 
 @njit(cache=True)
-def _triangle_goes(rule, r_c, disabled, served, agents, current, other, left, xy):  # pragma: no cover - numba
+def _triangle_goes(triangles, agents, current, other, left, xy):  # pragma: no cover - numba
     """Would a triangle go ahead this step? What ``AgentAssisted.decide_tracked`` asks ``select_triangles``.
 
     The candidates are the agents that hear a reference of another status (``other[m]``) and carry a router, less
     the triangles they served already; one goes ahead when its references are farther apart than ``r_c`` (the
-    distance as ``numpy.linalg.norm`` computes it) and, by the local rule, not both disabled.
+    distance as ``numpy.linalg.norm`` computes it) and, by the local rule, not both disabled (:class:`Triangles`).
     """
+    rule, r_c, disabled, served = triangles
     if rule == TRIANGLES_ACT:
         return True
     for m in range(agents.shape[0]):
@@ -214,10 +334,15 @@ def _triangle_goes(rule, r_c, disabled, served, agents, current, other, left, xy
 
 
 @njit(cache=True)
-def _observe(indptr, indices, agents, bases, network, linked, connected_steps, outages, longest, down_for, counts,
-             sums):  # pragma: no cover - numba
-    """What :meth:`amronet.sim.run.Run.observe_agents` and its :class:`~amronet.sim.run.OutageTracker` do."""
-    agents_linked_kernel(indptr, indices, agents, bases, network, linked)
+def _observe(indptr, indices, agents, books):  # pragma: no cover - numba
+    """What :meth:`amronet.sim.run.Run.observe_agents` and its :class:`~amronet.sim.run.OutageTracker` do.
+
+    ``books``: the agents' connection books (:class:`~amronet.algorithms.stepping.AgentBooks`, its arrays a
+    :class:`Links`), updated in place.
+    """
+    bases, relay_mask, arrays = books
+    linked, connected_steps, outages, longest, down_for, counts, sums = arrays
+    agents_linked_kernel(indptr, indices, agents, bases, relay_mask, linked)
     a = linked.shape[0]
     up = 0
     for j in range(a):

@@ -21,16 +21,17 @@ from collections.abc import Callable
 
 import numpy as np
 
-from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, NON_FINITE, SETTLING
+from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, NON_FINITE, SETTLING, Books, Radio
 from amronet.algorithms.stepping import StepContext, Stretched, Surroundings, Watch
+from amronet.engine.kernel_data import Csr
 from amronet.engine.neighbours import GroupIds
 from amronet.engine.table import NeighbourTable
 from amronet.threads import use_threads
 
 __all__ = ["SwarmStretch"]
 
-Kernel = Callable[[int, tuple, tuple, tuple], tuple]
-"""An algorithm's stretch kernel, given ``(limit, csr, radio, books)``: ``(done, how, indptr, indices, dist)``."""
+Kernel = Callable[[int, Csr, Radio, Books], tuple[int, int, Csr]]
+"""An algorithm's stretch kernel, given ``(limit, table, radio, books)``: ``(done, how, table)``."""
 
 
 class SwarmStretch:
@@ -45,7 +46,7 @@ class SwarmStretch:
 
     def __init__(self, context: StepContext, settling: tuple[np.ndarray, np.ndarray], around: Surroundings) -> None:
         ids = GroupIds.of(context.groups, len(context.swarm))
-        self.radio = (float(context.radio_reach), ids.ids, int(ids.count))
+        self.radio = Radio(float(context.radio_reach), ids.ids, int(ids.count))
         self.groups = ids.ids
         self.n_runs = int(ids.count)
         self.n = len(context.swarm)
@@ -74,11 +75,11 @@ class SwarmStretch:
             return None
         on = np.zeros(self.n_runs, dtype=np.bool_)
         on[watch.active] = True
-        books = (*self.settling, self.groups, on, np.asarray(watch.settled, dtype=np.bool_), self.counts)
-        done, how, indptr, indices, dist = kernel(limit, (table.indptr, table.indices, table.dist), self.radio, books)
+        books = Books(*self.settling, self.groups, on, np.asarray(watch.settled, dtype=np.bool_), self.counts)
+        done, how, csr = kernel(limit, Csr(table.indptr, table.indices, table.dist), self.radio, books)
         self.steps += done
         if how == BAD_DRAW:
             raise AssertionError("the walkers were not listed in order")
         if how != NON_FINITE:
             self.ends[{SETTLING: "settling", CANDIDATES: "candidates"}.get(how, "quiet")] += 1
-        return Stretched(done, (indptr, indices, dist) if done else None, non_finite=how == NON_FINITE)
+        return Stretched(done, (csr.indptr, csr.indices, csr.dist) if done else None, non_finite=how == NON_FINITE)

@@ -11,11 +11,16 @@ which a triangular deployment may start (the controller's Python decides those; 
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import numpy as np
 from numba import njit
 
+from amronet.engine.kernel_data import Csr
 from amronet.engine.neighbours import search_kernel
 
-__all__ = ["BAD_DRAW", "CANDIDATES", "NON_FINITE", "QUIET", "SETTLING", "after_step", "settling_changed"]
+__all__ = ["BAD_DRAW", "CANDIDATES", "NON_FINITE", "QUIET", "SETTLING", "Books", "Radio", "after_step",
+           "settling_changed"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -31,9 +36,38 @@ lists them so);
 the step after the last one done is left half done."""
 
 
+class Radio(NamedTuple):
+    """The radio's neighbour search in a stretch (:func:`~amronet.engine.neighbours.search_kernel`)."""
+
+    reach: float
+    """Every pair within ``reach`` is linked (the unit disk)."""
+    group_ids: np.ndarray
+    """``int64 (N,)``: each robot's group (run); robots of different groups are never linked."""
+    n_groups: int
+    """How many groups."""
+
+
+class Books(NamedTuple):
+    """What a stretch watches of the runs' books: whether an active run's settled state changes."""
+
+    lookup: np.ndarray
+    """``bool (n_states,)``: the states in which an eligible robot keeps its run unsettled."""
+    eligible: np.ndarray
+    """``bool (N,)``: the robots whose state counts."""
+    groups: np.ndarray
+    """``int64 (N,)``: each robot's run."""
+    active: np.ndarray
+    """``bool (n_runs,)``: the runs still running."""
+    settled: np.ndarray
+    """``bool (n_runs,)``: whether each run is settled now."""
+    counts: np.ndarray
+    """``int64 (n_runs,)``: scratch, per run."""
+
+
 @njit(cache=True)
-def settling_changed(state, lookup, eligible, groups, active, settled, counts):  # pragma: no cover - numba
+def settling_changed(state, books):  # pragma: no cover - numba
     """Whether an active run's settled state (none of its eligible robots in a ``lookup`` state) is not ``settled``."""
+    lookup, eligible, groups, active, settled, counts = books
     counts[:] = 0
     for i in range(state.shape[0]):
         if eligible[i] and lookup[state[i]]:
@@ -45,17 +79,15 @@ def settling_changed(state, lookup, eligible, groups, active, settled, counts): 
 
 
 @njit(cache=True, inline="always")
-def after_step(xy, state, radio, watch):  # pragma: no cover - numba
-    """The radio's next table and the books after a step: ``(how, indptr, indices, dist)``.
+def after_step(xy, state, radio, books):  # pragma: no cover - numba
+    """The radio's next table and the books after a step: ``(how, table)``, the table a :class:`Csr`.
 
     ``how``: :data:`NON_FINITE` (no table), :data:`SETTLING` (an active run's settled state changed: the stretch ends
     there) or :data:`QUIET`.
     """
-    reach, group_ids, n_groups = radio
-    lookup, eligible, groups, active, settled, counts = watch
-    ok, indptr, indices, dist = search_kernel(xy, reach, group_ids, n_groups)
+    ok, indptr, indices, dist = search_kernel(xy, radio.reach, radio.group_ids, radio.n_groups)
     if not ok:
-        return NON_FINITE, indptr, indices, dist
-    if settling_changed(state, lookup, eligible, groups, active, settled, counts):
-        return SETTLING, indptr, indices, dist
-    return QUIET, indptr, indices, dist
+        return NON_FINITE, Csr(indptr, indices, dist)
+    if settling_changed(state, books):
+        return SETTLING, Csr(indptr, indices, dist)
+    return QUIET, Csr(indptr, indices, dist)

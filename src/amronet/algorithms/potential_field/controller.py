@@ -50,8 +50,11 @@ from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
 from amronet.algorithms.common.forces import inverse_square_obstacle_forces
+from amronet.algorithms.common.swarm_data import robots_of
+from amronet.algorithms.potential_field.kernel_data import field_constants_of, field_state_of
 from amronet.algorithms.potential_field.kernels import come_to_rest, wake_and_accelerate
 from amronet.algorithms.stepping import FastStep, StepContext
+from amronet.engine.kernel_data import Csr
 from amronet.engine.robots import Role, State, state_lookup
 
 __all__ = ["PotentialField", "PotentialFieldParams"]
@@ -165,21 +168,15 @@ class PotentialField(Controller):
         movers = np.empty(len(self.routers), dtype=np.int64)
         speed = np.empty(len(self.routers))
         n_movers = wake_and_accelerate(
-            self.routers, sw.state, table.indptr, table.indices, table.dist, sw.xy, self.obstacle_force,
-            self.velocity, sw.heading, sw.max_speed, self.rest_count, self.window_start, self.force,
-            self.held_force, self.k_cover, self.k_degree, self.q_rc, self.force_cap,
-            p.connectivity_k, p.damping, p.mass, self.dt, p.rest_fraction, State.EXPLORE, State.REFERENCE,
-            self.wakeups, movers, speed)
+            self.routers, robots_of(sw), Csr(table.indptr, table.indices, table.dist), field_state_of(self),
+            field_constants_of(self, self.dt), State.EXPLORE, State.REFERENCE, movers, speed)
         return Command(movers[:n_movers], speed[:n_movers])
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
         if len(movers) == 0:
             return
-        p = self.params
-        come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), self.swarm.state,
-                     self.swarm.xy, self.swarm.max_speed, self.velocity, self.rest_count, self.window_start,
-                     self.force, self.held_force, p.rest_steps, self.dt, p.rest_fraction, p.damping,
-                     State.REFERENCE)
+        come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), robots_of(self.swarm),
+                     field_state_of(self), field_constants_of(self, self.dt), State.REFERENCE)
 
     def report(self) -> dict[str, object]:
         """The force constants used and how often resting routers woke up."""

@@ -9,44 +9,28 @@ between two records in one call (:func:`~amronet.algorithms.potential_field.kern
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amronet.algorithms.common.swarm_data import Ring, robots_of
 from amronet.algorithms.common.swarm_stretch import SwarmStretch
+from amronet.algorithms.common.swarm_stretch_kernels import Books, Radio
+from amronet.algorithms.potential_field.kernel_data import (
+    FieldControls,
+    FieldData,
+    FieldScratch,
+    field_constants_of,
+    field_state_of,
+)
 from amronet.algorithms.potential_field.kernels import field_step, field_stretch
 from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surroundings, Watch
+from amronet.engine.kernel_data import Csr
 
 if TYPE_CHECKING:
     from amronet.algorithms.base import StepInput
 
 __all__ = ["CompiledField", "FieldControls"]
-
-
-class FieldControls(Protocol):
-    """What the fast step reads and keeps of its controller: nothing else of it.
-
-    The controller is :class:`~amronet.algorithms.potential_field.controller.PotentialField`: its names below are
-    the declared interface between the two.
-    """
-
-    params: Any
-    routers: np.ndarray
-    needs_range_readings: bool
-    k_obstacle: float
-    force_cap: float
-    k_cover: float
-    k_degree: float
-    q_rc: float
-    obstacle_force: np.ndarray
-    velocity: np.ndarray
-    rest_count: np.ndarray
-    window_start: np.ndarray
-    force: np.ndarray
-    held_force: np.ndarray
-    wakeups: np.ndarray
-    settling_rule: Callable[[], tuple[np.ndarray, np.ndarray]]
 
 
 class CompiledField(FastStep):
@@ -68,6 +52,12 @@ class CompiledField(FastStep):
         self.movers = np.zeros(len(routers), dtype=np.int64)
         self.speed = np.zeros(len(routers))
         self.refused = np.zeros(len(routers), dtype=np.bool_)
+        a = self.around
+        self.data = FieldData(
+            a.grid, robots_of(sw), c.routers, Ring(a.angles, a.sensor_range), field_state_of(c),
+            field_constants_of(c, self.dt), FieldScratch(self.scan, self.movers, self.speed, self.refused),
+            Csr(*a.no_bodies(len(sw))), bool(a.collisions), bool(c.needs_range_readings))
+        """What the kernels read and keep, built once: the arrays are the swarm's, the controller's and those above."""
         self.stretcher = (SwarmStretch(context, c.settling_rule(), self.around) if SwarmStretch.applies(context)
                           else None)
         """The steps between records in one compiled call (:mod:`amronet.algorithms.common.swarm_stretch`), or
@@ -83,17 +73,10 @@ class CompiledField(FastStep):
 
     def step(self, now: StepInput) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
-        c, sw, p, a = self.controller, self.swarm, self.controller.params, self.around
+        c, sw, a = self.controller, self.swarm, self.around
         table = now.table
-        sense = bool(c.needs_range_readings)
-        several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table, sense)
-        field_step(*a.grid, c.routers, sw.state, sw.xy, sw.heading, sw.max_speed, sw.radius, sw.distance,
-                   table.indptr, table.indices, table.dist, sense, a.angles, a.sensor_range, *s_csr,
-                   several, float(c.k_obstacle), float(c.force_cap), c.obstacle_force, self.scan, c.velocity,
-                   c.rest_count, c.window_start, c.force, c.held_force, float(c.k_cover), float(c.k_degree),
-                   float(c.q_rc), int(p.connectivity_k), float(p.damping), float(p.mass), float(self.dt),
-                   float(p.rest_fraction), c.wakeups, int(p.rest_steps), drive_bodies, *d_csr, self.movers,
-                   self.speed, self.refused)
+        several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table, bool(c.needs_range_readings))
+        field_step(self.data, table.indptr, table.indices, table.dist, *s_csr, several, *d_csr, drive_bodies)
 
     def stretch(self, limit: int, now: StepInput, watch: Watch) -> Stretched | None:
         """Up to ``limit`` steps in one call (:func:`~amronet.algorithms.potential_field.kernels.field_stretch`)."""
@@ -101,16 +84,5 @@ class CompiledField(FastStep):
             return None
         return self.stretcher.take(limit, now.table, watch, self._kernel)
 
-    def _kernel(self, limit: int, csr: tuple, radio: tuple, books: tuple) -> tuple:
-        c, a, sw = self.controller, self.around, self.swarm
-        p = c.params
-        n = len(sw)
-        sense = bool(c.needs_range_readings)
-        head = (*a.grid, c.routers, sw.state, sw.xy, sw.heading, sw.max_speed, sw.radius, sw.distance)
-        tail = (*a.no_bodies(n), sense, True, float(c.k_obstacle), float(c.force_cap), c.obstacle_force,
-                self.scan, c.velocity, c.rest_count, c.window_start, c.force, c.held_force, float(c.k_cover),
-                float(c.k_degree), float(c.q_rc), int(p.connectivity_k), float(p.damping), float(p.mass),
-                float(self.dt), float(p.rest_fraction), c.wakeups, int(p.rest_steps), bool(a.collisions),
-                self.movers, self.speed, self.refused)
-        return field_stretch(limit, head, (a.angles, a.sensor_range), tail, sense, bool(a.collisions), radio, csr,
-                             books)
+    def _kernel(self, limit: int, csr: Csr, radio: Radio, books: Books) -> tuple[int, int, Csr]:
+        return field_stretch(limit, self.data, radio, csr, books)

@@ -11,6 +11,7 @@ from numba import njit
 
 from amronet.algorithms.common.forces import constrained_coverage_force, inverse_square_one
 from amronet.algorithms.common.swarm_stretch_kernels import QUIET, after_step
+from amronet.engine.kernel_data import Csr
 from amronet.engine.motion import drive_one
 from amronet.engine.robots import State
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
@@ -25,20 +26,25 @@ _TRIANGLE_SETTLED = State.TRIANGLE_SETTLED
 
 
 @njit(cache=True)
-def wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
-                        rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap,
-                        k_conn, damping, mass, dt, rest_fraction, explore, reference, wakeups, movers,
+def wake_and_accelerate(routers, robots, csr, field, constants, explore, reference, movers,
                         speed):  # pragma: no cover - numba
     """Wake resting routers whose force left the held one, then accelerate every moving router; the mover count.
 
-    A router's force depends only on positions and the neighbour table, so one pass in router order gives the
-    same result as waking everybody first and then moving everybody.
+    The links' forces come from the neighbour table ``csr``. A router's force depends only on positions and the
+    neighbour table, so one pass in router order gives the same result as waking everybody first and then moving
+    everybody.
     """
+    state, xy, heading, max_speed = robots.state, robots.xy, robots.heading, robots.max_speed
+    obstacle_force, velocity, rest_count, window_start, force, held_force, wakeups = field
+    k_cover, k_degree, q_rc, cap, k_conn = (constants.k_cover, constants.k_degree, constants.q_rc, constants.cap,
+                                            constants.k_conn)
+    damping, mass, dt, rest_fraction = constants.damping, constants.mass, constants.dt, constants.rest_fraction
     n_movers = 0
     for i in routers:
         if state[i] != explore and state[i] != reference:
             continue
-        fx, fy = constrained_coverage_force(i, indptr, indices, dist, xy, k_cover, k_degree, q_rc, cap, k_conn)
+        fx, fy = constrained_coverage_force(i, csr.indptr, csr.indices, csr.dist, xy, k_cover, k_degree, q_rc, cap,
+                                            k_conn)
         fx += obstacle_force[i, 0]
         fy += obstacle_force[i, 1]
         if state[i] == reference:
@@ -69,10 +75,13 @@ def wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_forc
 
 
 @njit(cache=True)
-def come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, window_start, force, held_force,
-                 rest_steps, dt, rest_fraction, damping, reference):  # pragma: no cover - numba
+def come_to_rest(movers, refused, robots, field, constants, reference):  # pragma: no cover - numba
     """The rest rule after a move (see the module docstring)."""
-    window = rest_steps * dt
+    state, xy, max_speed = robots.state, robots.xy, robots.max_speed
+    velocity, rest_count, window_start, force, held_force = (field.velocity, field.rest_count, field.window_start,
+                                                             field.force, field.held_force)
+    rest_steps, rest_fraction, damping = constants.rest_steps, constants.rest_fraction, constants.damping
+    window = rest_steps * constants.dt
     for m in range(len(movers)):
         i = movers[m]
         if refused[m]:
@@ -99,13 +108,22 @@ def come_to_rest(movers, refused, state, xy, max_speed, velocity, rest_count, wi
 
 
 @njit(cache=True)
-def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_speed, radius, distance, indptr, indices,
-               dist, sense, angles, sensor_range, s_indptr, s_indices, s_dist, sense_bodies, k_obstacle, cap,
-               obstacle_force, scan, velocity, rest_count, window_start, force, held_force, k_cover, k_degree, q_rc,
-               k_conn, damping, mass, dt, rest_fraction, wakeups, rest_steps, bodies, d_indptr, d_indices, d_dist,
-               movers, speed, refused):  # pragma: no cover - numba
-    """Sense, decide and move the potential-field routers: the reference's kernels and per-robot functions in order."""
-    if sense:  # the exploring routers' rings and the obstacles' push (resting routers keep their last one)
+def field_step(data, indptr, indices, dist, s_indptr, s_indices, s_dist, sense_bodies, d_indptr, d_indices, d_dist,
+               drive_bodies):  # pragma: no cover - numba
+    """Sense, decide and move the potential-field routers: the reference's kernels and per-robot functions in order.
+
+    ``indptr, indices, dist``: the neighbour table; the rings (``data.sense``) meet the bodies of the neighbour list
+    ``s_indptr, s_indices, s_dist`` (when ``sense_bodies``), the moves those of ``d_indptr, d_indices, d_dist`` (when
+    ``drive_bodies``). This step's lists come as arrays, not as :class:`~amronet.engine.kernel_data.Csr` s: see
+    :func:`~amronet.algorithms.self_spreading.kernels.sense_steer_drive`.
+    """
+    grid, robots, routers, field, constants = data.grid, data.robots, data.routers, data.field, data.constants
+    blocked, clear, ox, oy, res = grid
+    state, xy, heading, radius, distance = robots.state, robots.xy, robots.heading, robots.radius, robots.distance
+    angles, sensor_range = data.ring.angles, data.ring.sensor_range
+    scan, movers, speed, refused = data.scratch
+    obstacle_force, dt = field.obstacle_force, constants.dt
+    if data.sense:  # the exploring routers' rings and the obstacles' push (resting routers keep their last one)
         big = radius.max()
         for i in routers:
             if state[i] != _EXPLORE:
@@ -115,10 +133,9 @@ def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_spe
                 cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big,
                                 scan)
             obstacle_force[i, 0], obstacle_force[i, 1] = inverse_square_one(scan, heading[i], angles, sensor_range,
-                                                                            k_obstacle, cap)
-    n = wake_and_accelerate(routers, state, indptr, indices, dist, xy, obstacle_force, velocity, heading, max_speed,
-                            rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, cap, k_conn,
-                            damping, mass, dt, rest_fraction, _EXPLORE, _REFERENCE, wakeups, movers, speed)
+                                                                            constants.k_obstacle, constants.cap)
+    n = wake_and_accelerate(routers, robots, Csr(indptr, indices, dist), field, constants, _EXPLORE, _REFERENCE,
+                            movers, speed)
     if n == 0:
         return
     longest = 0.0
@@ -129,44 +146,27 @@ def field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_spe
     near = 2.0 * radius.max() + 2.0 * longest
     for m in range(n):
         i = movers[m]
-        refused[m], travelled = drive_one(blocked, clear, ox, oy, res, i, heading[i], speed[m] * dt, xy, radius,
-                                          bodies, d_indptr, d_indices, d_dist, near)
+        refused[m], travelled = drive_one(grid, i, heading[i], speed[m] * dt, xy, radius, drive_bodies,
+                                          Csr(d_indptr, d_indices, d_dist), near)
         distance[i] += travelled
-    come_to_rest(movers[:n], refused[:n], state, xy, max_speed, velocity, rest_count, window_start, force,
-                 held_force, rest_steps, dt, rest_fraction, damping, _REFERENCE)
+    come_to_rest(movers[:n], refused[:n], robots, field, constants, _REFERENCE)
 
 
 @njit(cache=True)
-def field_stretch(limit, head, ring, tail, sense_table, drive_table, radio, csr, watch):  # pragma: no cover - numba
-    """Up to ``limit`` steps of a potential-field loop; ``(steps done, how it ended, indptr, indices, dist)``.
+def field_stretch(limit, data, radio, csr, books):  # pragma: no cover - numba
+    """Up to ``limit`` steps of a potential-field loop from the table ``csr``; ``(steps done, how it ended, table)``.
 
-    :func:`field_step`'s arguments as :class:`~amronet.algorithms.potential_field.fast.CompiledField`
-    passes them but the neighbour tables: ``head`` (the map's grid to the distances), ``ring`` (beam angles, sensor
-    range) and ``tail`` (an empty neighbour list, then the arguments from ``sense`` on); the bodies the rings and the
-    moves meet are the table's when ``sense_table`` / ``drive_table``, else the empty list. Then the radio's search,
-    the table and the books as for :func:`spreading_stretch`.
+    Each step is :func:`field_step` with the table's bodies for the rings (``data.sense``) and, where bodies collide,
+    the moves (else an empty list); then the radio's search and the books, as for
+    :func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`.
     """
-    none_indptr, none_indices, none_dist, sense, sense_bodies, k_obstacle, cap, obstacle_force, scan, velocity, \
-        rest_count, window_start, force, held_force, k_cover, k_degree, q_rc, k_conn, damping, mass, dt, \
-        rest_fraction, wakeups, rest_steps, bodies, movers, speed, refused = tail
-    blocked, clear, ox, oy, res, routers, state, xy, heading, max_speed, radius, distance = head
-    angles, sensor_range = ring
-    indptr, indices, dist = csr
+    robots = data.robots
     for s in range(limit):
-        if sense_table:
-            s_indptr, s_indices, s_dist = indptr, indices, dist
-        else:
-            s_indptr, s_indices, s_dist = none_indptr, none_indices, none_dist
-        if drive_table:
-            d_indptr, d_indices, d_dist = indptr, indices, dist
-        else:
-            d_indptr, d_indices, d_dist = none_indptr, none_indices, none_dist
-        field_step(blocked, clear, ox, oy, res, routers, state, xy, heading, max_speed, radius, distance, indptr,
-                   indices, dist, sense, angles, sensor_range, s_indptr, s_indices, s_dist, sense_bodies, k_obstacle,
-                   cap, obstacle_force, scan, velocity, rest_count, window_start, force, held_force, k_cover,
-                   k_degree, q_rc, k_conn, damping, mass, dt, rest_fraction, wakeups, rest_steps, bodies, d_indptr,
-                   d_indices, d_dist, movers, speed, refused)
-        how, indptr, indices, dist = after_step(xy, state, radio, watch)
+        s_csr = csr if data.sense else data.no_bodies
+        d_csr = csr if data.collisions else data.no_bodies
+        field_step(data, csr.indptr, csr.indices, csr.dist, s_csr.indptr, s_csr.indices, s_csr.dist, np.bool_(True),
+                   d_csr.indptr, d_csr.indices, d_csr.dist, data.collisions)
+        how, csr = after_step(robots.xy, robots.state, radio, books)
         if how != QUIET:
-            return s + 1, how, indptr, indices, dist
-    return limit, QUIET, indptr, indices, dist
+            return s + 1, how, csr
+    return limit, QUIET, csr

@@ -21,7 +21,13 @@ is below ``loss_margin_db`` (hysteresis: one faded sample does not stop it, a li
 
 **Triangle rules** (``triangle_rule``). ``geometric`` (the paper's, the default): drive to the triangular goal point
 at ``(1 - loss_margin) r_c`` from both references; settle there, or earlier when blocked for ``give_up_steps`` steps
-in a row, or when a move would take it farther than ``(1 - loss_margin) r_c`` from either reference. ``link-quality``
+in a row, or when a move would take it farther than ``(1 - loss_margin) r_c`` from either reference. Ours, for
+radios whose links are not decided by distance alone (walls, shadowing, packet loss:
+:attr:`~amronet.algorithms.base.Setup.links_by_distance` is false), the *link test at settling*: the router settles
+only where its own table row holds one of its two references
+(:meth:`~amronet.algorithms.common.goto.GoalSteering.check_links`); otherwise it drives back to where it last heard
+one (no metre rule on the way) and settles there if it hears one; if not, it explores again, as under the
+``link-quality`` rule. Under the unit disk the metre rule keeps both links and the test is skipped. ``link-quality``
 ("routers deployed during the triangular deployment move in the direction where the link quality tends to be weak",
 paper section 6.3) is a run-and-tumble (chemotaxis) search that reads only the margins ``m_i``, ``m_j`` of the
 router's links to its two references ``R_i``, ``R_j``: with ``m_s = stop_margin_db`` and
@@ -220,7 +226,7 @@ class SelfSpreading(Controller):
             if self.searching:
                 speed[~walking] = self._search_triangles(step, tri, scans[~walking], sensor_range)
             else:
-                speed[~walking] = self._steer_triangles(tri, scans[~walking], sensor_range)
+                speed[~walking] = self._steer_triangles(step, tri, scans[~walking], sensor_range)
         return Command(movers, speed)
 
     def _decide_explorers(self, step: StepInput, explorers: np.ndarray) -> None:
@@ -290,12 +296,30 @@ class SelfSpreading(Controller):
         with np.errstate(invalid="ignore"):  # nan (nothing heard) compares False
             return (smoothed < p.stop_margin_db) | (best_margin < p.loss_margin_db)
 
-    def _steer_triangles(self, tri: np.ndarray, scans: np.ndarray, sensor_range: float) -> np.ndarray:
+    def _steer_triangles(self, step: StepInput, tri: np.ndarray, scans: np.ndarray,
+                         sensor_range: float) -> np.ndarray:
+        """The geometric triangle rule: one go-to-goal step of the triangle routers ``tri``; their speeds.
+
+        Where links are not decided by distance alone, a router settles only where its table row holds one of its
+        references (:meth:`~amronet.algorithms.common.goto.GoalSteering.check_links`); one lost goes back to exploring.
+        """
         sw = self.swarm
         length, done = self.steering.steer(tri, sw.xy, sw.heading, scans, sensor_range,
                                            sw.max_speed[tri] * self.dt, self.r_eff)
+        if not self.links_by_distance:
+            done, lost = self.steering.check_links(tri, done, step.table, sw.xy)
+            self._back_to_exploring(tri[lost])
         sw.state[tri[done]] = State.TRIANGLE_SETTLED
         return length / self.dt
+
+    def _back_to_exploring(self, lost: np.ndarray) -> None:
+        """Triangle routers that would settle out of touch with both references explore again, with no reference."""
+        sw = self.swarm
+        sw.state[lost] = State.EXPLORE
+        sw.status[lost] = -1
+        self.current[lost] = -1
+        if self.smoother is not None:
+            self.smoother.restart(lost)
 
     def _search_triangles(self, step: StepInput, tri: np.ndarray, scans: np.ndarray,
                           sensor_range: float) -> np.ndarray:
@@ -310,18 +334,13 @@ class SelfSpreading(Controller):
         random_walk(sw.heading, tri[go], scans[go], sensor_range, tumble[go] | self.refused[tri[go]], self.rng, 0.0)
         cut_off = done & ~np.isfinite(margins).any(axis=1)
         sw.state[tri[done & ~cut_off]] = State.TRIANGLE_SETTLED
-        lost = tri[cut_off]  # back to exploring: settled here, it would hear neither reference
-        sw.state[lost] = State.EXPLORE
-        sw.status[lost] = -1
-        self.current[lost] = -1
-        if self.smoother is not None:
-            self.smoother.restart(lost)
+        self._back_to_exploring(tri[cut_off])  # settled here, it would hear neither reference
         return np.where(done, 0.0, sw.max_speed[tri])
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
         self.refused[:] = False
         self.refused[movers] = refused
-        if self.searching:
+        if self.searching or not self.links_by_distance:  # (then one that arrived settles by its next table)
             return
         tri = movers[self.swarm.state[movers] == State.TRIANGLE]
         arrived = np.linalg.norm(self.swarm.xy[tri] - self.steering.goal[tri], axis=1) <= 1e-9

@@ -26,6 +26,11 @@ Between two records the steps may be taken in a stretch (:class:`~amronet.algori
 :func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`), which stops before a step in which a triangular
 deployment may start. Every per-robot computation is the same compiled function the phase-by-phase path calls, in the
 same order, so a run gives the same result bit for bit with either step (``tests/test_compiled_step.py``).
+
+Under a radio whose links are not decided by distance alone (walls, shadowing, packet loss), a triangle router settles
+by the controller's link test (:meth:`~amronet.algorithms.common.goto.GoalSteering.check_links`), which the kernels do
+not do: while a triangle router drives, and in a step in which a triangular deployment may start, the whole step is
+the loop's phases (the range rings, the controller's ``decide``, the move), as the agent-assisted fast step does.
 """
 
 from __future__ import annotations
@@ -37,7 +42,20 @@ from typing import Any, Protocol
 import numpy as np
 
 from amronet.algorithms.base import Readings, StepInput
+from amronet.algorithms.common.goto import steering_of
+from amronet.algorithms.common.swarm_data import Ring, robots_of
 from amronet.algorithms.common.swarm_stretch import SwarmStretch
+from amronet.algorithms.common.swarm_stretch_kernels import Books, Radio
+from amronet.algorithms.phases import move, sense
+from amronet.algorithms.self_spreading.kernel_data import (
+    Draws,
+    Moves,
+    SpreadingData,
+    Streams,
+    Tracked,
+    Tracking,
+    Walk,
+)
 from amronet.algorithms.self_spreading.kernels import (
     commit_moves,
     list_movers,
@@ -48,7 +66,8 @@ from amronet.algorithms.self_spreading.kernels import (
 )
 from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surroundings, Watch
 from amronet.engine.bitgen import draw_normal_uniform
-from amronet.engine.robots import DEPLOYED_STATES, Role, state_lookup
+from amronet.engine.kernel_data import Csr
+from amronet.engine.robots import DEPLOYED_STATES, Role, State, state_lookup
 from amronet.engine.streams import compiled_streams, normal_then_uniform
 from amronet.threads import LOCK, use_threads
 
@@ -66,6 +85,7 @@ class SpreadingControls(Protocol):
     rng: Any
     r_c: float
     r_eff: float
+    links_by_distance: bool
     router_model: int
     several_statuses: bool
     needs_range_readings: bool
@@ -76,6 +96,8 @@ class SpreadingControls(Protocol):
     steering: Any
     settle_explorers: Callable[..., None]
     settling_rule: Callable[[], tuple[np.ndarray, np.ndarray]]
+    decide: Callable[[StepInput], Any]
+    after_move: Callable[[np.ndarray, np.ndarray], None]
 
 
 class CompiledSpreading(FastStep):
@@ -89,7 +111,9 @@ class CompiledSpreading(FastStep):
     def __init__(self, controller: SpreadingControls, context: StepContext) -> None:
         c = controller
         sw = context.swarm
-        self.swarm, self.controller, self.dt = sw, c, context.dt
+        self.swarm, self.controller, self.dt, self.omap = sw, c, context.dt, context.omap
+        self.checks_links = not c.links_by_distance
+        """Whether triangle routers settle by the controller's link test (then their steps are the phases)."""
         n = len(sw)
         model = sw.models[c.router_model]
         self.around = Surroundings(context, model, sw.role == Role.ROUTER)
@@ -110,10 +134,21 @@ class CompiledSpreading(FastStep):
         self.slot = np.zeros(n, dtype=np.int64)  # the threaded step's (large runs: amronet.threads)
         self.free = np.zeros(n, dtype=np.bool_)
         self.planned = np.zeros((n, 2))
-        self.streams = compiled_streams(c.rng, n)
-        """The draws' ``(bitgens, starts)`` (:mod:`amronet.engine.bitgen`), ``None``: numpy draws them."""
+        streams = compiled_streams(c.rng, n)
+        self.streams = None if streams is None else Streams(*streams)
+        """The draws' generators (:mod:`amronet.engine.bitgen`), ``None``: numpy draws them."""
         self.normal = np.zeros(n)
         self.uniform = np.zeros(n)
+        a = self.around
+        self.data = SpreadingData(
+            a.grid, robots_of(sw),
+            Tracking(c.current, self.deployed_lookup, self.is_ref, bool(self.want_other), float(c.r_eff), self.r_c,
+                     bool(self.local), c.disabled),
+            Tracked(self.explorers, self.new_current, self.nearest, self.other, self.movers, self.walkers),
+            Walk(c.refused, self.turn_sigma), Draws(self.normal, self.uniform), steering_of(c.steering),
+            Ring(a.angles, a.sensor_range), Moves(self.scans, self.length, self.slot, self.free, self.planned),
+            Csr(*a.no_bodies(n)), bool(a.collisions), float(self.dt))
+        """What the kernels read and keep, built once: the arrays are the swarm's, the controller's and those above."""
         self.stretcher = (SwarmStretch(context, c.settling_rule(), self.around)
                           if self.streams is not None and SwarmStretch.applies(context) else None)
         """The steps between records in one compiled call (:mod:`amronet.algorithms.common.swarm_stretch`), or
@@ -133,10 +168,13 @@ class CompiledSpreading(FastStep):
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
         c, sw, a = self.controller, self.swarm, self.around
         table = now.table
-        k, candidates, n_movers, n_walkers = track_explorers(
-            sw.state, sw.status, c.current, self.deployed_lookup, self.is_ref, table.indptr, table.indices,
-            table.dist, self.want_other, c.r_eff, sw.xy, self.r_c, self.local, c.disabled, self.explorers,
-            self.new_current, self.nearest, self.other, self.movers, self.walkers)
+        if self.checks_links and (sw.state == State.TRIANGLE).any():
+            self._phases(now)
+            return
+        k, candidates, n_movers, n_walkers = track_explorers(self.data, table.indptr, table.indices, table.dist)
+        if candidates and self.checks_links:  # (nothing changed yet) and its router settles by the link test
+            self._phases(now)
+            return
         if candidates:  # a triangular deployment may start: the controller's own rules decide
             current = self.new_current[:k].copy()
             c.settle_explorers(replace(now, readings=Readings({})), self.explorers[:k].copy(), current,
@@ -149,22 +187,18 @@ class CompiledSpreading(FastStep):
         if self.streams is None or not draw_normal_uniform(*self.streams, self.walkers[:n_walkers], normal, uniform):
             normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
         several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
-        movers = self.movers[:n_movers]
-        s = c.steering
         if use_threads(n_movers):
             with LOCK:
-                sense_steer_plan_threaded(
-                    *a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, c.refused, movers, normal, uniform,
-                    self.turn_sigma, a.angles, a.sensor_range, *s_csr, several, s.goal, s.anchors, s.last_to_goal,
-                    s.blocked_steps, s.give_up_steps, s.min_progress, c.r_eff, self.dt, self.scans, self.length,
-                    self.slot, self.free, self.planned)
-            commit_moves(movers, self.length, self.free, self.planned, sw.xy, sw.radius, sw.state, s.goal,
-                         sw.distance, c.refused, drive_bodies, *d_csr)
+                sense_steer_plan_threaded(self.data, n_movers, normal, uniform, *s_csr, several)
+            commit_moves(self.data, n_movers, *d_csr, drive_bodies)
             return
-        sense_steer_drive(*a.grid, sw.xy, sw.heading, sw.state, sw.max_speed, sw.radius, sw.distance, c.refused,
-                          movers, normal, uniform, self.turn_sigma, a.angles, a.sensor_range, *s_csr, several, s.goal,
-                          s.anchors, s.last_to_goal, s.blocked_steps, s.give_up_steps, s.min_progress, c.r_eff,
-                          self.dt, drive_bodies, *d_csr, self.scans, self.length)
+        sense_steer_drive(self.data, n_movers, normal, uniform, *s_csr, several, *d_csr, drive_bodies)
+
+    def _phases(self, now: StepInput) -> None:
+        """The loop's sense, decide and move phases for this step (as :meth:`~amronet.sim.loop.Loop.step` runs them)."""
+        c, sw = self.controller, self.swarm
+        command = c.decide(replace(now, readings=sense(c, sw, self.omap, now.table)))
+        move(c, command, sw, self.omap, now.table, now.dt, self.around.collisions)
 
     def stretch(self, limit: int, now: StepInput, watch: Watch) -> Stretched | None:
         """Up to ``limit`` steps in one call (:func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`)."""
@@ -172,17 +206,6 @@ class CompiledSpreading(FastStep):
             return None
         return self.stretcher.take(limit, now.table, watch, self._kernel)
 
-    def _kernel(self, limit: int, csr: tuple, radio: tuple, books: tuple) -> tuple:
-        c, a, sw = self.controller, self.around, self.swarm
-        s = c.steering
-        n = len(sw)
-        track = (c.current, self.deployed_lookup, self.is_ref, bool(self.want_other), float(c.r_eff), self.r_c,
-                 bool(self.local), c.disabled, self.explorers, self.new_current, self.nearest, self.other, self.movers,
-                 self.walkers)
+    def _kernel(self, limit: int, csr: Csr, radio: Radio, books: Books) -> tuple[int, int, Csr]:
         assert self.streams is not None
-        draws = (*self.streams, self.normal, self.uniform)
-        steer = (c.refused, self.turn_sigma, a.angles, a.sensor_range, True, s.goal, s.anchors, s.last_to_goal,
-                 s.blocked_steps, int(s.give_up_steps), float(s.min_progress), float(self.dt), bool(a.collisions),
-                 *a.no_bodies(n), self.scans, self.length)
-        robots = (sw.xy, sw.heading, sw.state, sw.status, sw.max_speed, sw.radius, sw.distance)
-        return spreading_stretch(limit, a.grid, robots, track, draws, steer, radio, csr, books)
+        return spreading_stretch(limit, self.data, self.streams, radio, csr, books)

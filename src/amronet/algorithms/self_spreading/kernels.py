@@ -16,7 +16,9 @@ from numba import njit, prange
 from amronet.algorithms.common.goto import steer_one
 from amronet.algorithms.common.references import track_row
 from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, QUIET, after_step
+from amronet.algorithms.self_spreading.kernel_data import Draws
 from amronet.engine.bitgen import draw_normal_uniform
+from amronet.engine.kernel_data import Csr
 from amronet.engine.motion import commit_one, drive_one, plan_one, walk_one
 from amronet.engine.robots import State
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
@@ -54,10 +56,8 @@ def list_movers(state, movers, walkers):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, indices, dist, want_other, r_eff,
-                    xy, r_c, local, disabled, explorers, new_current, nearest, other, movers,
-                    walkers):  # pragma: no cover - numba
-    """Reference tracking of every exploring router; the stops too when no triangular deployment may start.
+def track_explorers(data, indptr, indices, dist):  # pragma: no cover - numba
+    """Reference tracking of every exploring router from the table's rows; the stops too when no triangle may start.
 
     A router that met a reference of another status is a *candidate* unless the rules of
     :func:`~amronet.algorithms.common.triangular.select_triangles` that need no graph already rule its triangle out: its
@@ -65,19 +65,23 @@ def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, ind
 
     Returns:
         ``(k, candidates, n_movers, n_walkers)``: the number of explorers (their ids, new references, nearest
-        reference distances and references of another status in the first ``k`` entries of the output arrays) and
+        reference distances and references of another status in the first ``k`` entries of ``data.tracked``) and
         how many are candidates. With candidates nothing is changed (the caller settles the explorers and lists
         the movers); without, the routers that move on (:func:`list_movers`) are listed too.
     """
+    robots, tracking, tracked = data.robots, data.tracking, data.tracked
+    state, status, xy = robots.state, robots.status, robots.xy
+    current, is_ref, disabled = tracking.current, tracking.is_ref, tracking.disabled
+    explorers, new_current, nearest, other = tracked.explorers, tracked.new_current, tracked.nearest, tracked.other
     n = state.shape[0]
     for j in range(n):
-        is_ref[j] = deployed_lookup[state[j]]
+        is_ref[j] = tracking.deployed[state[j]]
     k = 0
     candidates = 0
     for i in range(n):
         if state[i] != _EXPLORE:
             continue
-        c, d, o, _ = track_row(i, current[i], is_ref, status, indptr, indices, dist, want_other)
+        c, d, o, _ = track_row(i, current[i], is_ref, status, indptr, indices, dist, tracking.want_other)
         explorers[k] = i
         new_current[k] = c
         nearest[k] = d
@@ -85,7 +89,7 @@ def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, ind
         if o >= 0:
             dx = xy[c, 0] - xy[o, 0]
             dy = xy[c, 1] - xy[o, 1]
-            if math.sqrt(dx * dx + dy * dy) > r_c and not (local and disabled[c] and disabled[o]):
+            if math.sqrt(dx * dx + dy * dy) > tracking.r_c and not (tracking.local and disabled[c] and disabled[o]):
                 candidates += 1
         k += 1
     if candidates:
@@ -94,39 +98,43 @@ def track_explorers(state, status, current, deployed_lookup, is_ref, indptr, ind
         i = explorers[m]
         c = new_current[m]
         current[i] = c
-        if c >= 0 and nearest[m] >= r_eff:
+        if c >= 0 and nearest[m] >= tracking.r_eff:
             state[i] = _REFERENCE
             status[i] = status[c]
-    n_movers, n_walkers = list_movers(state, movers, walkers)
+    n_movers, n_walkers = list_movers(state, tracked.movers, tracked.walkers)
     return k, 0, n_movers, n_walkers
 
 
 @njit(cache=True, inline="always")
-def sense_one(blocked, clear, ox, oy, res, xy, heading, radius, big, i, angles, sensor_range, s_indptr, s_indices,
-              s_dist, sense_bodies, out):  # pragma: no cover - numba
+def sense_one(grid, robots, big, i, ring, s_csr, sense_bodies, out):  # pragma: no cover - numba
     """Robot ``i``'s ring into ``out``: the grid's beams, then (``sense_bodies``) shortened by the bodies near it."""
-    cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, out)
+    xy, heading = robots.xy, robots.heading
+    cast_grid_one(grid.blocked, grid.clear, grid.ox, grid.oy, grid.res, xy[i, 0], xy[i, 1], heading[i], ring.angles,
+                  ring.sensor_range, out)
     if sense_bodies:
-        cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big, out)
+        cast_bodies_one(i, s_csr.indptr, s_csr.indices, s_csr.dist, xy, heading[i], ring.angles, ring.sensor_range,
+                        robots.radius, big, out)
 
 
-@njit(cache=True, inline="always")
-def decide_one(i, w, state, heading, xy, max_speed, refused, normal, uniform, turn_sigma, scan, angles, sensor_range,
-               goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt):  # pragma: no cover
+@njit(cache=True)
+def decide_one(i, w, robots, walk, draws, scan, ring, steering, r_eff, dt):  # pragma: no cover - numba
     """Mover ``i``'s decision from its ring ``scan``, and the length of its step.
 
     A walker (the ``w``-th) walks, a triangle router steers to its goal (and settles when it cannot go on): the
     operations of :func:`sense_steer_drive`'s decide loop, which keeps them (and its sense loop) written out: calling
-    this function and :func:`sense_one` from there made the one-thread step 15-20 % slower at N = 3 000.
+    this function and :func:`sense_one` from there made the one-thread step 15-20 % slower at N = 3 000. Not inlined:
+    in a ``prange`` loop numba 0.68 loses what is written into an array reached through a named tuple's field
+    (``robots.heading[i] = ...``) in the loop's own body, inlined code included; a called function keeps it.
     """
+    state, heading, max_speed = robots.state, robots.heading, robots.max_speed
     if state[i] == _EXPLORE:
-        noise = turn_sigma * normal[w]
-        fresh = -np.pi + (2.0 * np.pi) * uniform[w]
-        heading[i] = walk_one(heading[i], scan, angles, sensor_range, refused[i], noise, fresh)
+        noise = walk.turn_sigma * draws.normal[w]
+        fresh = -np.pi + (2.0 * np.pi) * draws.uniform[w]
+        heading[i] = walk_one(heading[i], scan, ring.angles, ring.sensor_range, walk.refused[i], noise, fresh)
         speed = max_speed[i]
     else:
-        step, done = steer_one(i, xy, heading, goal, anchors, scan, angles, sensor_range, max_speed[i] * dt, r_eff,
-                               last_to_goal, blocked_steps, give_up, min_progress)
+        step, done = steer_one(i, robots.xy, heading, steering, scan, ring.angles, ring.sensor_range,
+                               max_speed[i] * dt, r_eff)
         if done:
             state[i] = _TRIANGLE_SETTLED
         speed = step / dt
@@ -134,15 +142,27 @@ def decide_one(i, w, state, heading, xy, max_speed, refused, normal, uniform, tu
 
 
 @njit(cache=True)
-def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed, radius, distance, refused,
-                      movers, normal, uniform, turn_sigma, angles, sensor_range, s_indptr, s_indices, s_dist,
-                      sense_bodies, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff, dt,
-                      bodies, d_indptr, d_indices, d_dist, scans, length):  # pragma: no cover - numba
-    """Sense, steer and drive the ``movers``; the same per-robot functions, in the same order, as the reference.
+def sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, sense_bodies, d_indptr, d_indices,
+                      d_dist, drive_bodies):  # pragma: no cover - numba
+    """Sense, steer and drive the ``n_movers`` movers: the reference's per-robot functions, in the same order.
 
     ``normal`` and ``uniform``: the walkers' draws (:func:`~amronet.engine.streams.normal_then_uniform`), scaled here as
-    :func:`~amronet.engine.motion.random_walk` scales them (the same operations on the same numbers).
+    :func:`~amronet.engine.motion.random_walk` scales them (the same operations on the same numbers). The rings meet
+    the bodies of the neighbour list ``s_indptr, s_indices, s_dist`` (when ``sense_bodies``), the moves those of
+    ``d_indptr, d_indices, d_dist`` (when ``drive_bodies``): this step's lists come as arrays, not as
+    :class:`~amronet.engine.kernel_data.Csr` s (numba types a named tuple field by field at every call from Python, and
+    three of them would cost more than all the arrays they hold).
     """
+    blocked, clear, ox, oy, res = data.grid
+    robots, steering, moves = data.robots, data.steering, data.moves
+    xy, heading, state, max_speed, radius, distance = (robots.xy, robots.heading, robots.state, robots.max_speed,
+                                                       robots.radius, robots.distance)
+    refused, turn_sigma = data.walk.refused, data.walk.turn_sigma
+    angles, sensor_range = data.ring.angles, data.ring.sensor_range
+    d_csr = Csr(d_indptr, d_indices, d_dist)
+    scans, length = moves.scans, moves.length
+    r_eff, dt = data.tracking.r_eff, data.dt
+    movers = data.tracked.movers[:n_movers]
     big = radius.max()
     for m in range(movers.shape[0]):  # sense: every mover's ring, from where everybody stands now
         i = movers[m]
@@ -161,8 +181,7 @@ def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed
             w += 1
             speed = max_speed[i]
         else:
-            step, done = steer_one(i, xy, heading, goal, anchors, scans[m], angles, sensor_range, max_speed[i] * dt,
-                                   r_eff, last_to_goal, blocked_steps, give_up, min_progress)
+            step, done = steer_one(i, xy, heading, steering, scans[m], angles, sensor_range, max_speed[i] * dt, r_eff)
             if done:
                 state[i] = _TRIANGLE_SETTLED
             speed = step / dt
@@ -173,11 +192,10 @@ def sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed
     refused[:] = False
     for m in range(movers.shape[0]):  # move, one after another
         i = movers[m]
-        r, travelled = drive_one(blocked, clear, ox, oy, res, i, heading[i], length[m], xy, radius, bodies,
-                                 d_indptr, d_indices, d_dist, near)
+        r, travelled = drive_one(data.grid, i, heading[i], length[m], xy, radius, drive_bodies, d_csr, near)
         refused[i] = r
         distance[i] += travelled
-    _arrive(movers, state, xy, goal)
+    _arrive(movers, state, xy, steering.goal)
 
 
 @njit(cache=True, inline="always")
@@ -201,93 +219,90 @@ def _arrive(movers, state, xy, goal):  # pragma: no cover - numba
                 state[i] = _TRIANGLE_SETTLED
 
 
-@njit(cache=True, parallel=True)
-def sense_steer_plan_threaded(blocked, clear, ox, oy, res, xy, heading, state, max_speed, radius, refused, movers,
-                              normal, uniform, turn_sigma, angles, sensor_range, s_indptr, s_indices, s_dist,
-                              sense_bodies, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress, r_eff,
-                              dt, scans, length, slot, free, planned):  # pragma: no cover - numba
+@njit(cache=True)
+def sense_steer_plan_threaded(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist,
+                              sense_bodies):  # pragma: no cover - numba
     """:func:`sense_steer_drive` up to the moves' obstacle checks, on several threads; :func:`commit_moves` ends it.
 
     Every mover's ring, decision and path against the map depend on where the robots stand before anybody moves and
     on the mover's own state, nothing else, so each mover is done in one go by one thread: the same numbers. The
-    walkers' draws are matched to them by their rank among the walkers (``slot``). ``free[m]`` and ``planned[m]``:
-    whether mover ``m``'s path is clear of obstacles, and where it would end.
+    walkers' draws are matched to them by their rank among the walkers (``moves.slot``). ``moves.free[m]`` and
+    ``moves.planned[m]``: whether mover ``m``'s path is clear of obstacles, and where it would end.
     """
-    big = radius.max()
+    _plan_threaded(data.grid, data.robots, data.walk, Draws(normal, uniform), data.steering, data.ring,
+                   Csr(s_indptr, s_indices, s_dist), sense_bodies, data.tracked.movers[:n_movers], data.moves,
+                   data.tracking.r_eff, data.dt)
+
+
+@njit(cache=True, parallel=True)
+def _plan_threaded(grid, robots, walk, draws, steering, ring, s_csr, sense_bodies, movers, moves, r_eff,
+                   dt):  # pragma: no cover - numba
+    """:func:`sense_steer_plan_threaded`'s threads.
+
+    numba's ``prange`` takes flat named tuples, not nested ones, and loses what its body writes into an array reached
+    through a named tuple's field: the arrays written here are taken out first, :func:`decide_one` is a call.
+    """
+    scans, length, slot, free, planned = moves
+    big = robots.radius.max()
     w = 0
     for m in range(movers.shape[0]):
         slot[m] = w
-        if state[movers[m]] == _EXPLORE:
+        if robots.state[movers[m]] == _EXPLORE:
             w += 1
     for m in prange(movers.shape[0]):
         i = movers[m]
-        sense_one(blocked, clear, ox, oy, res, xy, heading, radius, big, i, angles, sensor_range, s_indptr,
-                  s_indices, s_dist, sense_bodies, scans[m])
-        length[m] = decide_one(i, slot[m], state, heading, xy, max_speed, refused, normal, uniform, turn_sigma,
-                               scans[m], angles, sensor_range, goal, anchors, last_to_goal, blocked_steps, give_up,
-                               min_progress, r_eff, dt)
-        free[m], planned[m, 0], planned[m, 1] = plan_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1],
-                                                         heading[i], length[m], radius[i])
+        sense_one(grid, robots, big, i, ring, s_csr, sense_bodies, scans[m])
+        length[m] = decide_one(i, slot[m], robots, walk, draws, scans[m], ring, steering, r_eff, dt)
+        free[m], planned[m, 0], planned[m, 1] = plan_one(grid.blocked, grid.clear, grid.ox, grid.oy, grid.res,
+                                                         robots.xy[i, 0], robots.xy[i, 1], robots.heading[i],
+                                                         length[m], robots.radius[i])
 
 
 @njit(cache=True)
-def commit_moves(movers, length, free, planned, xy, radius, state, goal, distance, refused, bodies, d_indptr,
-                 d_indices, d_dist):  # pragma: no cover - numba
+def commit_moves(data, n_movers, d_indptr, d_indices, d_dist, drive_bodies):  # pragma: no cover - numba
     """The moves of :func:`sense_steer_plan_threaded`'s movers, one after another, against the bodies as they stand."""
+    robots, moves, refused = data.robots, data.moves, data.walk.refused
+    xy, radius, state, distance = robots.xy, robots.radius, robots.state, robots.distance
+    length, free, planned = moves.length, moves.free, moves.planned
+    movers = data.tracked.movers[:n_movers]
     near = 2.0 * radius.max() + 2.0 * _longest(length, movers.shape[0])
     refused[:] = False
     for m in range(movers.shape[0]):
         i = movers[m]
         if free[m]:
-            r, travelled = commit_one(i, xy[i, 0], xy[i, 1], planned[m, 0], planned[m, 1], xy, radius, bodies,
+            r, travelled = commit_one(i, xy[i, 0], xy[i, 1], planned[m, 0], planned[m, 1], xy, radius, drive_bodies,
                                       d_indptr, d_indices, d_dist, near)
         else:
             r, travelled = True, 0.0
         refused[i] = r
         distance[i] += travelled
-    _arrive(movers, state, xy, goal)
+    _arrive(movers, state, xy, data.steering.goal)
 
 
 @njit(cache=True)
-def spreading_stretch(limit, grid, robots, track, draws, steer, radio, csr, watch):  # pragma: no cover - numba
-    """Up to ``limit`` steps of a self-spreading loop; ``(steps done, how it ended, indptr, indices, dist)``.
+def spreading_stretch(limit, data, streams, radio, csr, books):  # pragma: no cover - numba
+    """Up to ``limit`` steps of a self-spreading loop from the table ``csr``; ``(steps done, how it ended, table)``.
 
-    The tuples hold :func:`track_explorers`'s, the draws' and
-    :func:`sense_steer_drive`'s arguments as :class:`~amronet.algorithms.self_spreading.fast.
-    CompiledSpreading` passes them, the radio's search (reach, group ids, groups), this step's neighbour table and the
-    books (:func:`~amronet.algorithms.common.swarm_stretch_kernels.settling_changed`'s arguments). The bodies the rings
-    and the moves meet are the table's (the caller
-    checked that they reach no farther) or, for the moves without collisions, none.
+    ``streams``: the walkers' generators; ``radio`` and ``books``: the radio's search and the runs' books
+    (:func:`~amronet.algorithms.common.swarm_stretch_kernels.after_step`). The bodies the rings and the moves meet are
+    the table's (the caller checked that they reach no farther) or, for the moves without collisions, none.
     """
-    blocked, clear, ox, oy, res = grid
-    xy, heading, state, status, max_speed, radius, distance = robots
-    current, deployed, is_ref, want_other, r_eff, r_c, local, disabled, explorers, new_current, nearest, other, \
-        movers, walkers = track
-    bitgens, starts, normal, uniform = draws
-    refused, turn_sigma, angles, sensor_range, sense_bodies, goal, anchors, last_to_goal, blocked_steps, give_up, \
-        min_progress, dt, drive_bodies, none_indptr, none_indices, none_dist, scans, length = steer
-    indptr, indices, dist = csr
+    robots, tracked, draws = data.robots, data.tracked, data.draws
     for s in range(limit):
-        _, candidates, n_movers, n_walkers = track_explorers(
-            state, status, current, deployed, is_ref, indptr, indices, dist, want_other, r_eff, xy, r_c, local,
-            disabled, explorers, new_current, nearest, other, movers, walkers)
+        _, candidates, n_movers, n_walkers = track_explorers(data, csr.indptr, csr.indices, csr.dist)
         if candidates:
-            return s, CANDIDATES, indptr, indices, dist
+            return s, CANDIDATES, csr
         if n_movers == 0:
-            refused[:] = False
+            data.walk.refused[:] = False
         else:
-            if not draw_normal_uniform(bitgens, starts, walkers[:n_walkers], normal, uniform):
-                return s, BAD_DRAW, indptr, indices, dist
-            if drive_bodies:
-                d_indptr, d_indices, d_dist = indptr, indices, dist
-            else:
-                d_indptr, d_indices, d_dist = none_indptr, none_indices, none_dist
-            sense_steer_drive(blocked, clear, ox, oy, res, xy, heading, state, max_speed, radius, distance, refused,
-                              movers[:n_movers], normal[:n_walkers], uniform[:n_walkers], turn_sigma, angles,
-                              sensor_range, indptr, indices, dist, sense_bodies, goal, anchors, last_to_goal,
-                              blocked_steps, give_up, min_progress, r_eff, dt, drive_bodies, d_indptr, d_indices,
-                              d_dist, scans, length)
-        how, indptr, indices, dist = after_step(xy, state, radio, watch)
+            walkers = tracked.walkers[:n_walkers]
+            if not draw_normal_uniform(streams.bitgens, streams.starts, walkers, draws.normal, draws.uniform):
+                return s, BAD_DRAW, csr
+            d_csr = csr if data.collisions else data.no_bodies
+            sense_steer_drive(data, n_movers, draws.normal[:n_walkers], draws.uniform[:n_walkers], csr.indptr,
+                              csr.indices, csr.dist, np.bool_(True), d_csr.indptr, d_csr.indices, d_csr.dist,
+                              data.collisions)
+        how, csr = after_step(robots.xy, robots.state, radio, books)
         if how != QUIET:
-            return s + 1, how, indptr, indices, dist
-    return limit, QUIET, indptr, indices, dist
+            return s + 1, how, csr
+    return limit, QUIET, csr

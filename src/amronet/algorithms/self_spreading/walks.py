@@ -33,10 +33,13 @@ it hears, their link lengths, and what they announce: state, position, and what 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
+from amronet.algorithms.common.swarm_data import Ring
+from amronet.engine.kernel_data import Csr
 from amronet.engine.motion import random_walk, walk_one
 from amronet.engine.network import hop_counts
 from amronet.engine.sensing import beam_angles
@@ -92,11 +95,35 @@ def _straight(heading, who, scans, angles, sensor_range, refused, fresh, draw): 
             heading[i] = away + STRAIGHT_SPREAD * (2.0 * draw[m] - 1.0)
 
 
+class EdgeFollowing(NamedTuple):
+    """``growth``: the routers following an obstacle's edge (the walker's arrays, changed in place)."""
+
+    follow: np.ndarray
+    """``int64 (N,)``: steps left following an obstacle's edge."""
+    side: np.ndarray
+    """``int64 (N,)``: the side each router keeps the obstacle it follows on."""
+    steps: int
+    """At most this many steps following an obstacle's edge."""
+
+
+class GrowthDraws(NamedTuple):
+    """``growth`` and ``guided``: a step's random numbers, walker by walker."""
+
+    noise: np.ndarray
+    """The growth walk's heading noise."""
+    fresh: np.ndarray
+    """Fresh uniform headings (a refused move, a random walk's fresh start)."""
+    draw: np.ndarray
+    """Uniforms in ``[0, 1)``: the side of an edge to follow, the turn off an obstacle."""
+    walk_noise: np.ndarray
+    """``guided``: the random walk's heading noise."""
+
+
 @njit(cache=True, inline="always")
-def _toward(i, m, want, heading, scans, angles, sensor_range, follow, side, follow_steps, draw,
-            noise):  # pragma: no cover - numba
+def _toward(i, m, want, heading, scans, ring, edges, draws):  # pragma: no cover - numba
     """Head for ``want``; when an obstacle ahead stands in the way, follow its edge until the way is clear."""
-    away, seen, ahead = _seen(heading[i], scans[m], angles, sensor_range)
+    follow, side, draw, noise = edges.follow, edges.side, draws.draw, draws.noise
+    away, seen, ahead = _seen(heading[i], scans[m], ring.angles, ring.sensor_range)
     if follow[i] > 0:
         follow[i] -= 1
         if follow[i] == 0:  # given up: off the obstacle at a random angle
@@ -109,7 +136,7 @@ def _toward(i, m, want, heading, scans, angles, sensor_range, follow, side, foll
         return away + side[i] * (math.pi / 2 - EDGE_LEAN)
     if ahead:
         if math.cos(want - away) < 0.0:  # want lies beyond the obstacle: follow its edge
-            follow[i] = follow_steps
+            follow[i] = edges.steps
             side[i] = 1 if draw[m] < 0.5 else -1
             return away + side[i] * (math.pi / 2 - EDGE_LEAN)
         return math.atan2(math.sin(want) + math.sin(away), math.cos(want) + math.cos(away))
@@ -117,8 +144,10 @@ def _toward(i, m, want, heading, scans, angles, sensor_range, follow, side, foll
 
 
 @njit(cache=True)
-def _growth(heading, who, xy, field, indptr, indices, dist, r_c, scans, angles, sensor_range, refused, noise, fresh,
-            follow, side, follow_steps, draw, diffuse, walk_noise):  # pragma: no cover - numba
+def _growth(heading, who, xy, field, csr, r_c, scans, ring, refused, draws, edges, diffuse):  # pragma: no cover
+    """``growth`` and ``guided``: the walkers ``who``'s headings from the growth ``field`` of the nodes they hear."""
+    indptr, indices, dist = csr.indptr, csr.indices, csr.dist
+    fresh, follow = draws.fresh, edges.follow
     for m in range(who.shape[0]):
         i = who[m]
         if refused[m]:
@@ -136,7 +165,8 @@ def _growth(heading, who, xy, field, indptr, indices, dist, r_c, scans, angles, 
                 target_d = dist[k]
         if diffuse and (target < 0 or low == 0.0):  # guided: the random walk where it grows, or nothing leads there
             follow[i] = 0
-            heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, False, walk_noise[m], fresh[m])
+            heading[i] = walk_one(heading[i], scans[m], ring.angles, ring.sensor_range, False, draws.walk_noise[m],
+                                  fresh[m])
             continue
         if target < 0:  # nothing it hears leads to growth: a persistent walk
             want = heading[i]
@@ -154,8 +184,7 @@ def _growth(heading, who, xy, field, indptr, indices, dist, r_c, scans, angles, 
                 px += w * (xy[i, 0] - xy[j, 0]) / d
                 py += w * (xy[i, 1] - xy[j, 1]) / d
             want = math.atan2(py, px) if math.hypot(px, py) > 1e-9 else heading[i]
-        heading[i] = _toward(i, m, want, heading, scans, angles, sensor_range, follow, side, follow_steps, draw,
-                             noise)
+        heading[i] = _toward(i, m, want, heading, scans, ring, edges, draws)
 
 
 class Walker:
@@ -233,6 +262,7 @@ class Walker:
             _straight(heading, who, scans, angles, float(sensor_range), refused, fresh, uniform)
             return
         assert field is not None
-        _growth(heading, who, xy, field, table.indptr, table.indices, table.dist, float(self.r_c), scans, angles,
-                float(sensor_range), refused, GROWTH_NOISE * self.turn_sigma * normal, fresh, self.follow, self.side,
-                self.follow_steps, uniform, self.rule == "guided", self.turn_sigma * normal)
+        draws = GrowthDraws(GROWTH_NOISE * self.turn_sigma * normal, fresh, uniform, self.turn_sigma * normal)
+        edges = EdgeFollowing(self.follow, self.side, self.follow_steps)
+        _growth(heading, who, xy, field, Csr(table.indptr, table.indices, table.dist), float(self.r_c), scans,
+                Ring(angles, float(sensor_range)), refused, draws, edges, self.rule == "guided")

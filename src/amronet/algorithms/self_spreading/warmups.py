@@ -27,6 +27,9 @@ def warm_ups() -> list[WarmUp]:
         # phase by phase (as in agent-assisted runs with several base stations)
         *(WarmUp(f"triangular deployment, {step} step", "self-spreading-6x6", two_bases, seconds=20.0, step=step)
           for step in ("compiled", "reference")),
+        # and under a radio that does not decide links by distance: the link test at settling (issue #44)
+        WarmUp("triangular deployment, multi-wall", "self-spreading-6x6", {**two_bases, "radio.model": "multi-wall"},
+               seconds=20.0),
         WarmUp("batch self-spreading", "self-spreading-6x6", seeds=(1, 2)),
         WarmUp("large runs: the threaded kernels", "self-spreading-6x6", threaded=True, first=True),
     ]

@@ -77,7 +77,7 @@ cells), :mod:`~amronet.algorithms.agent_assisted.explorers.frontier.distance` (d
 """
 
 from amronet.algorithms.agent_assisted.explorers.frontier.distance import gap_to_uncovered
-from amronet.algorithms.agent_assisted.explorers.frontier.explorer import FrontierExplorer
+from amronet.algorithms.agent_assisted.explorers.frontier.explorer import FrontierExplorer, FrontierTuning
 from amronet.algorithms.agent_assisted.explorers.frontier.knowledge import (
     FREE_FLOOR,
     HIT_GAIN,
@@ -97,6 +97,7 @@ __all__ = [
     "UNCOVERED",
     "AgentPlans",
     "FrontierExplorer",
+    "FrontierTuning",
     "KnowledgeGrid",
     "gap_to_uncovered",
 ]

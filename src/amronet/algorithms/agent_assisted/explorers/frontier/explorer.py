@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -27,24 +28,14 @@ from amronet.algorithms.agent_assisted.explorers.frontier.state import (
 from amronet.algorithms.agent_assisted.explorers.random_walk import RandomExplorer
 from amronet.engine.sensing import beam_angles
 
-__all__ = ["FrontierExplorer"]
+__all__ = ["FrontierExplorer", "FrontierTuning"]
 
 
-@EXPLORERS.register("frontier")
-class FrontierExplorer(Explorer):
-    """Frontier exploration on a knowledge grid shared by the agents (see the package's docstring).
+@dataclass(frozen=True)
+class FrontierTuning:
+    """How the frontier explorer's strategy is tuned; the defaults are those of an explorer picked by name.
 
-    The first five arguments are those of :class:`~amronet.algorithms.agent_assisted.explorers.base.Explorer`; the
-    others tune
-    the strategy and keep their defaults when the explorer is picked by name. The explorer keeps per-agent
-    state between calls: it must always be called with the same agents, in the same order.
-
-    Args:
-        turn_noise: Heading noise of the random fallback, radians per square-root second.
-        avoid_range: Sonar readings nearer than this (metres) must keep out of the lane ahead.
-        dt: Step length in seconds.
-        r_c: Communication radius.
-        extent: ``(xmin, xmax, ymin, ymax)`` of the area in metres.
+    Attributes:
         resolution: Cell size of the knowledge grid in metres.
         clearance: Cells within this distance (metres, centre to centre) of an occupied cell or a deployed node
             are not traversable; about the agent's body radius (a Pioneer's is 0.22 m). With 0.25 m cells,
@@ -61,6 +52,37 @@ class FrontierExplorer(Explorer):
         lookahead: The agent aims at most this many path cells ahead.
         robot_radius: A reading ending within this many metres of a known robot marks no obstacle.
         lane: Half-width in metres of the lane ahead that must be clear of near readings.
+    """
+
+    resolution: float = 0.25
+    clearance: float = 0.3
+    cover_margin: float = 0.02
+    window: int = 2
+    claim_radius: float | None = None
+    gap_weight: float = 1.5
+    replan_every: float = 5.0
+    stuck_after: float = 10.0
+    approach_time: float = 4.0
+    lookahead: int = 4
+    robot_radius: float = 0.3
+    lane: float = 0.25
+
+
+@EXPLORERS.register("frontier")
+class FrontierExplorer(Explorer):
+    """Frontier exploration on a knowledge grid shared by the agents (see the package's docstring).
+
+    The first five arguments are those of :class:`~amronet.algorithms.agent_assisted.explorers.base.Explorer`;
+    ``tuning`` tunes the strategy (:class:`FrontierTuning`'s defaults when the explorer is picked by name). The explorer
+    keeps per-agent state between calls: it must always be called with the same agents, in the same order.
+
+    Args:
+        turn_noise: Heading noise of the random fallback, radians per square-root second.
+        avoid_range: Sonar readings nearer than this (metres) must keep out of the lane ahead.
+        dt: Step length in seconds.
+        r_c: Communication radius.
+        extent: ``(xmin, xmax, ymin, ymax)`` of the area in metres.
+        tuning: The strategy's settings (default: :class:`FrontierTuning`'s defaults).
 
     Attributes:
         grid: The shared :class:`KnowledgeGrid`.
@@ -73,23 +95,21 @@ class FrontierExplorer(Explorer):
     """
 
     def __init__(self, turn_noise: float, avoid_range: float, dt: float, r_c: float,
-                 extent: tuple[float, float, float, float], *, resolution: float = 0.25, clearance: float = 0.3,
-                 cover_margin: float = 0.02, window: int = 2, claim_radius: float | None = None,
-                 gap_weight: float = 1.5, replan_every: float = 5.0, stuck_after: float = 10.0,
-                 approach_time: float = 4.0, lookahead: int = 4, robot_radius: float = 0.3,
-                 lane: float = 0.25) -> None:
+                 extent: tuple[float, float, float, float], *, tuning: FrontierTuning | None = None) -> None:
         super().__init__(turn_noise, avoid_range, dt, r_c, extent)
+        t = FrontierTuning() if tuning is None else tuning
+        resolution, clearance = t.resolution, t.clearance
         self.grid = KnowledgeGrid(extent, resolution)
         self.clearance = clearance
-        self.cover_radius = (1.0 - cover_margin) * r_c
-        self.claim_radius = 0.5 * r_c if claim_radius is None else claim_radius
-        self.gap_weight = gap_weight
-        self.robot_radius = robot_radius
-        self.lane = lane
-        self.window = int(window)
-        self.lookahead = int(lookahead)
-        self._steps_of = (max(1, round(replan_every / dt)), max(1, round(stuck_after / dt)),
-                          max(1, round(approach_time / dt)))
+        self.cover_radius = (1.0 - t.cover_margin) * r_c
+        self.claim_radius = 0.5 * r_c if t.claim_radius is None else t.claim_radius
+        self.gap_weight = t.gap_weight
+        self.robot_radius = t.robot_radius
+        self.lane = t.lane
+        self.window = int(t.window)
+        self.lookahead = int(t.lookahead)
+        self._steps_of = (max(1, round(t.replan_every / dt)), max(1, round(t.stuck_after / dt)),
+                          max(1, round(t.approach_time / dt)))
         rows, cols = self.grid.shape
         self.covered = np.zeros((rows, cols), dtype=np.bool_)
         self.robots = np.zeros((rows, cols), dtype=np.bool_)

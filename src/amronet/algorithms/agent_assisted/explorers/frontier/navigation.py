@@ -42,8 +42,14 @@ __all__ = ["navigate", "navigate_kernel"]
 
 
 @njit(cache=True)
-def _sees(score, seen, rb, off_r, off_c, ox, oy, res, x0, y0, x1, y1, buf_r, buf_c):  # pragma: no cover - numba
-    """Does the straight segment cross only traversable cells (the cell it starts in excepted)?"""
+def _sees(score, seen, rb, off_r, off_c, origin, start, end, buf_r, buf_c):  # pragma: no cover - numba
+    """Does the straight segment from ``start`` to ``end`` (``(x, y)`` each) cross only traversable cells?
+
+    The cell it starts in is excepted; ``origin`` is ``(ox, oy, res)``, the grid's lower-left corner and cell size.
+    """
+    ox, oy, res = origin
+    x0, y0 = start
+    x1, y1 = end
     rows, cols = score.shape
     n = trace_cells(ox, oy, res, rows, cols, x0, y0, x1, y1, buf_r, buf_c)
     if n == 0:
@@ -215,16 +221,16 @@ def navigate_kernel(step, layers, cfg, plans, work):  # pragma: no cover - numba
                 if j != m and goal[j] >= 0:
                     claims[j, 0] = goal[j] // cols
                     claims[j, 1] = goal[j] - claims[j, 0] * cols
-            n, g, k = search_target(score, seen, visited, trav[0], counts, gap, win, sr, sc, escape,
-                                    claims, claim_r2, search, path[m])
+            n, g, k = search_target(score, seen, trav[0], (visited, counts, gap, win), (claims, claim_r2), sr, sc,
+                                    escape, search, path[m])
             through_nodes[m] = False
             if g < 0:
                 if not ready_soft:
                     update_passable(score, seen, no_robots, off_r, off_c, row_stamp > synced[3], trav[1])
                     synced[3] = stamp
                     ready_soft = True
-                n, g, k = search_target(score, seen, visited, trav[1], counts, gap, win, sr, sc,
-                                        escape, claims, claim_r2, search, path[m])
+                n, g, k = search_target(score, seen, trav[1], (visited, counts, gap, win), (claims, claim_r2), sr,
+                                        sc, escape, search, path[m])
                 through_nodes[m] = g >= 0
             rbm = no_robots if through_nodes[m] else robots
             last_plan[m] = now
@@ -255,8 +261,8 @@ def navigate_kernel(step, layers, cfg, plans, work):  # pragma: no cover - numba
         for q in range(min(ppos + lookahead, plen - 1), first, -1):
             v = path[m, q]
             vr = v // cols
-            if _sees(score, seen, rbm, off_r, off_c, ox, oy, res, x, y, ox + (v - vr * cols + 0.5) * res,
-                     oy + (vr + 0.5) * res, cells_r, cells_c):
+            if _sees(score, seen, rbm, off_r, off_c, (ox, oy, res), (x, y),
+                     (ox + (v - vr * cols + 0.5) * res, oy + (vr + 0.5) * res), cells_r, cells_c):
                 aim = q
                 break
         if refused[m]:

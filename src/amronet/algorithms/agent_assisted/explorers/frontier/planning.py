@@ -10,6 +10,8 @@ with
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -18,6 +20,8 @@ from amronet.algorithms.agent_assisted.explorers.frontier.knowledge import is_fr
 __all__ = [
     "FRONTIER",
     "UNCOVERED",
+    "Claims",
+    "Targets",
     "kind_at",
     "nearest_uncovered",
     "search_buffers",
@@ -30,6 +34,28 @@ UNCOVERED = 1
 """Target kind: a seen, uncovered cell is near (going there releases a router)."""
 FRONTIER = 2
 """Target kind: a frontier cell is near, and everything seen around it is covered."""
+
+
+class Targets(NamedTuple):
+    """Which cells are targets and how they score, as :func:`search_target` reads them (a plain tuple there)."""
+
+    visited: np.ndarray
+    """Cells that are no longer targets ``(rows, cols)``."""
+    counts: np.ndarray
+    """Window counts of the frontier and seen uncovered cells (:func:`update_window_counts`)."""
+    gap: np.ndarray
+    """Per cell, what its distance to uncovered space adds to a target's score ``(rows, cols)``."""
+    win: int
+    """Window half-width in cells."""
+
+
+class Claims(NamedTuple):
+    """The other agents' goals, whose targets are left to them, as :func:`search_target` reads them."""
+
+    goals: np.ndarray
+    """``(row, col)`` of the other agents' goals ``(K, 2)``; rows of -1 are ignored."""
+    r2: float
+    """Squared radius in cells around a goal within which targets are left to its agent."""
 
 
 @njit(cache=True, inline="always")
@@ -198,8 +224,7 @@ def _push(parent, depth, queue, tail, u, v, d):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def search_target(score, seen, visited, trav, counts, gap, win, sr, sc, escape, claims, claim_r2, search,
-                  path):  # pragma: no cover - numba
+def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, path):  # pragma: no cover - numba
     """Breadth-first search from ``(sr, sc)`` for the best target; its path (start excluded) goes to ``path``.
 
     A path may enter traversable cells, and free cells within ``escape`` cells (Chebyshev) of the start; it
@@ -209,17 +234,13 @@ def search_target(score, seen, visited, trav, counts, gap, win, sr, sc, escape, 
     Args:
         score: Evidence counts ``(rows, cols)``.
         seen: Seen cells ``(rows, cols)``.
-        visited: Cells that are no longer targets ``(rows, cols)``.
         trav: Traversable cells ``(rows, cols)``; the search opens the free cells near the start in it, and
             closes them again on return.
-        counts: Window counts (:func:`update_window_counts`).
-        gap: Per cell, what its distance to uncovered space adds to a target's score ``(rows, cols)``.
-        win: Window half-width in cells.
+        targets: The targets (:class:`Targets`, as a plain tuple).
+        claims: The other agents' goals (:class:`Claims`, as a plain tuple).
         sr: Row of the start.
         sc: Column of the start.
         escape: Chebyshev radius in cells around the start within which free cells may be crossed.
-        claims: ``(row, col)`` of the other agents' goals ``(K, 2)``; rows of -1 are ignored.
-        claim_r2: Squared radius in cells around a claim within which targets are left to its agent.
         search: Scratch parent, depth and queue of every cell (:func:`search_buffers`); the parents must be -1
             on entry, and are again on return.
         path: Gets the flat cells of the path, start excluded, goal last.
@@ -227,6 +248,8 @@ def search_target(score, seen, visited, trav, counts, gap, win, sr, sc, escape, 
     Returns:
         ``(n, goal, kind)``: path length, flat goal cell (-1: none) and its target kind.
     """
+    visited, counts, gap, win = targets
+    goals, claim_r2 = claims
     rows, cols = score.shape
     parent = search[0]
     depth = search[1]
@@ -268,11 +291,11 @@ def search_target(score, seen, visited, trav, counts, gap, win, sr, sc, escape, 
         if kind:
             s = d + gap[r, c]
             claimed = False
-            for j in range(claims.shape[0]):
-                if claims[j, 0] < 0:
+            for j in range(goals.shape[0]):
+                if goals[j, 0] < 0:
                     continue
-                er = r - claims[j, 0]
-                ec = c - claims[j, 1]
+                er = r - goals[j, 0]
+                ec = c - goals[j, 1]
                 if er * er + ec * ec <= claim_r2:
                     claimed = True
                     break

@@ -1,22 +1,12 @@
-"""Scenarios: one YAML file (or dict, or built-in preset) describes a whole run, validated on load.
+"""The scenario's schema: every field of a scenario file, its type, its default and its checks.
 
-Unknown keys, wrong types, NaN or negative radii and speeds are rejected with one line that names the field.
-Example::
-
-    name: my-run
-    map: obstacles-6x6              # a built-in map name or a path to a ROS map_server YAML
-    algorithm: {name: self-spreading, params: {triangular: local}}
-    radio: {model: unit-disk, r_c: 1.0}
-    base_stations: [{x: 0.0, y: 0.0, region: [1.0, 1.0]}]
-    routers: {count: 30, robot: bebot}
-    sim: {dt: 0.1, time_limit: 300}
+Unknown keys, wrong types, NaN or negative radii and speeds are rejected with one line that names the field
+(:mod:`amronet.scenario.messages`).
 """
 
 from __future__ import annotations
 
-import copy
 import math
-from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -37,21 +27,23 @@ from amronet.algorithms import ALGORITHMS
 from amronet.engine.propagation import LinkBudget, median_range
 from amronet.engine.radio import DEFAULT_WALL_DB, MEDIA
 from amronet.errors import ScenarioError
-from amronet.yaml_loading import load_yaml
+from amronet.scenario.messages import to_scenario_error
+from amronet.scenario.overrides import apply_overrides
 
 __all__ = [
+    "FAULT_KINDS",
+    "MAX_RANGE_M",
     "AgentsSpec",
+    "AlgorithmSpec",
     "BaseStationSpec",
     "FaultSpec",
     "RadioSpec",
+    "RobotRef",
     "RobotSpec",
     "RoutersSpec",
     "Scenario",
     "SimSpec",
-    "apply_overrides",
-    "list_presets",
-    "load_scenario",
-    "parse_override",
+    "validate_scenario",
 ]
 
 PositiveFloat = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
@@ -332,7 +324,7 @@ class Scenario(_Strict):
         try:
             return model.model_validate(self.algorithm.params)
         except ValidationError as exc:
-            raise to_scenario_error(exc, prefix="algorithm.params", model=model) from None
+            raise to_scenario_error(exc, model=model, prefix="algorithm.params") from None
 
     def to_dict(self) -> dict[str, Any]:
         """The scenario as plain data (what a YAML file would hold).
@@ -349,191 +341,20 @@ class Scenario(_Strict):
     def with_overrides(self, overrides: dict[str, Any]) -> Scenario:
         """A copy with dotted-path fields replaced, e.g. ``{"radio.r_c": 1.5, "routers.count": 60}``."""
         data = apply_overrides(self.to_dict(), overrides)
-        return _validate(data, base_dir=self.base_dir)
+        return validate_scenario(data, base_dir=self.base_dir)
 
 
-_UNION_TAGS = ("name", "spec")
-"""The tags of :data:`RobotRef`'s two forms: pydantic puts them into an error's location after ``robot``."""
+def validate_scenario(data: Any, base_dir: str | None) -> Scenario:
+    """Validate plain data as a scenario, its algorithm's parameters too; ``base_dir``: see :class:`Scenario`.
 
-
-def _field_path(loc: tuple[Any, ...], prefix: str = "") -> str:
-    path = prefix
-    for k, part in enumerate(loc):
-        if isinstance(part, int):
-            path += f"[{part}]"
-        elif not (part in _UNION_TAGS and k > 0 and loc[k - 1] == "robot"):
-            path += ("." if path else "") + str(part)
-    return path
-
-
-def _allowed_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
-    current: Any = model
-    for k, part in enumerate(loc[:-1]):
-        if isinstance(part, int) or (part in _UNION_TAGS and k > 0 and loc[k - 1] == "robot"):
-            continue
-        field = getattr(current, "model_fields", {}).get(part)
-        if field is None:
-            return []
-        found = _model_in(field.annotation)
-        if found is not None:
-            current = found
-    return [k for k in getattr(current, "model_fields", {}) if k != "base_dir"]
-
-
-def _model_in(annotation: Any, depth: int = 0) -> type[BaseModel] | None:
-    """The first pydantic model inside an annotation (through unions, ``Annotated`` and containers)."""
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    if depth > 4:
-        return None
-    for inner in getattr(annotation, "__args__", ()) or ():
-        found = _model_in(inner, depth + 1)
-        if found is not None:
-            return found
-    origin = getattr(annotation, "__origin__", None)
-    return _model_in(origin, depth + 1) if origin is not None and origin is not annotation else None
-
-
-def to_scenario_error(exc: ValidationError, prefix: str = "", model: type[BaseModel] = Scenario) -> ScenarioError:
-    err = exc.errors()[0]
-    msg = str(err.get("msg", "invalid"))
-    if msg.startswith("Value error, @"):
-        _, field, text = msg.split("@", 2)
-        return ScenarioError(field, text)
-    loc = tuple(err.get("loc", ()))
-    field = _field_path(loc, prefix)
-    if err.get("type") == "extra_forbidden":
-        allowed = _allowed_keys(model, loc)
-        return ScenarioError(field, "unknown key; allowed keys here: " + ", ".join(allowed))
-    if err.get("type") == "missing":
-        return ScenarioError(field, "required field is missing; add it")
-    got = err.get("input")
-    shown = repr(got) if not isinstance(got, dict | list) else type(got).__name__
-    if isinstance(got, float) and math.isnan(got):
-        shown = "nan"
-    return ScenarioError(field, f"{msg[0].lower()}{msg[1:]} (got {shown})")
-
-
-def _validate(data: Any, base_dir: str | None) -> Scenario:
+    Raises:
+        ScenarioError: The data is not a valid scenario; the message names the field.
+    """
     if not isinstance(data, dict):
         raise ScenarioError("scenario", f"must be a mapping of fields, got {type(data).__name__}")
     try:
         scenario = Scenario.model_validate({**data, "base_dir": base_dir})
     except ValidationError as exc:
-        raise to_scenario_error(exc) from None
+        raise to_scenario_error(exc, model=Scenario) from None
     scenario.algorithm_params()
     return scenario
-
-
-def parse_override(text: str) -> tuple[str, Any]:
-    """Parse one ``--set key=value`` item; the value is YAML (``1e-3``, ``true``, ``[1, 2]``; :func:`load_yaml`)."""
-    key, sep, value = text.partition("=")
-    if not sep or not key.strip():
-        raise ScenarioError("--set", f"expected KEY=VALUE such as radio.r_c=1.5, got {text!r}")
-    return key.strip(), load_yaml(value, key.strip(), f"value {value!r}")
-
-
-def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
-    """Return a copy of ``data`` with dotted paths set (list items by index: ``base_stations.0.x``).
-
-    One rule for every caller (``run --set``, sweeps, the library): an ``algorithm.name`` that switches to another
-    algorithm drops the base's ``algorithm.params`` first, since they belong to the base's algorithm; the new one
-    starts from its defaults and ``algorithm.params[.KEY]`` given in ``overrides`` apply on top. The same for the
-    radio: ``radio.threshold_dbm`` given without ``radio.r_c`` replaces the base's ``r_c`` (and the other way round),
-    and a ``radio.model`` that switches drops the base's ``wall_db`` / ``shadowing_db`` that the new model does not
-    take.
-    """
-    out = copy.deepcopy(data)
-    radio = out.get("radio") if isinstance(out, dict) else None
-    if isinstance(radio, dict) and not isinstance(overrides.get("radio"), dict):
-        for given, replaced in (("threshold_dbm", "r_c"), ("r_c", "threshold_dbm")):
-            if f"radio.{given}" in overrides and f"radio.{replaced}" not in overrides:
-                radio.pop(replaced, None)
-        new_model = MEDIA.get(overrides.get("radio.model")) if isinstance(overrides.get("radio.model"), str) else None
-        if new_model is not None and overrides["radio.model"] != radio.get("model"):
-            for key, taken in (("wall_db", new_model.uses_walls), ("shadowing_db", new_model.uses_shadowing)):
-                if not taken and f"radio.{key}" not in overrides:
-                    radio.pop(key, None)
-    algorithm = out.get("algorithm") if isinstance(out, dict) else None
-    name = overrides.get("algorithm.name")
-    if (isinstance(algorithm, dict) and name is not None and name != algorithm.get("name")
-            and not isinstance(overrides.get("algorithm"), dict)):
-        algorithm.pop("params", None)
-    for dotted, value in overrides.items():
-        parts = dotted.split(".")
-        node: Any = out
-        for i, part in enumerate(parts):
-            last = i == len(parts) - 1
-            if isinstance(node, list):
-                if not part.isdigit() or int(part) >= len(node):
-                    raise ScenarioError(".".join(parts[: i + 1]), f"no list item {part}; the list has {len(node)}")
-                key: Any = int(part)
-            elif isinstance(node, dict):
-                key = part
-            else:
-                raise ScenarioError(".".join(parts[:i]), "is not a mapping; cannot set a field inside it")
-            if last:
-                node[key] = value
-            else:
-                if isinstance(node, dict) and key not in node:
-                    node[key] = {}
-                node = node[key]
-    return out
-
-
-def _preset_dir() -> Any:
-    return resources.files("amronet") / "data" / "presets"
-
-
-def list_presets() -> dict[str, str]:
-    """Built-in scenarios: name → one-line description."""
-    out = {}
-    for entry in sorted(_preset_dir().iterdir(), key=lambda e: e.name):
-        if entry.name.endswith(".yaml"):
-            data = load_yaml(entry.read_text(), "preset", repr(entry.name))
-            out[entry.name[:-5]] = str(data.get("description", ""))
-    return out
-
-
-def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dict[str, Any] | None = None) -> Scenario:
-    """Load and validate a scenario.
-
-    Args:
-        source: A :class:`Scenario`, a dict, a path to a YAML file, or the name of a built-in preset
-            (see :func:`list_presets`).
-        overrides: Dotted-path fields to replace before validation, e.g. ``{"radio.r_c": 1.5}``.
-
-    Returns:
-        The validated scenario.
-
-    Raises:
-        ScenarioError: The source cannot be read or is invalid; the message names the field.
-    """
-    base_dir: str | None = None
-    if isinstance(source, Scenario):
-        data, base_dir = source.to_dict(), source.base_dir
-    elif isinstance(source, dict):
-        data = source
-    elif not isinstance(source, str | Path):
-        raise ScenarioError("scenario", f"must be a mapping of fields, a YAML path or a preset name, got "
-                                        f"{type(source).__name__}")
-    else:
-        path = Path(source)
-        preset = _preset_dir() / f"{source}.yaml"
-        if not path.suffix and preset.is_file():
-            text, shown = preset.read_text(), f"preset {str(source)!r}"
-        elif path.is_file():
-            try:
-                text = path.read_text()
-            except (OSError, UnicodeDecodeError) as exc:
-                raise ScenarioError("scenario", f"cannot read {str(path)!r}: {exc}") from None
-            base_dir, shown = str(path.resolve().parent), repr(str(path))
-        else:
-            raise ScenarioError(
-                "scenario", f"no file {str(source)!r} and no preset of that name; presets: "
-                + ", ".join(list_presets())
-            )
-        data = load_yaml(text, "scenario", shown)
-    if overrides:
-        data = apply_overrides(data if isinstance(data, dict) else {}, overrides)
-    return _validate(data, base_dir)

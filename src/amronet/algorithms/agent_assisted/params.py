@@ -1,0 +1,59 @@
+"""The parameters of agent-assisted router deployment (:class:`AgentAssistedParams`), validated when a run starts."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
+
+from amronet.algorithms.agent_assisted.drops import DROP_RULES, validate_drop_params
+from amronet.algorithms.common.triangular import TriangularMode
+
+__all__ = ["DEFAULT_COVERAGE_TARGET", "AgentAssistedParams"]
+
+DEFAULT_COVERAGE_TARGET = 0.99
+
+
+class AgentAssistedParams(BaseModel):
+    """Parameters of agent-assisted router deployment.
+
+    Attributes:
+        triangular: ``off``, ``none``, ``global`` or ``local`` (see :mod:`amronet.algorithms.common.triangular`).
+        loss_margin: Width of the "about to lose" band as a fraction of ``r_c``.
+        explorer: Exploration strategy of the agents (:data:`amronet.algorithms.agent_assisted.explorers.EXPLORERS`).
+        turn_noise: Heading noise of the agents' random exploration, radians per square-root second.
+        avoid_range: Sonar readings nearer than this (metres) make an agent turn away.
+        give_up_steps: Consecutive blocked steps after which a triangle router stops short of its goal.
+        release_gap: Gap in metres between an agent's body and the router it releases.
+        drop_rule: When an agent puts a router down (:data:`amronet.algorithms.agent_assisted.drops.DROP_RULES`); the
+        paper's
+            ``last-reference`` by default.
+        drop: The drop rule's own parameters (e.g. ``{drop_margin_db: 3}`` for ``link-quality``).
+        repair: ``none``, or ``relocate``: deployed routers that a failure cut off move to bridge the cut
+            (:mod:`amronet.algorithms.agent_assisted.relocate`).
+        repair_confirm_s: How long a neighbour must be missing before a router counts it as lost, seconds.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    triangular: TriangularMode = "local"
+    loss_margin: Annotated[float, Field(strict=True, gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
+    explorer: str = "random"
+    turn_noise: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.5
+    avoid_range: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 0.6
+    give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
+    release_gap: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.02
+    drop_rule: str = "last-reference"
+    drop: dict[str, Any] = Field(default_factory=dict)
+    repair: Literal["none", "relocate"] = "none"
+    repair_confirm_s: Annotated[float, Field(strict=True, ge=0, le=600, allow_inf_nan=False)] = 1.0
+
+    @model_validator(mode="after")
+    def _check_drop_rule(self) -> AgentAssistedParams:
+        rule = DROP_RULES.get(self.drop_rule)
+        if rule is None:
+            raise ValueError(f"@algorithm.params.drop_rule@unknown drop rule {self.drop_rule!r}; choose one of: "
+                             + ", ".join(sorted(DROP_RULES)))
+        validate_drop_params(rule, self.drop, "algorithm.params.drop")
+        return self
+

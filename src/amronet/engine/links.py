@@ -1,0 +1,143 @@
+"""From candidate pairs to links: the margin of every candidate, which links a step keeps, and packet loss.
+
+The radio medium (:mod:`amronet.engine.radio`) searches the pairs within its reach (the *candidates*,
+:mod:`amronet.engine.neighbours`), asks the model's margin kernel (:mod:`amronet.engine.hearing`) for the margin of
+each (:func:`candidate_margins`, once per pair and mirrored) and keeps those at or above the threshold
+(:func:`keep_entries`); with packet loss a link also drops out with probability one minus its delivery ratio
+(:func:`losses`).
+
+:func:`candidate_margins` calls ``model_margin``, here the path-loss law's;
+:func:`amronet.engine.margin_kernels.margin_kernels` compiles copies of it that call another model's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from amronet.engine.hearing import named_inputs, path_loss_margin
+from amronet.engine.propagation import delivery_ratio
+from amronet.engine.shadowing import _cell_value
+
+__all__ = ["NO_PREVIOUS", "candidate_margins", "keep_entries", "losses", "mirror"]
+
+model_margin = path_loss_margin
+"""The margin kernel :func:`candidate_margins` calls (a model's own in the copies of
+:mod:`amronet.engine.margin_kernels`)."""
+
+NO_PREVIOUS = (np.zeros((0, 2)), np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0))
+"""The previous table ``(xy, indptr, indices, margin)`` of :func:`candidate_margins` when there is none."""
+
+
+@njit(cache=True)
+def mirror(indptr, indices):  # pragma: no cover - numba
+    """For every entry ``(i, j)`` of a symmetric CSR with sorted rows, the position of its entry ``(j, i)``.
+
+    Visiting the rows in order, the entries ``(j, i)`` with ``i < j`` of row ``j`` come up in column order, so a
+    cursor per row finds each one in constant time.
+    """
+    n = indptr.shape[0] - 1
+    out = np.empty(indices.shape[0], np.int64)
+    cursor = indptr[:-1].copy()
+    for i in range(n):
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            if j > i:
+                f = cursor[j]
+                cursor[j] = f + 1
+                out[e] = f
+                out[f] = e
+    return out
+
+
+@njit(cache=True, inline="always")
+def _find(indptr, indices, i, j):  # pragma: no cover - numba
+    """Position of entry ``(i, j)`` in a CSR with sorted rows, -1 if absent."""
+    lo = indptr[i]
+    hi = indptr[i + 1]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if indices[mid] < j:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo if lo < indptr[i + 1] and indices[lo] == j else -1
+
+
+@njit(cache=True)
+def candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indices, prev_margin,
+                      hearing):  # pragma: no cover - numba
+    """Margin of every candidate link (CSR order), computed once per pair (walking from the lower id) and mirrored.
+
+    ``hearing``: the radio's :class:`~amronet.engine.hearing.HearingInputs` as a plain tuple
+    (:meth:`~amronet.engine.hearing.HearingInputs.plain`). A pair whose two ends stand exactly where they
+    stood in the previous table (``prev_*``, :data:`NO_PREVIOUS` for none) and were a candidate there takes its
+    margin from it: a margin depends on the two positions alone, so it is the same number.
+    """
+    h = named_inputs(hearing)
+    out = np.empty(indices.shape[0])
+    cursor = indptr[:-1].copy()  # see mirror
+    n_prev = prev_xy.shape[0]
+    shadowed = h.clip > 0.0
+    # out of the loops: an array read out of a tuple in a loop costs two atomic reference counts each time
+    values, x0, y0, cell = h.field
+    for i in range(indptr.shape[0] - 1):
+        xa = xy[i, 0]
+        ya = xy[i, 1]
+        still_i = i < n_prev and xa == prev_xy[i, 0] and ya == prev_xy[i, 1]
+        sa = _cell_value(values, x0, y0, cell, xa, ya) if shadowed else 0.0
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            if j < i:
+                continue
+            xb = xy[j, 0]
+            yb = xy[j, 1]
+            f = -1
+            if still_i and j < n_prev and xb == prev_xy[j, 0] and yb == prev_xy[j, 1]:
+                f = _find(prev_indptr, prev_indices, i, j)
+            if f >= 0:
+                m = prev_margin[f]
+            else:
+                sb = _cell_value(values, x0, y0, cell, xb, yb) if shadowed else 0.0
+                m = model_margin(xa, ya, xb, yb, dist[e], sa, sb, 0.0, h)
+            out[e] = m
+            f = cursor[j]
+            cursor[j] = f + 1
+            out[f] = m
+    return out
+
+
+@njit(cache=True)
+def keep_entries(indptr, indices, dist, margin, keep):  # pragma: no cover - numba
+    """The CSR arrays ``(indptr, indices, dist, margin)`` of the entries in ``keep``."""
+    n = indptr.shape[0] - 1
+    m = 0
+    for e in range(keep.shape[0]):
+        if keep[e]:
+            m += 1
+    out_ptr = np.zeros(n + 1, np.int64)
+    out_idx = np.empty(m, indices.dtype)
+    out_dist = np.empty(m)
+    out_margin = np.empty(m)
+    k = 0
+    for i in range(n):
+        for e in range(indptr[i], indptr[i + 1]):
+            if keep[e]:
+                out_idx[k] = indices[e]
+                out_dist[k] = dist[e]
+                out_margin[k] = margin[e]
+                k += 1
+        out_ptr[i + 1] = k
+    return out_ptr, out_idx, out_dist, out_margin
+
+
+def losses(rng: np.random.Generator, indptr: np.ndarray, indices: np.ndarray, margin: np.ndarray) -> np.ndarray:
+    """Which entries drop out this step: one draw from ``rng`` per link (pair), shared by its two entries."""
+    rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+    upper = np.flatnonzero(indices > rows)
+    across = mirror(indptr, indices)
+    lost = np.zeros(len(indices), dtype=bool)
+    drop = rng.random(len(upper)) >= delivery_ratio(margin[upper])
+    lost[upper] = drop
+    lost[across[upper]] = drop
+    return lost

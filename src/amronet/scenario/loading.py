@@ -1,0 +1,75 @@
+"""Loading a scenario: from a YAML file, a mapping, a :class:`~amronet.scenario.schema.Scenario` or a preset.
+
+The built-in presets are the YAML files of ``amronet/data/presets``.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from amronet.errors import ScenarioError
+from amronet.scenario.overrides import apply_overrides
+from amronet.scenario.schema import Scenario, validate_scenario
+from amronet.yaml_loading import load_yaml
+
+__all__ = ["list_presets", "load_scenario"]
+
+
+def _preset_dir() -> Any:
+    return resources.files("amronet") / "data" / "presets"
+
+
+def list_presets() -> dict[str, str]:
+    """Built-in scenarios: name → one-line description."""
+    out = {}
+    for entry in sorted(_preset_dir().iterdir(), key=lambda e: e.name):
+        if entry.name.endswith(".yaml"):
+            data = load_yaml(entry.read_text(), "preset", repr(entry.name))
+            out[entry.name[:-5]] = str(data.get("description", ""))
+    return out
+
+
+def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dict[str, Any] | None = None) -> Scenario:
+    """Load and validate a scenario.
+
+    Args:
+        source: A :class:`Scenario`, a dict, a path to a YAML file, or the name of a built-in preset
+            (see :func:`list_presets`).
+        overrides: Dotted-path fields to replace before validation, e.g. ``{"radio.r_c": 1.5}``.
+
+    Returns:
+        The validated scenario.
+
+    Raises:
+        ScenarioError: The source cannot be read or is invalid; the message names the field.
+    """
+    base_dir: str | None = None
+    if isinstance(source, Scenario):
+        data, base_dir = source.to_dict(), source.base_dir
+    elif isinstance(source, dict):
+        data = source
+    elif not isinstance(source, str | Path):
+        raise ScenarioError("scenario", f"must be a mapping of fields, a YAML path or a preset name, got "
+                                        f"{type(source).__name__}")
+    else:
+        path = Path(source)
+        preset = _preset_dir() / f"{source}.yaml"
+        if not path.suffix and preset.is_file():
+            text, shown = preset.read_text(), f"preset {str(source)!r}"
+        elif path.is_file():
+            try:
+                text = path.read_text()
+            except (OSError, UnicodeDecodeError) as exc:
+                raise ScenarioError("scenario", f"cannot read {str(path)!r}: {exc}") from None
+            base_dir, shown = str(path.resolve().parent), repr(str(path))
+        else:
+            raise ScenarioError(
+                "scenario", f"no file {str(source)!r} and no preset of that name; presets: "
+                + ", ".join(list_presets())
+            )
+        data = load_yaml(text, "scenario", shown)
+    if overrides:
+        data = apply_overrides(data if isinstance(data, dict) else {}, overrides)
+    return validate_scenario(data, base_dir)
