@@ -20,8 +20,6 @@ __all__ = ["come_to_rest", "field_step", "field_stretch", "wake_and_accelerate"]
 
 _EXPLORE = State.EXPLORE
 _REFERENCE = State.REFERENCE
-_TRIANGLE = State.TRIANGLE
-_TRIANGLE_SETTLED = State.TRIANGLE_SETTLED
 
 
 
