@@ -4,15 +4,18 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean browser
+.PHONY: demo test lint bench clean browser docs
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
+	@echo "installing amronet and its dependencies into $(VENV) (about 2 minutes)..."
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,cluster]'
-	@# compile the numba kernels into their on-disk cache now (one to two minutes), not in the first run; should it
-	@# fail, runs still work and compile what they use (tests/test_warmup.py runs the same warm-up and fails)
-	$(BIN)/amronet compile --quiet || echo "amronet compile failed: runs will compile their kernels on first use"
+	$(BIN)/python -m pip install --quiet -e '.[dev,cluster,docs]'
+	@# compile the numba kernels into their on-disk cache now, not in the first run; it prints a line per group of
+	@# kernels as it starts (one updating line on a terminal). Should it fail, runs still work and compile what they
+	@# use (tests/test_warmup.py runs the same warm-up and fails)
+	@echo "compiling the simulator's kernels once (about 2 minutes on 2 cores, up to 4 on a busy machine)..."
+	$(BIN)/amronet compile || echo "amronet compile failed: runs will compile their kernels on first use"
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -40,11 +43,20 @@ NUMPY_SIMD := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR AVX512F AVX
 test: $(STAMP) browser
 	$(BIN)/ruff check src tests benchmarks tools
 	$(BIN)/lint-imports
+	$(MKDOCS) build --strict --quiet
 	MPLBACKEND=Agg $(NUMPY_SIMD) $(BIN)/python -m pytest
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks tools
 	$(BIN)/lint-imports
+
+# The documentation site (MkDocs + Material + mkdocstrings) into build/site; `make test` builds it with --strict,
+# so a broken link, a missing page or a reference that does not resolve fails the tests.
+MKDOCS := NO_MKDOCS_2_WARNING=1 DISABLE_MKDOCS_2_WARNING=true $(BIN)/mkdocs
+
+docs: $(STAMP)
+	$(MKDOCS) build --strict
+	@echo "documentation: build/site/index.html (or: $(MKDOCS) serve)"
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run_all.py

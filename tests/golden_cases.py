@@ -25,7 +25,8 @@ RUNS = {
                                         {"sim.time_limit": 60, "algorithm.params.triangular": "global"}),
     "self-spreading-autolab": ("self-spreading-autolab", 1, {"sim.time_limit": 30}),
     "self-spreading-office-2bs": ("self-spreading-office", 2, {"sim.time_limit": 30}),
-    "agent-assisted-random": ("agent-assisted-office", 1, {"sim.time_limit": 150}),
+    "agent-assisted-random": ("agent-assisted-office", 1, {"sim.time_limit": 150,
+                                                          "algorithm.params.explorer": "random"}),
     "agent-assisted-frontier-4bs": ("agent-assisted-office-4bs", 2,
                                     {"sim.time_limit": 30, "algorithm.params.explorer": "frontier"}),
     "agent-assisted-carried": ("agent-assisted-office", 4, {"sim.time_limit": 60, "agents.routers_carried": 3,
@@ -104,11 +105,23 @@ def _drop_mission(summary: dict) -> None:
     summary.pop("mission", None)
 
 
+def _drop_pinned_random_explorer(summary: dict) -> None:
+    """Leave out ``algorithm.params.explorer`` when it is ``random``.
+
+    ``random`` was the agents' default explorer when the fingerprints were taken, and the case that ran with it
+    left the field out; the default is ``frontier`` now, so that case names ``random`` (the same run) and the
+    digest leaves the name out, as it was.
+    """
+    params = summary.get("scenario", {}).get("algorithm", {}).get("params", {})
+    if params.get("explorer") == "random":
+        del params["explorer"]
+
+
 def result_fingerprint(result) -> dict[str, str]:
     """Digests of a run's ``network.json``, ``timeseries.csv`` and ``summary.json`` (less wall-clock fields).
 
     The summary's digest leaves out what was added later without changing results: radio and agents fields at
-    their defaults and the ``mission`` section.
+    their defaults, the ``mission`` section, and the explorer pinned to ``random`` (once the default).
     """
     files = result.files()
     summary = {k: v for k, v in json.loads(files["summary.json"]).items() if k not in _WALL_FIELDS}
@@ -116,6 +129,7 @@ def result_fingerprint(result) -> dict[str, str]:
     _drop_default_agents_fields(summary)
     _drop_mission(summary)
     _drop_no_faults(summary)
+    _drop_pinned_random_explorer(summary)
     return {"network.json": _sha(files["network.json"]), "timeseries.csv": _sha(files["timeseries.csv"]),
             "summary": _sha(json.dumps(summary, sort_keys=True).encode()),
             "coverage": f"{summary['coverage']:.6f}", "nodes_total": str(summary["nodes_total"])}

@@ -7,7 +7,7 @@ from amronet.cli import main
 from amronet.experiments.fig5 import run_fig5
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.sweeps.stats import mean_ci, mean_ci_columns
+from amronet.sweeps.stats import mean_ci, mean_ci_columns, mean_ci_text
 
 
 def test_mean_ci_matches_t_interval():
@@ -28,6 +28,32 @@ def test_mean_ci_uses_the_same_t_quantile_as_scipy_stats():
             assert mean_ci(x[:, 0], confidence)[1] == float(expected)  # bit for bit: the figures' tables stay
             columns = stats.t.ppf(0.5 + confidence / 2, n - 1) * x.std(axis=0, ddof=1) / np.sqrt(n)
             assert np.array_equal(mean_ci_columns(x, confidence)[1], columns)
+
+
+def test_mean_and_ci_are_printed_to_the_half_widths_second_significant_digit():
+    assert mean_ci_text(27.0, 4.303) == "27.0 ± 4.3"
+    assert mean_ci_text(21.667, 1.434) == "21.7 ± 1.4"
+    assert mean_ci_text(2734.0, 143.0) == "2730 ± 140"
+    assert mean_ci_text(0.51234, 0.0213) == "0.512 ± 0.021"
+    assert mean_ci_text(5.123, 0.0996) == "5.12 ± 0.10"  # 0.0996 rounds up to 0.10: still two digits
+    assert mean_ci_text(-3.0, 140.0) == "0 ± 140"  # never "-0"
+    assert mean_ci_text(21.6667, 0.0) == "21.67 ± 0"
+    assert mean_ci_text(float("nan"), float("nan")) == "n/a"
+
+
+def test_fig5_and_fig7_tables_count_the_runs_that_reached_the_target():
+    from amronet.experiments import fig5, fig7
+
+    entry = {"map": "open-32x32", "r_c": 10.0, "runs": 4, "completed": 3, "ard_mean": 27.0, "ard_ci95": 4.303,
+             "ard_est_077": 7.9}
+    entry.update({f"{p}_{k}": 8 for p in ("r-strip", "hexagonal", "square", "triangular")
+                  for k in ("placed", "estimated")})
+    text = fig5._markdown([entry], [])
+    assert "| reached target |" in text and "runs done" not in text and "| 3/4 | 27.0 ± 4.3 |" in text
+    row = {"bases": 2, "agents_per_base": 1, "runs": 4, "completed": 3, "nodes_mean": 21.667, "nodes_ci95": 1.434,
+           "triangle_mean": 0.5}
+    text = fig7._markdown([row], [], "office-32x32", 6.0)
+    assert "| reached target |" in text and "runs done" not in text and "| 3/4 | 21.7 ± 1.4 | 0.5 |" in text
 
 
 def test_jobs_are_deterministic_and_ordered():

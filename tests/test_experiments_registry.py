@@ -51,7 +51,7 @@ def test_figures_are_a_registry_in_the_order_reproduce_all_runs_them():
 
 
 def test_figure_modules_are_imported_only_when_a_figure_runs():
-    code = ("import sys; from amronet.cli.main import _parser; _parser(); "
+    code = ("import sys; from amronet.cli.main import build_parser; build_parser(); "
             "print(sorted(m for m in sys.modules if m.startswith('amronet.experiments.fig')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"

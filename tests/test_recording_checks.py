@@ -50,6 +50,12 @@ def _meta(a: Arrays, **change) -> Arrays:
     return {**a, "meta": np.array(json.dumps({**json.loads(str(a["meta"])), **change}))}
 
 
+def _budget(a: Arrays, **change) -> Arrays:
+    """``a`` as a log-distance run with these link budget fields (numbers its radio could not have had)."""
+    meta = json.loads(str(a["meta"]))
+    return _meta(a, medium="log-distance", budget={**meta["budget"], **change})
+
+
 def _poke(arr: np.ndarray, index: tuple, value) -> np.ndarray:
     arr[index] = value
     return arr
@@ -90,13 +96,16 @@ CASES: list[tuple[str, Callable[[Arrays], Arrays], str]] = [
     ("links-beyond-robots", lambda a: _set(_linked(a), "link_pairs", lambda p: p + 100), "link_pairs"),
     ("links-half-stored", lambda a: {k: v for k, v in _linked(a).items() if k != "link_pairs"}, "link_pairs"),
     ("meta-r_c-negative", lambda a: _meta(a, r_c=-1.0), "meta.r_c"),
+    ("meta-budget-exponent-tiny", lambda a: _budget(a, exponent=1e-300), "meta.budget.exponent"),
+    ("meta-budget-shadowing-huge", lambda a: _budget(a, shadowing_db=1e6), "meta.budget.shadowing_db"),
+    ("meta-budget-clip-huge", lambda a: _budget(a, shadowing_clip=1e6, shadowing_db=5.0), "meta.budget"),
 ]
 
 # the cases the command line is run on: the ones of the issue, and one of each kind of damage
 CLI_CASES = ["quantum-nan", "quantum-inf", "quantum-zero", "quantum-negative", "resolution-zero",
              "resolution-negative", "resolution-nan", "status-wrong-shape", "status-wrong-dtype",
              "positions-wrong-shape", "positions-wrong-dtype", "n-more-robots-than-stored", "links-offsets-disagree",
-             "meta-r_c-negative"]
+             "meta-r_c-negative", "meta-budget-exponent-tiny", "meta-budget-shadowing-huge"]
 
 
 def _write(arrays: Arrays, folder: Path) -> Path:

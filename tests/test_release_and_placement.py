@@ -13,6 +13,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -106,3 +108,51 @@ def test_start_region_that_cannot_hold_the_robots_is_refused():
     assert err.value.field == "base_stations[0].region"
     assert "\n" not in str(err.value)
     assert "fewer robots" in str(err.value)
+
+
+def _region_scenario(per_base: int, region: list[float]):
+    return load_scenario("agent-assisted-office", overrides={
+        "map": "hospital_section", "agents.per_base": per_base,
+        "base_stations": [{"x": CORNER[0], "y": CORNER[1], "region": region}]})
+
+
+def _sides(message: str) -> list[float]:
+    found = re.search(r"a region of ([\d.]+) m x ([\d.]+) m holds them here", message)
+    assert found, message
+    return [float(found.group(1)), float(found.group(2))]
+
+
+@pytest.mark.parametrize(("per_base", "region"), [(3, [0.6, 0.6]), (6, [1.0, 1.0])])
+def test_a_region_too_small_says_which_region_holds_the_robots_there(per_base, region):
+    """The refusal names the smallest region (the given one scaled up, to 0.1 m) that holds them by the walls."""
+    scenario = _region_scenario(per_base, region)
+    with pytest.raises(ScenarioError) as err:
+        build_swarm(scenario, build_world(scenario), np.random.default_rng(1), r_start=5.7)
+    assert err.value.field == "base_stations[0].region" and "\n" not in str(err.value)
+    sides = _sides(err.value.message)
+    assert sides[0] > region[0] and sides[0] / region[0] == pytest.approx(sides[1] / region[1], abs=0.11)
+    enough = _region_scenario(per_base, sides)
+    for seed in (1, 2, 3):
+        swarm = build_swarm(enough, build_world(enough), np.random.default_rng(seed), r_start=5.7)
+        assert (swarm.role == Role.AGENT).sum() == per_base
+    smaller = _region_scenario(per_base, [round(s - 0.1, 6) for s in sides])
+    with pytest.raises(ScenarioError):  # 0.1 m less on each side holds them not (the packing does not)
+        build_swarm(smaller, build_world(smaller), np.random.default_rng(1), r_start=5.7)
+
+
+def test_a_region_too_small_by_its_floor_area_says_which_region_holds_them():
+    """Refused before the map is loaded (the bodies' area alone is too much): the message gives the square."""
+    from amronet.sim.guard import check_scenario
+
+    scenario = load_scenario("agent-assisted-office", overrides={
+        "agents.per_base": 9, "base_stations": [{"x": 16.0, "y": 1.5, "region": [0.4, 0.4]}]})
+    with pytest.raises(ScenarioError) as err:
+        check_scenario(scenario, r_start=5.7)
+    found = re.search(r"a ([\d.]+) m x \1 m region holds them in open floor", err.value.message)
+    assert found, err.value.message
+    side = float(found.group(1))
+    fitted = load_scenario("agent-assisted-office", overrides={
+        "map": "open-32x32", "agents.per_base": 9, "base_stations": [{"x": 16.0, "y": 16.0, "region": [side, side]}]})
+    check_scenario(fitted, r_start=5.7)
+    swarm = build_swarm(fitted, build_world(fitted), np.random.default_rng(1), r_start=5.7)
+    assert (swarm.role == Role.AGENT).sum() == 9

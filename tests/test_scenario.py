@@ -158,3 +158,81 @@ def test_a_scenario_file_with_inf_is_still_refused_where_a_finite_value_is_neede
     with pytest.raises(ScenarioError) as info:
         load_scenario(path)
     assert str(info.value).startswith("radio.r_c: input should be a finite number")
+
+
+# -- defaults that fit the algorithm: agent-assisted deployment, start regions -----------------------------------
+AGENTS = {"map": "office-32x32", "algorithm": {"name": "agent-assisted"}, "base_stations": [{"x": 1.0, "y": 1.0}],
+          "agents": {"per_base": 3}}
+"""An agent-assisted scenario as a user writes it: a map, the algorithm, one base station and its agents."""
+
+
+def test_agent_assisted_scenarios_default_to_no_free_routers_and_the_agents_range():
+    """Agents release the routers: none start free unless given, and ``r_c`` is the paper's agent-assisted 6 m."""
+    sc = load_scenario(AGENTS)
+    assert sc.routers.count == 0 and sc.radio.r_c == 6.0 and sc.agents.per_base == 3
+    assert load_scenario({**AGENTS, "agents": {}}).agents.per_base == 3
+    given = load_scenario({**AGENTS, "routers": {"count": 5}, "radio": {"r_c": 3.0}, "agents": {"per_base": 1}})
+    assert given.routers.count == 5 and given.radio.r_c == 3.0 and given.agents.per_base == 1
+    assert load_scenario({**AGENTS, "radio": {"threshold_dbm": -70.0}}).radio.r_c != 6.0  # the threshold's range
+    other = load_scenario({**AGENTS, "algorithm": {"name": "self-spreading"}})
+    assert other.routers.count == 30 and other.radio.r_c == 1.0
+    # the defaults are written out, so the scenario means the same wherever it is loaded again
+    again = load_scenario(sc.to_dict())
+    assert again.to_dict() == sc.to_dict()
+
+
+def test_a_default_start_region_holds_its_robots_and_stays_1_m_where_that_does():
+    from amronet.scenario.defaults import fitted_side
+
+    assert load_scenario(AGENTS).base_stations[0].region == (1.0, 1.0)
+    assert load_scenario(BASE).base_stations[0].region == (1.0, 1.0)  # 30 routers: the paper's 1 m x 1 m
+    twelve = load_scenario({**AGENTS, "agents": {"per_base": 12}}).base_stations[0].region
+    assert twelve[0] == twelve[1] > 1.0
+    given = load_scenario({**AGENTS, "base_stations": [{"x": 1.0, "y": 1.0, "region": [0.5, 0.5]}]})
+    assert given.base_stations[0].region == (0.5, 0.5)
+    assert fitted_side(12, 0.22, 0.165) == twelve[0] and fitted_side(10**7, 0.22, 0.165) > 1000.0
+
+
+@pytest.mark.parametrize("agents", [3, 9, 12, 20])
+def test_agents_start_in_a_default_region_in_open_floor(agents):
+    """Twelve agents did not fit the 1 m x 1 m region that was the default for every scenario."""
+    import numpy as np
+
+    from amronet.sim.assemble import build_swarm, build_world
+
+    sc = load_scenario({**AGENTS, "map": "open-32x32", "base_stations": [{"x": 16.0, "y": 16.0}],
+                        "agents": {"per_base": agents}})
+    for seed in (1, 2):
+        swarm = build_swarm(sc, build_world(sc), np.random.default_rng(seed), r_start=5.7)
+        assert len(swarm) == 1 + agents
+
+
+def test_a_minimal_agent_assisted_scenario_file_runs(tmp_path):
+    """The file a user writes first: map, algorithm, one base station, agents; it ran only with routers.count: 0."""
+    import amronet
+
+    path = tmp_path / "agents.yaml"
+    path.write_text("map: office-32x32\nalgorithm: {name: agent-assisted}\nbase_stations:\n  - {x: 1.0, y: 1.0}\n"
+                    "agents: {per_base: 3}\nsim: {time_limit: 120}\n")
+    result = amronet.run(amronet.load_scenario(path), seed=1)
+    s = result.summary
+    assert s["routers_total"] > 0 and s["agents_connected_min"] == 1.0 and s["coverage"] > 0.2
+
+
+def test_an_override_computes_the_defaults_that_follow_the_algorithm_and_the_robots_again():
+    """A sweep's point (or ``with_overrides``) with another algorithm or more agents gets the defaults that fit it;
+    fields the scenario gives stay as given."""
+    agents = load_scenario(AGENTS)
+    more = agents.with_overrides({"agents.per_base": 12})
+    assert more.base_stations[0].region == load_scenario({**AGENTS, "agents": {"per_base": 12}}).base_stations[0].region
+    assert more.base_stations[0].region != (1.0, 1.0) and more.routers.count == 0
+    back = agents.with_overrides({"algorithm.name": "self-spreading"})
+    assert back.routers.count == 30 and back.radio.r_c == 1.0
+    spreading = load_scenario({**BASE, "radio": {"r_c": 4.0}})
+    switched = spreading.with_overrides({"algorithm.name": "agent-assisted"})
+    assert switched.routers.count == 0 and switched.agents.per_base == 3 and switched.radio.r_c == 4.0
+    assert load_scenario(agents, {"agents.per_base": 12}).to_dict() == more.to_dict()
+    given = load_scenario({**AGENTS, "routers": {"count": 4}, "radio": {"r_c": 3.0},
+                           "base_stations": [{"x": 1.0, "y": 1.0, "region": [1.0, 1.0]}]})
+    kept = given.with_overrides({"agents.per_base": 12, "algorithm.name": "self-spreading"})
+    assert kept.routers.count == 4 and kept.radio.r_c == 3.0 and kept.base_stations[0].region == (1.0, 1.0)

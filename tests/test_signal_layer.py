@@ -90,7 +90,7 @@ def _wall_point() -> str:
     (["--node", "2.5,10", "--set", "sim.dt=1"], "--set: 'sim.dt' is not a radio field"),
     (["--node", "2.5,10", "--set", "radio.shadowing_db"], "--set: expected KEY=VALUE"),
     (["--node", "2.5,10", "--radio", "log-distance", "--set", "radio.shadowing_db=-2"],
-     "radio.shadowing_db: input should be greater than or equal to 0"),
+     "radio.shadowing_db: -2 dB is outside [0, 30] dB"),
     (["--node", "2.5,10", "--set", "radio.wall_db=3"], "radio.wall_db: the unit-disk model has no walls"),
     (["--node", "2.5,10", "--r-c", "-1"], "radio.r_c: input should be greater than 0"),
     (["--node", "2.5,10", "--r-c", "wide"], "--r-c: 'wide' is not a number"),

@@ -1,5 +1,6 @@
 import csv
 import json
+import re
 
 import pytest
 from PIL import Image
@@ -22,11 +23,47 @@ def swept(tmp_path, capsys):
 
 def test_sweep_prints_a_table_and_resumes_nothing_twice(swept, capsys):
     path, store, out = swept
-    assert "radio.r_c" in out and "nodes_total" in out and "8 runs: 0 already in the store, 8 done" in out
+    assert "nodes_total" in out and "8 runs: 0 already in the store, 8 done" in out
+    header = next(line for line in out.splitlines() if "nodes_total" in line)
+    assert "radio.r_c" not in header and re.search(r"\br_c\b.*\btriangular\b", header)  # short names
+    assert re.search(r"\b0\.8 +. local +. +2/2", out)  # the point's values, not its index
     assert main(["sweep", str(path), "--store", str(store), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert (doc["runs"], doc["already_in_store"], doc["done_now"]) == (8, 8, 0)
     assert [p["runs"] for p in doc["points"]] == [2, 2, 2, 2]
+    assert all(len(p["scenario_hash"]) == 64 for p in doc["points"])
+    assert main(["sweep", str(path), "--store", str(store), "--hash"]) == 0
+    assert doc["points"][0]["scenario_hash"][:12] in capsys.readouterr().out
+
+
+def test_sweep_table_gives_mean_and_ci_to_the_same_decimal_place(swept):
+    _, _, out = swept
+    cells = re.findall(r"(-?\d+(?:\.(\d+))?) ± (\d+(?:\.(\d+))?)", out)
+    assert len(cells) == 4
+    for _, mean_decimals, half, half_decimals in cells:
+        assert mean_decimals == "" or len(mean_decimals) == len(half_decimals)
+        if float(half) > 0:  # the half-width to two significant digits
+            assert len(half.replace(".", "").lstrip("0")) == 2
+
+
+def test_results_name_runs_by_their_point_and_keep_the_hash_for_scripts(swept, capsys):
+    _, store, _ = swept
+    with ResultStore(store) as st:
+        hashes = {r["scenario_hash"][:12] for r in st.runs()}
+    assert main(["results", str(store), "--limit", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "r_c=0.8, triangular=local" in out and "r_c=1.0, triangular=none" in out
+    assert not any(h in out for h in hashes)
+    rows = [line for line in out.splitlines() if "r_c=" in line]
+    assert len(rows) == 8 and "r_c=0.8, triangular=local" in rows[0]  # in point order
+    assert main(["results", str(store), "--hash"]) == 0
+    out = capsys.readouterr().out
+    assert all(h in out for h in hashes)
+    assert main(["results", str(store), "--json"]) == 0
+    runs = json.loads(capsys.readouterr().out)["runs"]
+    assert {r["scenario_hash"][:12] for r in runs} == hashes
+    assert {(r["point"]["radio.r_c"], r["point"]["algorithm.params.triangular"]) for r in runs} == {
+        (0.8, "local"), (0.8, "none"), (1.0, "local"), (1.0, "none")}
 
 
 def test_results_lists_and_exports_tidy_tables(swept, tmp_path, capsys):

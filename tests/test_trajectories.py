@@ -29,9 +29,14 @@ def write(tmp_path, text, name="paths.csv"):
 
 
 def with_paths(tmp_path, csv_text, **over):
-    """The open-field agent scenario of the helpers with a trajectory file (one agent per base unless told)."""
+    """The open-field agent scenario of the helpers with a trajectory file (one agent per base unless told).
+
+    Agents without a path explore with the paper's ``random`` walk, named here (the default is ``frontier``): the
+    tests were written for agents that stay near their base station while the paths are followed.
+    """
     path = write(tmp_path, csv_text)
-    return open_field_agents(**{"agents.per_base": 1, "agents.trajectories": str(path), **over})
+    return open_field_agents(**{"agents.per_base": 1, "agents.trajectories": str(path),
+                                "algorithm.params.explorer": "random", **over})
 
 
 # -- parsing ------------------------------------------------------------------------------------------------------

@@ -251,3 +251,21 @@ def test_links_thin_out_when_there_are_many(omap):
                                       status=np.zeros(n, int), links=links, r_c=0.2), dpi=DPI)
     coll = next(c for c in fig.axes[0].collections if c.get_zorder() == 2)
     assert coll.get_linewidth()[0] <= 0.2 and coll.get_edgecolor()[0][3] <= 0.25
+
+
+def test_a_faulted_runs_snapshot_draws_without_warnings():
+    import warnings
+
+    import amronet
+    from amronet.viz.run_snapshot import run_snapshot_figure
+
+    scenario = amronet.load_scenario("self-spreading-6x6", overrides={
+        "sim.time_limit": 40.0, "faults": [{"at": 30.0, "routers": 0.5}]})
+    result = amronet.run(scenario, seed=2)
+    assert result.summary["faults"]["nodes_failed"] > 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # matplotlib warned about an edge colour on the failed nodes' crosses
+        fig = run_snapshot_figure(result, dpi=DPI)
+        fig.canvas.draw()
+    crosses = [c for c in fig.axes[0].collections if c.get_zorder() == 3.6]  # STYLE["failed"]'s z-order
+    assert len(crosses) == 1 and len(crosses[0].get_offsets()) == result.summary["faults"]["nodes_failed"]

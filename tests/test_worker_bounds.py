@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from amronet import limits
 from amronet.cli import main
 from amronet.errors import AmronetError
-from amronet.sweeps import executors, worker_bounds
+from amronet.sweeps import local_pool, worker_bounds
 from amronet.sweeps.engine import run_sweep
 from amronet.sweeps.executors import LocalExecutor, make_executor
 from amronet.sweeps.spec import sweep_from_spec
@@ -160,7 +160,7 @@ def test_sweep_of_two_runs_with_three_workers_starts_at_most_two(tmp_path, capsy
             counts.append(len(pool_workers()))  # the pool's processes, all forked at its first job
             super().shutdown(*args, **kwargs)
 
-    monkeypatch.setattr(executors, "ProcessPoolExecutor", Counted)
+    monkeypatch.setattr(local_pool, "ProcessPoolExecutor", Counted)
     path = write_sweep(tmp_path / "tiny.yaml", tiny_sweep(radii=(0.8, 1.0), seeds=1))
     assert main(["sweep", str(path), "--store", str(tmp_path / "r.sqlite"), "--workers", "3", "--force", "-q"]) == 0
     assert counts and max(counts) <= 2, counts

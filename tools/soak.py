@@ -29,7 +29,7 @@ The run is stepped by hand and checked every few steps (every step for connectiv
 
 The paper's distance rules promise connectivity only where a link is decided by distance: a ``router_cut_off``
 under shadowing or packet loss, and an ``agents_disconnected`` anywhere but on the unit disk without packet loss
-with unlimited routers, is counted as *known* (docs/model.md, "What the paper's rules do under a real radio"), not as a
+with unlimited routers, is counted as *known* (docs/radio.md, "What the paper's rules do under a real radio"), not as a
 failure. A ``ScenarioError`` from loading or setting up a draw (e.g. a start region too small for its robots)
 counts as *refused*. Any other exception is a *crash*. The exit status is 1 when there was a crash, a hang or a
 failing violation, and every failure prints the one command that replays it.

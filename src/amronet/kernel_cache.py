@@ -31,8 +31,8 @@ A cache entry that cannot be loaded (an empty, truncated or garbled index or dat
 fatal (:mod:`amronet.kernel_cache_repair`, installed by :func:`configure`); :func:`clear` (``amronet compile
 --fresh``) empties the folder of the kernels' present source.
 
-This module must run before any module with kernels is imported: ``amronet/__init__.py`` calls
-:func:`configure` first.
+:func:`configure` must run before the first kernel is defined: :mod:`amronet.numba_setup` (installed by
+``amronet/__init__.py``) calls it as soon as numba is imported.
 """
 
 from __future__ import annotations

@@ -1,11 +1,11 @@
 """Resource guards: what a job would cost, estimated from its inputs before anything is allocated.
 
 Every entry point that allocates in proportion to a number the user gives (robots, map cells, steps, sweep
-points, a recording's arrays, pattern lattice points, worker processes) first multiplies that number by a
-documented cost per item and compares the result with the machine: a job that cannot fit in the memory available
-now is refused (one line saying how much it would need and how much there is, and the fix), and a job that fits
-but would take absurdly long is refused unless the user acknowledges it (``--force`` on the command line,
-``force=True`` in Python). Nothing is allocated or written before the check.
+points, a recording's arrays, pattern lattice points, worker processes, the nodes of a signal map) first
+multiplies that number by a documented cost per item and compares the result with the machine: a job that cannot
+fit in the memory available now is refused (one line saying how much it would need and how much there is, and the
+fix), and a job that fits but would take absurdly long is refused unless the user acknowledges it (``--force`` on
+the command line, ``force=True`` in Python). Nothing is allocated or written before the check.
 
 The per-item costs are measured peaks on 64-bit Linux with NumPy 2, rounded up (see each constant); the estimates
 are deliberately coarse and err on the high side, since they guard the machine, not budget it. This module sits at
@@ -32,11 +32,14 @@ __all__ = [
     "BYTES_PER_SWEEP_POINT",
     "BYTES_PER_SWEEP_RUN",
     "BYTES_PER_WORKER",
+    "MAX_COUNT",
     "MAX_PATTERN_WORK",
     "MAX_ROBOT_STEPS",
+    "MAX_SIGNAL_WORK",
     "MAX_STEPS",
     "MAX_SWEEP_POINTS",
     "MAX_SWEEP_RUNS",
+    "SIGNAL_CELL_WITHOUT_WALLS",
     "available_memory",
     "check_memory",
     "check_work",
@@ -107,6 +110,21 @@ MAX_PATTERN_WORK = 20_000_000
 """Lattice points times candidate offsets of one pattern placement (about 6 us each on a 2-core machine): two
 minutes a pattern; at the default 16 steps (about 720 offsets) some 28 000 lattice points, e.g. 160 m x 160 m at
 ``r`` = 1 m."""
+
+MAX_SIGNAL_WORK = 2 * 10**8
+"""Nodes times the map cells within each one's signal reach, of one signal map (``amronet radio-map``): about 0.3 us
+each when walls are counted, on an idle 2-core machine (263 nodes over the 409 600 cells of ``office-32x32`` under
+``multi-wall``, 1.1 x 10^8, took 30 s; two to three times that while other jobs ran), so a minute. A cell of a
+radio without walls counts :data:`SIGNAL_CELL_WITHOUT_WALLS`."""
+
+SIGNAL_CELL_WITHOUT_WALLS = 0.125
+"""What a node-cell costs without walls to count, as a share of one with them (measured: a fifteenth for the unit
+disk, a ninth for ``log-distance``)."""
+
+MAX_COUNT = 10**12
+"""The largest whole number a scenario field takes (robots, node ids, steps of a rule, steps between records): far
+more than any machine holds (10^9 robots at :data:`BYTES_PER_ROBOT` are 2 TB) or steps through, and exact in a
+float and in the compiled kernels' 64-bit integers, which a larger one would overflow."""
 
 ACKNOWLEDGE = "or acknowledge it with --force (force=True in Python)"
 """How a user acknowledges absurd work, as the messages say it."""

@@ -9,7 +9,8 @@ medium's neighbour table (who hears whom, how far). A robot's decision reads its
 it hears; nothing else of the world reaches a controller: not the map, not the scenario, not the loop. Metrics and
 stop conditions live in :mod:`amronet.sim`, not here. What the loop needs to know of an algorithm it asks through
 the declared interface below (:meth:`Controller.start_range`, :attr:`Controller.default_coverage_target`,
-:meth:`Controller.unsettled`, :attr:`Controller.follows_paths`, :meth:`Controller.fast_step`).
+:meth:`Controller.unsettled`, :attr:`Controller.follows_paths`, :meth:`Controller.fast_step`); what the scenario
+needs to know, through :attr:`Controller.scenario_defaults`.
 """
 
 from __future__ import annotations
@@ -160,6 +161,9 @@ class Controller(ABC):
     """The coverage at which a run of this algorithm ends when the scenario sets none (``None``: no target)."""
     follows_paths: ClassVar[bool] = False
     """Whether the controller drives agents along given paths (:attr:`Setup.paths`, ``agents.trajectories``)."""
+    scenario_defaults: ClassVar[dict[str, Any]] = {}
+    """Scenario fields (``section.field``) that take these values when a scenario of this algorithm leaves them out,
+    instead of the schema's defaults (:mod:`amronet.scenario.defaults`)."""
 
     def __init__(self, params: BaseModel, setup: Setup) -> None:
         self.params = params

@@ -17,20 +17,20 @@ from amronet.cli.common import add_executor_arguments, make_executor_from_args
 from amronet.errors import AmronetError
 from amronet.version import __version__
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from amronet.outputs.files import check_output_folder
     from amronet.scenario import load_scenario, parse_override
-    from amronet.sim import Simulation
-    from amronet.sim.results import RunResult  # noqa: F401 - import cost paid here, not for --help
 
     if (args.scenario is None) == (args.preset is None):
         raise AmronetError("run: give either a scenario file or --preset NAME (amronet presets lists them)")
     check_output_folder(args.out)
     overrides = dict(parse_override(item) for item in args.set or [])
     scenario = load_scenario(args.scenario if args.scenario is not None else args.preset, overrides)
+    from amronet.sim import Simulation  # numba and scipy: imported once the scenario is accepted
+
     sim = Simulation(scenario, args.seed, force=args.force, step=args.step)
     quiet = args.quiet
     from amronet.cli.viz import make_recorder
@@ -51,19 +51,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
         snapshot = run_snapshot_png(result)
     result.save(args.out, snapshot=snapshot)
-    s = result.summary
     if not quiet:
-        model = s["scenario"]["radio"]["model"]
-        radio = "" if model == "unit-disk" else f", {model} radio"
-        print(f"{s['algorithm']} on {s['map']} (seed {s['seed']}, r_c = {s['r_c']:g} m{radio}): "
-              f"{s['stop_reason']} after {s['sim_time_s']:g} s simulated, {s['wall_time_s']:.1f} s wall")
-        bases = s['nodes_total'] - s['routers_deployed']
-        print(f"  nodes: {s['nodes_total']} (routers deployed: {s['routers_deployed']} of {s['routers_total']}, "
-              f"base nodes: {bases}); states {s['states']}")
-        print(f"  coverage {100 * s['coverage']:.2f} %, connected coverage {100 * s['connected_coverage']:.2f} % "
-              f"of {s['reachable_area_m2']:.1f} m² reachable ({s['coverage_method']})")
-        print(f"  wrote {args.out}/: summary.json timeseries.csv network.json"
-              + ("" if args.no_snapshot else " snapshot.png") + (" recording.npz" if recorder.full else ""))
+        from amronet.outputs.console import run_lines, wrote_line
+
+        files = ["summary.json", "timeseries.csv", "network.json", *([] if args.no_snapshot else ["snapshot.png"]),
+                 *(["recording.npz"] if recorder.full else [])]
+        print("\n".join([*run_lines(result.summary), wrote_line(args.out, files)]))
     return 0
 
 
@@ -119,40 +112,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_compile(args: argparse.Namespace) -> int:
-    from amronet.sim.warmup import warm_up
-
-    if args.jobs < 1:
-        raise AmronetError(f"--jobs: must be >= 1, got {args.jobs}")
-    if args.fresh:
-        from amronet import kernel_cache
-
-        removed = kernel_cache.clear()
-        if removed is None:
-            mine = os.environ.get("NUMBA_CACHE_DIR")
-            raise AmronetError(f"--fresh: the kernel cache is your NUMBA_CACHE_DIR ({mine}), which amronet does not "
-                               "empty; remove its .nbi and .nbc files yourself, or unset NUMBA_CACHE_DIR" if mine else
-                               "--fresh: amronet has no kernel cache folder of its own here (its cache home cannot be "
-                               "written; numba's default __pycache__ applies): nothing to empty")
-        if not args.quiet:
-            files = "file" if removed == 1 else "files"
-            print(f"emptied the kernel cache {kernel_cache.cache_folder()} ({removed} {files} removed); "
-                  "compiling afresh")
-
-    def progress(label: str, seconds: float) -> None:
-        if not args.quiet:
-            print(f"{seconds:7.1f} s  {label}")
-
-    try:
-        seconds = warm_up(jobs=args.jobs, progress=progress)
-    except KeyboardInterrupt:  # not "nothing was written": what was compiled stays in the cache, and is sound
-        print("amronet: interrupted; the kernels compiled so far stay cached, runs compile the rest",
-              file=sys.stderr)
-        return 130
-    print(f"amronet's kernels are compiled and cached ({seconds:.1f} s): a first run no longer compiles")
-    return 0
-
-
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from amronet.experiments.common import STORE_FILES
     from amronet.experiments.registry import FIGURES, check_options, group
@@ -187,7 +146,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
+    """The ``amronet`` command's parser, with every subcommand (the CLI reference is generated from it)."""
     p = argparse.ArgumentParser(prog="amronet", description="Build and evaluate Ad-hoc Mobile Router Networks.")
     p.add_argument("--version", action="version", version=f"amronet {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -238,6 +198,12 @@ def _parser() -> argparse.ArgumentParser:
     from amronet.cli.radio_map import add_parser as add_radio_map_parser
 
     add_radio_map_parser(sub)
+    from amronet.cli.optimum import add_parser as add_optimum_parser
+
+    add_optimum_parser(sub)
+    from amronet.cli.radio_fit import add_parser as add_radio_fit_parser
+
+    add_radio_fit_parser(sub)
 
     rp = sub.add_parser(
         "reproduce", help="run one of the paper's experiments (figures) end to end",
@@ -263,16 +229,9 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("-q", "--quiet", action="store_true")
     rp.set_defaults(func=_cmd_reproduce)
 
-    c = sub.add_parser("compile", help="compile the simulator's kernels into numba's cache (make does it once at "
-                                       "installation, so that a first run does not spend tens of seconds compiling)")
-    c.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
-                   help="worker processes (default: 2, or 1 on a one-core machine)")
-    c.add_argument("--fresh", action="store_true",
-                   help="first remove the kernels already compiled into amronet's cache folder (and its warm-up "
-                        "notes), then compile them all again; a damaged cache entry needs no --fresh: runs "
-                        "recompile it by themselves. Refused when NUMBA_CACHE_DIR (your own folder) is set")
-    c.add_argument("-q", "--quiet", action="store_true", help="print only the closing line")
-    c.set_defaults(func=_cmd_compile)
+    from amronet.cli.compile import add_parser as add_compile_parser
+
+    add_compile_parser(sub)
 
     b = sub.add_parser("bench", help="measure robot-steps per second of an algorithm's full step")
     b.add_argument("--algorithm", default="self-spreading")
@@ -292,14 +251,14 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``amronet`` command."""
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     try:
         return args.func(args)
     except AmronetError as exc:
         print(f"amronet: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("amronet: interrupted; nothing was written", file=sys.stderr)
+    except KeyboardInterrupt as exc:  # a sweep's runs (reproduce): SweepInterrupted says what its store holds
+        print(f"amronet: {exc}" if str(exc) else "amronet: interrupted; nothing was written", file=sys.stderr)
         return 130
     except BrokenPipeError:
         # the reader of stdout went away (amronet results STORE | head -1): stop quietly, as other tools do;

@@ -42,12 +42,16 @@ def cmd_plan(args: argparse.Namespace) -> int:
         raise AmronetError("--base: give at least one base station as --base X,Y")
     if args.time_limit <= 0 or not math.isfinite(args.time_limit):
         raise AmronetError(f"--time-limit: must be a finite number > 0, got {args.time_limit:g}")
+    if args.optimum is not None and not (math.isfinite(args.optimum) and args.optimum > 0):
+        raise AmronetError(f"--optimum: must be a number of seconds > 0, got {args.optimum:g}")
     with make_executor_from_args(args) as executor:
         options = RunOptions(explorer=args.explorer, time_limit=args.time_limit, seed=args.seed, store=args.store,
                              executor=executor, show_progress=not args.quiet and not args.json,
                              retry_failed=args.retry_failed)
         p = plan(args.map, bases, r_c=args.rc, agents_per_base=args.agents, runs=args.runs,
                  confidence=args.confidence, options=options, mission=_mission(args))
+    if args.optimum is not None:
+        p.optimum = _optimum(args, bases)
     picture = None
     if args.out:
         write_plan(p, args.out, keep=keep)
@@ -58,10 +62,23 @@ def cmd_plan(args: argparse.Namespace) -> int:
     elif not args.quiet:
         print(p.markdown(picture=None), end="")
         if args.out:
-            print(f"wrote {args.out}/: plan.json plan.md" + (" typical.png" if p.typical_seed is not None else ""))
+            from amronet.outputs.console import folder_name
+
+            print(f"wrote {folder_name(args.out)}: plan.json plan.md"
+                  + (" typical.png" if p.typical_seed is not None else ""))
     for line in p.warnings if not args.json else []:
         print(f"amronet: warning: {line}", file=sys.stderr)
     return 0 if p.recommended is not None else 1
+
+
+def _optimum(args: argparse.Namespace, bases: list[tuple[float, float]]) -> dict[str, Any]:
+    """``--optimum SECONDS``: the fewest routers on a lattice of ``r_c / 2`` (:func:`amronet.optimum.find_optimum`)."""
+    from amronet.optimum import find_optimum
+
+    radio = _mission(args).radio
+    opt = find_optimum(args.map, bases, args.rc, args.rc / 2, radio=radio, seed=args.seed, time_limit=args.optimum)
+    return {"routers": opt.count, "lower_bound": opt.lower, "gap": opt.gap, "optimal": opt.optimal,
+            "spacing_m": opt.spacing, "time_limit_s": args.optimum, "solver_status": opt.solver["status"]}
 
 
 def _mission(args: argparse.Namespace) -> Mission:
@@ -140,6 +157,9 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--trajectories", metavar="CSV",
                    help="the agents' paths (columns t, agent, x, y): plan a replayed or planned mission")
     p.add_argument("--time-limit", type=float, default=6000.0, help="simulated seconds per run at most")
+    p.add_argument("--optimum", type=float, nargs="?", const=60.0, metavar="SECONDS",
+                   help="also the fewest routers on a lattice of r_c / 2 (amronet optimum) and the recommendation's "
+                        "ratio to it, searched for SECONDS (default 60)")
     p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--store", help="keep the runs in this result store (and reuse them next time)")
     p.add_argument("--retry-failed", action="store_true",

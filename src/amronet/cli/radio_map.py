@@ -12,13 +12,20 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from amronet.cli.common import parse_point
 from amronet.errors import AmronetError
+from amronet.limits import MAX_SIGNAL_WORK, SIGNAL_CELL_WITHOUT_WALLS, check_work, format_count
 
-__all__ = ["add_parser", "parse_node"]
+__all__ = ["PROGRESS_WORK", "add_parser", "parse_node"]
+
+PROGRESS_WORK = 2 * 10**7
+"""Node-cells (see :data:`amronet.limits.MAX_SIGNAL_WORK`) from which a map says how far it is (about 5 s)."""
 
 
 def parse_node(text: str) -> tuple[float, float]:
@@ -67,6 +74,26 @@ def _radio_overrides(args: argparse.Namespace) -> dict[str, Any]:
     return fields
 
 
+def _progress(work: int, quiet: bool) -> Callable[[int, int], None] | None:
+    """How a map of ``work`` node-cells reports its progress on stderr; ``None``: a short map, or ``--quiet``.
+
+    On a terminal one line updated in place; elsewhere (a log, a pipe) a line at each quarter.
+    """
+    if quiet or work < PROGRESS_WORK:
+        return None
+    live, start, quarter = sys.stderr.isatty(), time.perf_counter(), [1]
+
+    def report(done: int, total: int) -> None:
+        line = f"radio map: {done} of {total} nodes ({time.perf_counter() - start:.0f} s)"
+        if live:
+            print(f"\r  {line}", end="\n" if done == total else "", file=sys.stderr, flush=True)
+        elif done < total and 4 * done >= quarter[0] * total:
+            quarter[0] = 4 * done // total + 1
+            print(line, file=sys.stderr, flush=True)
+
+    return report
+
+
 def _cmd_radio_map(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -105,9 +132,17 @@ def _cmd_radio_map(args: argparse.Namespace) -> int:
     scenario = load_scenario({"name": "radio-map", "map": omap.name,
                               "base_stations": [{"x": float(nodes[0, 0]), "y": float(nodes[0, 1])}]}, radio)
     medium = build_medium(scenario, omap, np.random.default_rng(seed), packet_loss=False)
+    reach = medium.signal_reach(-SPAN_DB)
+    cells = medium.heard.cells_in_reach(omap, nodes, reach)
+    walls = medium.hearing.wall_db > 0
+    work = cells if walls else cells * SIGNAL_CELL_WITHOUT_WALLS
+    check_work(work, MAX_SIGNAL_WORK, "--node",
+               f"{len(nodes)} nodes x the cells within {min(reach, math.hypot(*omap.size_m)):.3g} m of each = "
+               f"{format_count(cells)} node-cells{'' if walls else ' (counted at an eighth: no walls)'}",
+               "give fewer --node points", args.force, error=AmronetError, acknowledge="or acknowledge it with --force")
     budget = medium.budget
     threshold = budget.threshold_dbm
-    signal = medium.signal_dbm(omap, nodes, floor_db=-SPAN_DB)
+    signal = medium.signal_dbm(omap, nodes, floor_db=-SPAN_DB, progress=_progress(work, args.quiet))
     model = scenario.radio.model
     walls = f", {budget.wall_db:g} dB per wall" if budget.wall_db > 0 else ""
     shadowing = f", shadowing {budget.shadowing_db:g} dB (seed {seed})" if budget.shadowing_db > 0 else ""
@@ -139,5 +174,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", default="0", help="seed of the shadowing field, as a run's (default 0)")
     p.add_argument("--out", required=True, help="picture to write (.png or .svg)")
     p.add_argument("--dpi", default="150", help="resolution (default 150)")
+    p.add_argument("--force", action="store_true", help="draw even when the map would take absurdly long (more "
+                   f"than {MAX_SIGNAL_WORK:.0e} nodes x cells within their signal reach)")
     p.add_argument("-q", "--quiet", action="store_true")
     p.set_defaults(func=_cmd_radio_map)

@@ -64,9 +64,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         try:
             report = run_sweep(sweep, args.store, executor, retry_failed=args.retry_failed,
                                show_progress=not args.quiet)
-        except KeyboardInterrupt:
-            print(f"amronet: interrupted; every finished run is in {args.store}: run the same command again to "
-                  "finish the sweep", file=sys.stderr)
+        except KeyboardInterrupt as exc:  # a SweepInterrupted says what the store holds
+            print(f"amronet: {exc}" if str(exc) else f"amronet: interrupted; every finished run is in {args.store}: "
+                  "run the same command again to finish the sweep", file=sys.stderr)
             return 130
     with ResultStore(args.store, must_exist=True) as store:
         rows = run_rows(store, report.sweep_id)
@@ -77,13 +77,18 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                           "failed": failed, "finished_elsewhere": report.elsewhere, "wall_time_s": report.wall_time_s,
                           "points": point_summary(rows, sweep.keys)}, indent=2, default=str))
     elif not args.quiet:
+        from amronet.sweeps.point_names import short_keys, value_text
+        from amronet.sweeps.stats import mean_ci_text
+
         table = Table(title=f"{sweep.name} ({args.store})")
-        for col in ("point", *sweep.keys, "runs", "failed", "nodes_total (mean ± 95 % CI)", "coverage %",
-                    "connected %", "stop"):
-            table.add_column(col, justify="left" if col in sweep.keys or col == "stop" else "right")
+        names = short_keys(sweep.keys)  # the point's values under their keys' last names (r_c, triangular)
+        for col in (*names.values(), *(["scenario"] if args.hash else []), "runs", "failed",
+                    "nodes_total (mean ± 95 % CI)", "coverage %", "connected %", "stop"):
+            table.add_column(col, justify="right" if col in ("runs", "failed") or "%" in col else "left")
         for e in point_summary(rows, sweep.keys):
-            table.add_row(str(e["point"]), *(_fmt(e[k]) for k in sweep.keys), f"{e['done']}/{e['runs']}",
-                          str(e["failed"]), f"{_fmt(e['nodes_total_mean'])} ± {_fmt(e['nodes_total_ci95'])}",
+            table.add_row(*(value_text(e[k]) for k in sweep.keys), *([e["scenario_hash"][:12]] if args.hash else []),
+                          f"{e['done']}/{e['runs']}", str(e["failed"]),
+                          mean_ci_text(e["nodes_total_mean"], e["nodes_total_ci95"]),
                           _fmt(100 * e["coverage_mean"]), _fmt(100 * e["connected_coverage_mean"]), e["stop_reason"])
         _console().print(table)
         elsewhere = f", {report.elsewhere} by another sweep on the store" if report.elsewhere else ""
@@ -113,16 +118,22 @@ def cmd_results(args: argparse.Namespace) -> int:
         if args.export:
             check_output_folder(args.out)
             counts = export_tables(store, args.export, args.out, sweep_id)
-            print(f"wrote {args.out}/: " + ", ".join(f"{name} ({n} rows)" for name, n in counts.items()))
+            from amronet.outputs.console import folder_name
+
+            print(f"wrote {folder_name(args.out)}: " + ", ".join(f"{name} ({n} rows)" for name, n in counts.items()))
             return 0
         sweeps = store.sweeps()
         runs = store.runs(sweep_id)
+        links = store.links(sweep_id)
+    labels, order = _points(runs, links)
     if args.failed:
         runs = [r for r in runs if r["status"] == "failed"]
     if args.json:
         keep = ("scenario_hash", "seed", "status", "error", "nodes_total", "routers_deployed", "coverage",
                 "connected_coverage", "stop_reason", "sim_time_s", "wall_time_s", "finished_at")
-        print(json.dumps({"sweeps": sweeps, "runs": [{k: r.get(k) for k in keep} for r in runs]}, indent=2))
+        print(json.dumps({"sweeps": sweeps, "runs": [{**{k: r.get(k) for k in keep},
+                                                      "point": labels.get((r["scenario_hash"], r["seed"]))}
+                                                     for r in runs]}, indent=2))
         return 0
     console = _console()
     st = Table(title=f"sweeps in {args.store}")
@@ -131,18 +142,53 @@ def cmd_results(args: argparse.Namespace) -> int:
     for s in sweeps:
         st.add_row(*(str(s[c]) for c in ("id", "name", "created", "runs", "done", "failed", "missing")))
     console.print(st)
+    runs = sorted(runs, key=lambda r: order.get((r["scenario_hash"], r["seed"]), len(order)))  # by point, seed
     shown = runs if args.limit == 0 else runs[: args.limit]
     rt = Table(title="runs" + (f" of sweep {args.sweep}" if args.sweep else "") + (" (failed)" if args.failed else ""))
-    for col in ("scenario", "seed", "status", "nodes_total", "coverage %", "stop", "wall s", "error"):
+    for col in ("point", *(["scenario"] if args.hash else []), "seed", "status", "nodes_total", "coverage %", "stop",
+                "wall s", "error"):
         rt.add_column(col, justify="right" if col in ("seed", "nodes_total", "coverage %", "wall s") else "left")
+    names = _short_names(labels.values())
     for r in shown:
+        key = (r["scenario_hash"], r["seed"])
         cov = "" if r["coverage"] is None else f"{100 * r['coverage']:.2f}"
-        rt.add_row(r["scenario_hash"][:12], str(r["seed"]), r["status"], _fmt(r["nodes_total"]), cov,
-                   _fmt(r["stop_reason"]), _fmt(r["wall_time_s"]), _fmt(r["error"]))
+        point = _point_text(labels[key], names) if key in labels else f"scenario {r['scenario_hash'][:12]}"
+        rt.add_row(point, *([r["scenario_hash"][:12]] if args.hash else []), str(r["seed"]), r["status"],
+                   _fmt(r["nodes_total"]), cov, _fmt(r["stop_reason"]), _fmt(r["wall_time_s"]), _fmt(r["error"]))
     console.print(rt)
     if len(shown) < len(runs):
         print(f"... and {len(runs) - len(shown)} more runs (--limit 0 shows all)")
     return 0
+
+
+def _points(runs: list[dict[str, Any]], links: list[dict[str, Any]]
+            ) -> tuple[dict[tuple[str, int], dict[str, Any]], dict[tuple[str, int], int]]:
+    """Each run's point labels and its place in (sweep, point, seed) order, by ``(scenario_hash, seed)``.
+
+    A run in several sweeps takes its first sweep's labels; the runs of one sweep carry their own.
+    """
+    labels: dict[tuple[str, int], dict[str, Any]] = {}
+    order: dict[tuple[str, int], int] = {}
+    for link in links:
+        key = (link["scenario_hash"], link["seed"])
+        labels.setdefault(key, link["labels"])
+        order.setdefault(key, len(order))
+    for r in runs:
+        if r.get("labels") is not None:
+            labels[(r["scenario_hash"], r["seed"])] = r["labels"]
+    return labels, order
+
+
+def _short_names(labels: Any) -> dict[str, str]:
+    from amronet.sweeps.point_names import short_keys, varied_keys
+
+    return short_keys(varied_keys(labels))
+
+
+def _point_text(labels: dict[str, Any], names: dict[str, str]) -> str:
+    from amronet.sweeps.point_names import point_text
+
+    return point_text(labels, names) or "(one point)"
 
 
 def default_plot_name(x: str, y: str, hue: str | None = None) -> str:
@@ -183,7 +229,8 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
                    help="with Dask: stop when the scheduler has had no worker for this long (default 300; 0 waits "
                         "forever); the finished runs stay in the store")
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded as failed")
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON (with each point's scenario_hash)")
+    p.add_argument("--hash", action="store_true", help="also list each point's scenario hash (its key in the store)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no table")
     p.add_argument("--force", action="store_true", help="run a sweep of more than 100 000 points or 1 000 000 runs "
                                                         "(refused otherwise as absurdly long), or start more "
@@ -197,7 +244,9 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     r.add_argument("--limit", type=int, default=20, help="runs to list (default 20; 0 for all)")
     r.add_argument("--export", choices=["csv", "parquet"], help="write tidy tables instead of listing")
     r.add_argument("--out", metavar="DIR", help="folder for --export (replaced atomically)")
-    r.add_argument("--json", action="store_true", help="print sweeps and runs as JSON")
+    r.add_argument("--json", action="store_true", help="print sweeps and runs as JSON (with each run's "
+                                                         "scenario_hash and point)")
+    r.add_argument("--hash", action="store_true", help="also list each run's scenario hash (its key in the store)")
     r.set_defaults(func=cmd_results)
 
     g = subparsers.add_parser("plot", help="plot a metric (mean, 95 %% CI) against a parameter from a result store")

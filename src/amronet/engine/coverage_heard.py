@@ -8,6 +8,8 @@ theirs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from amronet.engine.coverage import CoverageArea
@@ -79,18 +81,42 @@ class HeardCells:
             del boxes[key]  # positions not met in the last three calls
         return covered
 
-    def best_margins(self, omap: OccupancyMap, xy: np.ndarray, floor_db: float, reach: float) -> np.ndarray:
+    def best_margins(self, omap: OccupancyMap, xy: np.ndarray, floor_db: float, reach: float,
+                     progress: Callable[[int, int], None] | None = None) -> np.ndarray:
         """Best margin (dB) at every cell centre of ``omap`` over the nodes ``xy``; ``-inf`` below ``floor_db``.
 
-        No margin at or above ``floor_db`` is farther than ``reach`` (which may be infinite).
+        No margin at or above ``floor_db`` is farther than ``reach`` (which may be infinite). With ``progress``, the
+        nodes go to the kernel in about a hundred slices, and ``progress(done, total)`` is called after each (the
+        maximum over the nodes is the same whatever the slices).
 
         Raises:
             ValueError: ``xy`` has non-finite coordinates.
         """
         xy = _finite(xy)
         out = np.full(omap.shape, -np.inf)
-        self.kernels.best_margin_grid(xy, self.cells(omap), out, float(floor_db), float(reach), self.plain)
+        n = len(xy)
+        step = max(n, 1) if progress is None else max(-(-n // 100), 1)
+        for k in range(0, n, step):
+            self.kernels.best_margin_grid(xy[k:k + step], self.cells(omap), out, float(floor_db), float(reach),
+                                          self.plain)
+            if progress is not None:
+                progress(min(k + step, n), n)
         return out
+
+    @staticmethod
+    def cells_in_reach(omap: OccupancyMap, xy: np.ndarray, reach: float) -> int:
+        """How many cells of ``omap`` the signal kernels visit for the nodes ``xy``: each node's box of ``reach``.
+
+        The work of :meth:`best_margins`, for a guard to estimate before it starts.
+        """
+        xy = _finite(xy)
+        res, (ox, oy), (rows, cols) = float(omap.resolution), omap.origin, omap.shape
+        reach = min(float(reach), (rows + cols) * res)  # an infinite reach: the whole map
+        i0 = np.clip(np.floor((xy[:, 1] - reach - oy) / res), 0, rows)
+        i1 = np.clip(np.floor((xy[:, 1] + reach - oy) / res), -1, rows - 1)
+        j0 = np.clip(np.floor((xy[:, 0] - reach - ox) / res), 0, cols)
+        j1 = np.clip(np.floor((xy[:, 0] + reach - ox) / res), -1, cols - 1)
+        return int((np.maximum(i1 - i0 + 1, 0) * np.maximum(j1 - j0 + 1, 0)).sum())
 
     def cells(self, omap: OccupancyMap) -> tuple:
         """The kernels' :class:`~amronet.engine.hearing.Cells` of a map's grid as a plain tuple, cached per grid."""

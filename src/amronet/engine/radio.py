@@ -317,14 +317,15 @@ class RadioMedium:
         self._announce()
         return self.heard.covered(area, xy, self.reach)
 
-    def signal_dbm(self, omap: OccupancyMap, xy: np.ndarray, floor_db: float = -30.0) -> np.ndarray:
-        """Best RSSI (dBm) at every cell centre of ``omap`` over the nodes ``xy``.
+    def signal_dbm(self, omap: OccupancyMap, xy: np.ndarray, floor_db: float = -30.0,
+                   progress: Callable[[int, int], None] | None = None) -> np.ndarray:
+        """Best RSSI (dBm) at every cell centre of ``omap`` over the nodes ``xy``; ``progress(done, total)`` nodes.
 
         NaN where every node is more than ``-floor_db`` dB below the usable threshold (or there are no nodes).
         """
         if type(self).margin_bound is None:
             self._announce()
-        out = self.heard.best_margins(omap, xy, floor_db, self.signal_reach(floor_db))
+        out = self.heard.best_margins(omap, xy, floor_db, self.signal_reach(floor_db), progress)
         out[~np.isfinite(out)] = np.nan
         return out + self.budget.threshold_dbm
 

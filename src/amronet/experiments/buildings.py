@@ -25,7 +25,7 @@ import numpy as np
 from amronet.experiments.common import Claim, agent_scenario, claims_markdown, csv_text, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.sweeps.stats import mean_ci
+from amronet.sweeps.stats import mean_ci, mean_ci_text
 
 __all__ = ["BUILDINGS", "RADIOS", "RULES", "STOCKS", "Building", "run_buildings"]
 
@@ -247,8 +247,8 @@ def _markdown(table: list[dict[str, Any]], strips: dict[str, int], claims: list[
              "| coverage | reached 99 % |", "|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for e in table:
         lines.append(f"| {e['map']} | {e['rule']} | {e['radio']} | {e['stock']} | "
-                     f"{e['relays_mean']:.1f} ± {e['relays_ci95']:.1f} | "
-                     f"{100 * e['connected_mean']:.1f} ± {100 * e['connected_ci95']:.1f} % | "
+                     f"{mean_ci_text(e['relays_mean'], e['relays_ci95'])} | "
+                     f"{mean_ci_text(100 * e['connected_mean'], 100 * e['connected_ci95'])} % | "
                      f"{e['runs_cut_off']}/{e['runs']} | {e['longest_outage_s']:g} | "
                      f"{100 * e['coverage_mean']:.1f} % | {e['reached_target']}/{e['runs']} |")
     lines += ["", "## Best rule per building (longest time connected; ties: fewer relays)", "",

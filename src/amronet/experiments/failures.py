@@ -26,7 +26,7 @@ from amronet.experiments.buildings import BUILDINGS
 from amronet.experiments.common import agent_scenario, csv_text, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.sweeps.stats import mean_ci, mean_ci_columns
+from amronet.sweeps.stats import mean_ci, mean_ci_columns, mean_ci_text
 
 __all__ = ["ALGORITHMS", "run_failures"]
 
@@ -148,9 +148,9 @@ def _markdown(table: list[dict[str, Any]], runs: int, fault_at: float, after: fl
     for e in table:
         med = "" if e["restored_median_s"] is None else f", {e['restored_median_s']:g} s"
         lines.append(f"| {e['map']} | {e['algorithm']} | {100 * e['fraction']:g} % | {e['failed_mean']:.1f} | "
-                     f"{100 * e['connected_before_mean']:.1f} ± {100 * e['connected_before_ci95']:.1f} % | "
-                     f"{100 * e['connected_after_mean']:.1f} ± {100 * e['connected_after_ci95']:.1f} % | "
-                     f"{100 * e['connected_end_mean']:.1f} ± {100 * e['connected_end_ci95']:.1f} % | "
+                     f"{mean_ci_text(100 * e['connected_before_mean'], 100 * e['connected_before_ci95'])} % | "
+                     f"{mean_ci_text(100 * e['connected_after_mean'], 100 * e['connected_after_ci95'])} % | "
+                     f"{mean_ci_text(100 * e['connected_end_mean'], 100 * e['connected_end_ci95'])} % | "
                      f"{e['restored_runs']}/{e['runs']}{med} | {e['extra_routers_mean']:.1f} | "
                      f"{e['routers_moved_mean']:.1f} | {e['repair_distance_m_mean']:.1f} |")
     return "\n".join(lines) + "\n"

@@ -23,7 +23,7 @@ import numpy as np
 from amronet.experiments.common import Claim, claims_markdown, csv_table_text, csv_text, load_plotting, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.sweeps.stats import mean_ci, mean_ci_columns
+from amronet.sweeps.stats import mean_ci, mean_ci_columns, mean_ci_text
 
 __all__ = ["ALGORITHMS", "run_coverage_over_time"]
 
@@ -187,6 +187,11 @@ def _pp(x: float) -> str:
     return f"{100 * x:.1f} %"
 
 
+def _pp_ci(mean: float, half: float) -> str:
+    """A fraction's mean ± 95 % CI half-width in percent, both to the half-width's second significant digit."""
+    return f"{mean_ci_text(100 * mean, 100 * half)} %"
+
+
 SAME_POINTS = 0.02
 """'Almost the same' final coverage: within two percentage points (and confidently so)."""
 SLIGHTLY_POINTS = 0.10
@@ -203,11 +208,11 @@ def _claims(figure: str, table: list[dict[str, Any]], baseline: dict[str, dict[s
         return claims
     for key, what in (("coverage", "coverage"), ("connected_coverage", "connected coverage")):
         beaten = [e for e in others if ss[f"{key}_mean"] - ss[f"{key}_ci95"] > e[f"{key}_mean"] + e[f"{key}_ci95"]]
-        ours = "; ".join(f"{LABELS[e['algorithm']]} {_pp(e[f'{key}_mean'])} ± {_pp(e[f'{key}_ci95'])}"
+        ours = "; ".join(f"{LABELS[e['algorithm']]} {_pp_ci(e[f'{key}_mean'], e[f'{key}_ci95'])}"
                          for e in others)
         claims.append(Claim(f"Self-spreading ends with more {what} than the force-based algorithms",
                             "higher" if key == "coverage" else "(not in the paper)",
-                            f"self-spreading {_pp(ss[f'{key}_mean'])} ± {_pp(ss[f'{key}_ci95'])}; {ours}",
+                            f"self-spreading {_pp_ci(ss[f'{key}_mean'], ss[f'{key}_ci95'])}; {ours}",
                             _verdict(len(beaten) == len(others), len(beaten) > 0) if key == "coverage" else
                             ("holds" if len(beaten) == len(others) else "holds partly" if beaten else "does not hold")))
     gaps = [e["coverage_early_mean"] - ss["coverage_early_mean"] for e in others]
@@ -262,9 +267,9 @@ def _markdown(figure: str, map_name: str, runs: int, horizon: float, table: list
         conv = (f"{e['runs_converged']}/{e['runs']} ({e['converged_at_median_s']:.0f} s)" if e["runs_converged"]
                 else f"0/{e['runs']}")
         lines.append(
-            f"| {LABELS[e['algorithm']]} | {_pp(e['coverage_mean'])} ± {_pp(e['coverage_ci95'])} | "
-            f"{_pp(e['connected_coverage_mean'])} ± {_pp(e['connected_coverage_ci95'])} | "
-            f"{_pp(e['coverage_early_mean'])} | {e['time_to_90pct_mean_s']:.0f} ± {e['time_to_90pct_ci95_s']:.0f} | "
+            f"| {LABELS[e['algorithm']]} | {_pp_ci(e['coverage_mean'], e['coverage_ci95'])} | "
+            f"{_pp_ci(e['connected_coverage_mean'], e['connected_coverage_ci95'])} | "
+            f"{_pp(e['coverage_early_mean'])} | {mean_ci_text(e['time_to_90pct_mean_s'], e['time_to_90pct_ci95_s'])} | "
             f"{e['distance_per_router_mean_m']:.2f} | {_pp(e['routers_connected_mean'])} | "
             f"{e['runs_all_connected']}/{e['runs']} | {conv} |")
     return "\n".join(lines) + "\n\n" + claims_markdown(f"The paper's claims (5.2.1, Fig. {number}) and ours", claims)

@@ -27,7 +27,7 @@ from amronet.experiments.common import (
 from amronet.experiments.options import AGENT_TIME_LIMIT_S, RunOptions
 from amronet.experiments.runner import run_jobs
 from amronet.patterns import estimate, place
-from amronet.sweeps.stats import mean_ci
+from amronet.sweeps.stats import mean_ci, mean_ci_text
 
 __all__ = ["PATTERNS", "run_fig5"]
 
@@ -151,12 +151,13 @@ def _claims(table: list[dict[str, Any]]) -> list[Claim]:
 
 def _markdown(table: list[dict[str, Any]], claims: list[Claim]) -> str:
     lines = ["# Fig. 5: routers needed vs r_c (agent-assisted deployment vs static patterns)", "",
-             "| map | r_c | runs done | ARD mean ± 95 % CI | 0.77 A/r² | RSTR min/est | HEX min/est | "
+             "| map | r_c | reached target | ARD mean ± 95 % CI | 0.77 A/r² | RSTR min/est | HEX min/est | "
              "SQR min/est | TRI min/est |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for e in table:
         lines.append(
-            f"| {e['map']} | {e['r_c']:g} | {e['completed']}/{e['runs']} | {e['ard_mean']:.1f} ± {e['ard_ci95']:.1f} | "
-            f"{e['ard_est_077']:.1f} | {e['r-strip_placed']}/{e['r-strip_estimated']} | "
+            f"| {e['map']} | {e['r_c']:g} | {e['completed']}/{e['runs']} | "
+            f"{mean_ci_text(e['ard_mean'], e['ard_ci95'])} | {e['ard_est_077']:.1f} | "
+            f"{e['r-strip_placed']}/{e['r-strip_estimated']} | "
             f"{e['hexagonal_placed']}/{e['hexagonal_estimated']} | {e['square_placed']}/{e['square_estimated']} | "
             f"{e['triangular_placed']}/{e['triangular_estimated']} |")
     return "\n".join(lines) + "\n\n" + claims_markdown("The paper's claims (5.1.1, 6.1) and ours", claims)

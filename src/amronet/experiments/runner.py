@@ -12,6 +12,7 @@ stopped.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -25,6 +26,7 @@ from amronet.sim.batch import run_seeds
 from amronet.sweeps.engine import execute_into_store, pending_runs, plan_batches, progress_bar, warm_workers
 from amronet.sweeps.executors import Executor, LocalExecutor, default_workers
 from amronet.sweeps.identity import canonical_json, resolve_scenario, scenario_hash
+from amronet.sweeps.local_pool import sigint_elsewhere
 from amronet.sweeps.store import ResultStore, check_store_path
 
 __all__ = ["Job", "run_batch", "run_jobs"]
@@ -96,7 +98,8 @@ def run_jobs(
         if on_result is not None:
             on_result(k, result)
         if todo:
-            todo.pop()()
+            with sigint_elsewhere():  # its kernels run in this process (see amronet.sweeps.local_pool)
+                todo.pop()()
 
     own = options.executor is None
     executor: Executor = options.executor or LocalExecutor(options.workers or default_workers())
@@ -110,7 +113,8 @@ def run_jobs(
         if own:
             executor.close()
     if todo:
-        todo.pop()()
+        with sigint_elsewhere():
+            todo.pop()()
     return results
 
 
@@ -124,13 +128,15 @@ def _run_plain(jobs: Sequence[Job], executor: Executor, description: str, show_p
     with progress_bar(show_progress) as bar:
         task = bar.add_task(description, total=len(jobs), done=0, failed=0, running=min(slots, len(jobs)))
         warm_workers(executor, len(jobs), bar, task, description)
-        for b, outs in executor.imap_unordered(run_batch, [[jobs[k] for k in ks] for ks in batches]):
-            for k, result in zip(batches[b], outs, strict=True):
-                n += 1
-                results[k] = result
-                if on_result:
-                    on_result(k, result)
-                bar.update(task, advance=1, done=n, running=min(slots, len(jobs) - n))
+        arriving = executor.imap_unordered(run_batch, [[jobs[k] for k in ks] for ks in batches])
+        with contextlib.closing(arriving):  # left early (Ctrl-C, an error): the executor stops its workers now
+            for b, outs in arriving:
+                for k, result in zip(batches[b], outs, strict=True):
+                    n += 1
+                    results[k] = result
+                    if on_result:
+                        on_result(k, result)
+                    bar.update(task, advance=1, done=n, running=min(slots, len(jobs) - n))
     return [r for r in results if r is not None]
 
 

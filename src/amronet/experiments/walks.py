@@ -26,7 +26,7 @@ from amronet.algorithms.self_spreading.walks import WALKS
 from amronet.experiments.common import Claim, claims_markdown, csv_text, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
-from amronet.sweeps.stats import mean_ci
+from amronet.sweeps.stats import mean_ci, mean_ci_text
 
 __all__ = ["WALK_MAPS", "WalkMap", "run_walks", "walk_scenario"]
 
@@ -211,11 +211,11 @@ def _markdown(table: list[dict[str, Any]], claims: list[Claim], runs: int, time_
     for e in table:
         never = f" ({e['t_random_level_never']} never)" if e["t_random_level_never"] else ""
         lines.append(f"| {e['map']} | {e['walk']} | "
-                     f"{100 * e['coverage_mean']:.1f} ± {100 * e['coverage_ci95']:.1f} % | "
-                     f"{e['t90_mean_s']:.0f} ± {e['t90_ci95_s']:.0f} | "
-                     f"{e['t_random_level_mean_s']:.0f} ± {e['t_random_level_ci95_s']:.0f}{never} | "
-                     f"{e['deployed_mean']:.1f} ± {e['deployed_ci95']:.1f} | {e['all_connected_runs']}/{e['runs']} | "
-                     f"{e['settled_runs']}/{e['runs']} |")
+                     f"{mean_ci_text(100 * e['coverage_mean'], 100 * e['coverage_ci95'])} % | "
+                     f"{mean_ci_text(e['t90_mean_s'], e['t90_ci95_s'])} | "
+                     f"{mean_ci_text(e['t_random_level_mean_s'], e['t_random_level_ci95_s'])}{never} | "
+                     f"{mean_ci_text(e['deployed_mean'], e['deployed_ci95'])} | "
+                     f"{e['all_connected_runs']}/{e['runs']} | {e['settled_runs']}/{e['runs']} |")
     return "\n".join(lines) + "\n\n" + claims_markdown("Do the local rules meet issue #15's goal?", claims)
 
 

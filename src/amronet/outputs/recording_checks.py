@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from amronet import limits
-from amronet.engine.propagation import LinkBudget
+from amronet.engine.propagation import RADIO_BOUNDS, LinkBudget
 from amronet.engine.radio import MEDIA
 from amronet.engine.robots import ROLE_NAMES, STATE_NAMES
 from amronet.errors import AmronetError, RecordingError
@@ -130,9 +130,11 @@ def read_budget(meta: Mapping[str, Any], where: str) -> LinkBudget:
             raise RecordingError(where, f"meta.budget.{key}", f"its meta's budget.{key} is not a finite number")
         values[key] = float(value)
     budget = LinkBudget(**values)
-    if budget.r_c <= 0 or budget.exponent <= 0 or budget.shadowing_corr_m <= 0 or min(
-            budget.wall_db, budget.shadowing_db, budget.shadowing_clip) < 0:
+    if not 0 < budget.r_c <= MAX_RANGE_M or not 0 <= budget.shadowing_clip <= 10.0:  # runs clip at 3 sigma
         raise RecordingError(where, "meta.budget", "its meta's budget is out of range")
+    for key in ("tx_dbm", "pl0_db", "exponent", "wall_db", "shadowing_db", "shadowing_corr_m"):  # as a scenario's
+        if RADIO_BOUNDS["path_loss_exponent" if key == "exponent" else key].problem(getattr(budget, key)):
+            raise RecordingError(where, f"meta.budget.{key}", f"its meta's budget.{key} is out of range")
     if not isinstance(meta.get("medium"), str) or meta["medium"] not in MEDIA:
         raise RecordingError(where, "meta.medium", f"its meta's medium {meta.get('medium')!r:.40} is not a radio model "
                                                    f"of this amronet: {', '.join(sorted(MEDIA))}")

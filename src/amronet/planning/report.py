@@ -52,6 +52,8 @@ class Plan:
     """Time the agents were connected over the finished runs
     (:func:`~amronet.planning.planner.connected_distribution`)."""
     scenario: dict[str, Any] = field(default_factory=dict, repr=False)
+    optimum: dict[str, Any] | None = None
+    """``amronet plan --optimum``: the best placement on a lattice and its proven bound (:mod:`amronet.optimum`)."""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-compatible content of ``plan.json``."""
@@ -65,6 +67,7 @@ class Plan:
             "confidence": self.confidence, "recommended_routers": self.recommended, "typical_seed": self.typical_seed,
             "connected": self.connected,
             "warnings": self.warnings, "settings": self.settings, "scenario": self.scenario,
+            **({"optimum": self.optimum} if self.optimum is not None else {}),
         }  # fmt: skip
 
     def markdown(self, picture: str | None = "typical.png") -> str:
@@ -97,6 +100,11 @@ class Plan:
             conn = "" if p["connected"] else ", not connected"
             lines.append(f"| {name} placed on the map (estimated {p['estimated']}{conn}) | {p['placed']} | "
                          f"{max(0, p['placed'] - n_b)} |")
+        o = self.optimum
+        if o is not None:
+            state = "optimal" if o["optimal"] else f"proven bound {o['lower_bound']}"
+            lines.append(f"| fewest on a {o['spacing_m']:g} m lattice (amronet optimum, {state}) | "
+                         f"{o['routers'] + n_b} | {o['routers']} |")
         if d["completed"]:
             for label, key in (("minimum", "min"), ("median", "median"), ("mean", "mean"), (q, "quantile"),
                                ("maximum", "max")):
@@ -116,6 +124,11 @@ class Plan:
                       "|---:|---:|---:|---:|---:|",
                       f"| {100 * c['min']:.1f} % | {100 * c['quantile']:.1f} % | {100 * c['median']:.1f} % | "
                       f"{100 * c['mean']:.1f} % | {100 * c['max']:.1f} % |"]
+        if o is not None and self.recommended is not None and o["routers"] > 0:
+            lines += ["", f"The recommendation is {self.recommended / o['routers']:.2f} times the best placement "
+                          f"found on the lattice ({o['routers']} routers, covering all of the reachable space) and at "
+                          f"most {self.recommended / max(o['lower_bound'], 1):.2f} times the fewest the lattice allows "
+                          f"(at least {o['lower_bound']}); runs stop at their coverage target."]
         if "per_agent" in d:
             lines += ["", f"Per agent: {d['per_agent']} routers."]
         if self.warnings:

@@ -2,7 +2,8 @@
 
 Unknown keys, wrong types, NaN or negative radii and speeds are rejected with one line that names the field.
 The parts: the schema (:mod:`~amronet.scenario.schema`), the error messages (:mod:`~amronet.scenario.messages`),
-overrides (:mod:`~amronet.scenario.overrides`), loading files and presets (:mod:`~amronet.scenario.loading`).
+overrides (:mod:`~amronet.scenario.overrides`), loading files and presets (:mod:`~amronet.scenario.loading`), and
+the defaults that follow the algorithm and the robots (:mod:`~amronet.scenario.defaults`).
 
 Example::
 
@@ -15,24 +16,38 @@ Example::
     sim: {dt: 0.1, time_limit: 300}
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from amronet.scenario.loading import list_presets, load_scenario
-from amronet.scenario.messages import to_scenario_error
 from amronet.scenario.overrides import apply_overrides, parse_override
-from amronet.scenario.schema import (
-    FAULT_KINDS,
-    MAX_RANGE_M,
-    AgentsSpec,
-    AlgorithmSpec,
-    BaseStationSpec,
-    FaultSpec,
-    RadioSpec,
-    RobotRef,
-    RobotSpec,
-    RoutersSpec,
-    Scenario,
-    SimSpec,
-    validate_scenario,
-)
+
+if TYPE_CHECKING:
+    from amronet.scenario.messages import to_scenario_error
+    from amronet.scenario.schema import (
+        FAULT_KINDS,
+        MAX_RANGE_M,
+        AgentsSpec,
+        AlgorithmSpec,
+        BaseStationSpec,
+        FaultSpec,
+        RadioSpec,
+        RobotRef,
+        RobotSpec,
+        RoutersSpec,
+        Scenario,
+        SimSpec,
+        validate_scenario,
+    )
+
+_LAZY = {name: "amronet.scenario.schema" for name in (
+    "FAULT_KINDS", "MAX_RANGE_M", "AgentsSpec", "AlgorithmSpec", "BaseStationSpec", "FaultSpec", "RadioSpec",
+    "RobotRef", "RobotSpec", "RoutersSpec", "Scenario", "SimSpec", "validate_scenario")}
+_LAZY["to_scenario_error"] = "amronet.scenario.messages"
+"""Names loaded on first use: the schema needs the algorithms' and radio models' registries (numba, scipy), which
+a scenario file that does not exist, or a command line's ``--help``, need not import."""
 
 __all__ = [
     "FAULT_KINDS",
@@ -54,3 +69,15 @@ __all__ = [
     "to_scenario_error",
     "validate_scenario",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module 'amronet.scenario' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})

@@ -1,18 +1,22 @@
 """Loading a scenario: from a YAML file, a mapping, a :class:`~amronet.scenario.schema.Scenario` or a preset.
 
-The built-in presets are the YAML files of ``amronet/data/presets``.
+The built-in presets are the YAML files of ``amronet/data/presets``. The schema is imported only when a scenario is
+validated (it needs the algorithms' and radio models' registries: numba, scipy), so a file that does not exist is
+refused at once.
 """
 
 from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from amronet.errors import ScenarioError
 from amronet.scenario.overrides import apply_overrides
-from amronet.scenario.schema import Scenario, validate_scenario
 from amronet.yaml_loading import load_yaml
+
+if TYPE_CHECKING:
+    from amronet.scenario.schema import Scenario
 
 __all__ = ["list_presets", "load_scenario"]
 
@@ -46,13 +50,15 @@ def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dic
         ScenarioError: The source cannot be read or is invalid; the message names the field.
     """
     base_dir: str | None = None
-    if isinstance(source, Scenario):
-        data, base_dir = source.to_dict(), source.base_dir
-    elif isinstance(source, dict):
+    if isinstance(source, dict):
         data = source
     elif not isinstance(source, str | Path):
-        raise ScenarioError("scenario", f"must be a mapping of fields, a YAML path or a preset name, got "
-                                        f"{type(source).__name__}")
+        from amronet.scenario.schema import Scenario  # here, not at the top: see the module
+
+        if not isinstance(source, Scenario):
+            raise ScenarioError("scenario", f"must be a mapping of fields, a YAML path or a preset name, got "
+                                            f"{type(source).__name__}")
+        data, base_dir = source.given_dict(), source.base_dir
     else:
         path = Path(source)
         preset = _preset_dir() / f"{source}.yaml"
@@ -72,4 +78,6 @@ def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dic
         data = load_yaml(text, "scenario", shown)
     if overrides:
         data = apply_overrides(data if isinstance(data, dict) else {}, overrides)
+    from amronet.scenario.schema import validate_scenario  # here, not at the top: see the module
+
     return validate_scenario(data, base_dir)

@@ -2,7 +2,8 @@
 
 A validator that knows better says it itself as ``@field.path@message`` (a ``ValueError``); other errors are
 worded here: an unknown key lists the keys allowed where it stands, a missing one says so, a wrong value shows
-what was given.
+what was given (and, where YAML read a boolean or a number for a text field, says to quote it:
+:mod:`amronet.yaml_loading`).
 """
 
 from __future__ import annotations
@@ -87,4 +88,9 @@ def to_scenario_error(exc: ValidationError, *, model: type[BaseModel], prefix: s
     shown = repr(got) if not isinstance(got, dict | list) else type(got).__name__
     if isinstance(got, float) and math.isnan(got):
         shown = "nan"
-    return ScenarioError(field, f"{msg[0].lower()}{msg[1:]} (got {shown})")
+    hint = ""
+    if err.get("type") == "string_type" and isinstance(got, bool | int | float):
+        hint = f"; YAML read a {'boolean' if isinstance(got, bool) else 'number'}: put the value in quotes"
+    elif err.get("type") == "bool_type":
+        hint = "; give true or false (or yes / no, on / off)"
+    return ScenarioError(field, f"{msg[0].lower()}{msg[1:]} (got {shown}){hint}")

@@ -3,21 +3,45 @@
 from __future__ import annotations
 
 import copy
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from amronet.engine.radio import MEDIA
 from amronet.errors import ScenarioError
 from amronet.yaml_loading import load_yaml
+
+if TYPE_CHECKING:
+    from amronet.engine.radio import RadioMedium
 
 __all__ = ["apply_overrides", "parse_override"]
 
 
 def parse_override(text: str) -> tuple[str, Any]:
-    """Parse one ``--set key=value`` item; the value is YAML (``1e-3``, ``true``, ``[1, 2]``; :func:`load_yaml`)."""
+    """Parse one ``--set key=value`` item; the value is YAML (``1e-3``, ``off``, ``[1, 2]``; :func:`load_yaml`).
+
+    The value is read as a scenario file's values are: ``off``, ``on``, ``yes`` and ``no`` are words (the fields
+    that take a boolean accept them), only ``true`` / ``false`` are booleans, ``010`` is ten.
+    """
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
-        raise ScenarioError("--set", f"expected KEY=VALUE such as radio.r_c=1.5, got {text!r}")
-    return key.strip(), load_yaml(value, key.strip(), f"value {value!r}")
+        raise ScenarioError("--set", f"expected KEY=VALUE such as radio.r_c=1.5, got {_shown(text)}")
+    return key.strip(), load_yaml(value, key.strip(), f"value {_shown(value)}")
+
+
+def _shown(text: str, most: int = 60) -> str:
+    """``text`` quoted for a message, cut to its first ``most`` characters when longer (one short line)."""
+    return repr(text) if len(text) <= most else f"{text[:most]!r}... ({len(text)} characters)"
+
+
+def _radio_model(name: Any) -> type[RadioMedium] | None:
+    """The radio model class registered as ``name``, or ``None``.
+
+    The registry is imported here, only when an override names a radio model: it brings numba and scipy, which
+    reading ``--set`` items or refusing a scenario file that does not exist should not wait for.
+    """
+    if not isinstance(name, str):
+        return None
+    from amronet.engine.radio import MEDIA
+
+    return MEDIA.get(name)
 
 
 def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
@@ -36,7 +60,7 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str
         for given, replaced in (("threshold_dbm", "r_c"), ("r_c", "threshold_dbm")):
             if f"radio.{given}" in overrides and f"radio.{replaced}" not in overrides:
                 radio.pop(replaced, None)
-        new_model = MEDIA.get(overrides.get("radio.model")) if isinstance(overrides.get("radio.model"), str) else None
+        new_model = _radio_model(overrides.get("radio.model"))
         if new_model is not None and overrides["radio.model"] != radio.get("model"):
             for key, taken in (("wall_db", new_model.uses_walls), ("shadowing_db", new_model.uses_shadowing)):
                 if not taken and f"radio.{key}" not in overrides:

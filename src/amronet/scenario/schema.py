@@ -15,20 +15,25 @@ from pydantic import (
     ConfigDict,
     Discriminator,
     Field,
-    StrictBool,
+    ModelWrapValidatorHandler,
+    PrivateAttr,
     StrictInt,
     Tag,
     ValidationError,
+    ValidationInfo,
     field_validator,
     model_validator,
 )
 
 from amronet.algorithms import ALGORITHMS
-from amronet.engine.propagation import LinkBudget, median_range
+from amronet.engine.propagation import RADIO_BOUNDS, LinkBudget, median_range
 from amronet.engine.radio import DEFAULT_WALL_DB, MEDIA
 from amronet.errors import ScenarioError
+from amronet.limits import MAX_COUNT
+from amronet.scenario.defaults import fill_start_regions, with_algorithm_defaults, without
 from amronet.scenario.messages import to_scenario_error
 from amronet.scenario.overrides import apply_overrides
+from amronet.yaml_fields import YamlBool
 
 __all__ = [
     "FAULT_KINDS",
@@ -49,6 +54,9 @@ __all__ = [
 PositiveFloat = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
 NonNegativeFloat = Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)]
 FiniteFloat = Annotated[float, Field(strict=True, allow_inf_nan=False)]
+Count = Annotated[StrictInt, Field(ge=0, le=MAX_COUNT)]
+"""A number of robots (at most :data:`~amronet.limits.MAX_COUNT`: larger ones are typos)."""
+NodeId = Annotated[StrictInt, Field(ge=0, lt=MAX_COUNT)]
 
 MAX_RANGE_M = 1e5
 """The longest median range ``radio.r_c`` (100 km): longer ones overflow the controllers' squared ranges and the
@@ -98,8 +106,17 @@ class RadioSpec(_Strict):
     shadowing_corr_m: PositiveFloat = 2.0
     threshold_dbm: FiniteFloat | None = None
     """The usable-link threshold (dBm); given, it sets ``r_c`` (the median range it implies), so give one of the two."""
-    packet_loss: StrictBool = False
+    packet_loss: YamlBool = False
     """Drop each link in each step with probability one minus its packet delivery ratio."""
+
+    @field_validator(*RADIO_BOUNDS, mode="before")
+    @classmethod
+    def _in_bounds(cls, value: Any, info: ValidationInfo) -> Any:
+        """Refuse a number outside the field's physical range (:data:`~amronet.engine.propagation.RADIO_BOUNDS`)."""
+        problem = RADIO_BOUNDS[str(info.field_name)].problem(value)
+        if problem is not None:
+            raise ValueError(f"@radio.{info.field_name}@{problem}")
+        return value
 
     @model_validator(mode="after")
     def _check_budget(self) -> RadioSpec:
@@ -150,13 +167,15 @@ class BaseStationSpec(_Strict):
     x: FiniteFloat
     y: FiniteFloat
     region: tuple[PositiveFloat, PositiveFloat] = (1.0, 1.0)
+    """Width and height (m) of the rectangle around the base its robots start in; left out, the smallest square of
+    at least 1 m that holds them (:mod:`amronet.scenario.defaults`)."""
     robot: RobotRef = "amigobot"
 
 
 class RoutersSpec(_Strict):
     """The routers of the AMRoNet."""
 
-    count: Annotated[StrictInt, Field(ge=0)] = 30
+    count: Count = 30
     robot: RobotRef = "bebot"
     start: Literal["base", "uniform"] = "base"
     """``base``: in the base stations' regions (the paper); ``uniform``: scattered over the reachable free space
@@ -166,10 +185,10 @@ class RoutersSpec(_Strict):
 class AgentsSpec(_Strict):
     """The agents: fast explorers that use (and, in agent-assisted deployment, build) the AMRoNet."""
 
-    per_base: Annotated[StrictInt, Field(ge=0)] = 0
+    per_base: Count = 0
     """Agents per base station; they start next to its reference node with its status."""
     robot: RobotRef = "pioneer"
-    routers_carried: Annotated[StrictInt, Field(ge=0)] | None = None
+    routers_carried: Count | None = None
     """Routers each agent carries; ``null`` for unlimited (DARPA SubT robots carried 6 to 12)."""
     when_empty: Literal["tether", "continue"] = "tether"
     """An agent with no router left: ``tether`` turns back when it is about to lose its last reference (it never
@@ -195,13 +214,13 @@ class SimSpec(_Strict):
 
     dt: PositiveFloat = 0.1
     time_limit: PositiveFloat = 300.0
-    record_every: Annotated[StrictInt, Field(ge=1)] = 10
+    record_every: Annotated[StrictInt, Field(ge=1, le=MAX_COUNT)] = 10
     coverage_target: float | str | None = None
     """Coverage at which a run ends, in (0, 1]; ``null``: the algorithm's default (0.99 for agent-assisted deployment,
     none for the others); ``off``: none (the run goes on until it settles or reaches its time limit)."""
     coverage_method: Literal["raster", "exact"] = "raster"
-    stop_when_settled: StrictBool = True
-    robot_collisions: StrictBool = True
+    stop_when_settled: YamlBool = True
+    robot_collisions: YamlBool = True
 
     @field_validator("coverage_target", mode="before")
     @classmethod
@@ -209,7 +228,8 @@ class SimSpec(_Strict):
         ok = value is None or value == "off" or (
             isinstance(value, float) and math.isfinite(value) and 0 < value <= 1)
         if not ok:
-            raise ValueError(f"@sim.coverage_target@{value!r} is not a fraction in (0, 1] (with a decimal point) "
+            shown = f"a {type(value).__name__}" if isinstance(value, list | dict) else repr(value)
+            raise ValueError(f"@sim.coverage_target@{shown} is not a fraction in (0, 1] (with a decimal point) "
                              "nor off; give e.g. 0.99, or off for no target")
         return value
 
@@ -224,9 +244,9 @@ class FaultSpec(_Strict):
 
     at: NonNegativeFloat | None = None
     routers: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] | None = None
-    ids: Annotated[list[Annotated[StrictInt, Field(ge=0)]], Field(min_length=1)] | None = None
+    ids: Annotated[list[NodeId], Field(min_length=1)] | None = None
     rate_per_hour: PositiveFloat | None = None
-    base_station: Annotated[StrictInt, Field(ge=0)] | None = None
+    base_station: NodeId | None = None
 
     @property
     def kind(self) -> str:
@@ -264,6 +284,17 @@ class Scenario(_Strict):
     faults: list[FaultSpec] = Field(default_factory=list)
     """Node failures (:class:`FaultSpec`); none by default."""
     base_dir: str | None = Field(default=None, exclude=True)
+
+    _defaulted: frozenset[str] = PrivateAttr(default=frozenset())
+    """Fields that took a default following the rest of the scenario (:mod:`amronet.scenario.defaults`)."""
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _fitting_defaults(cls, data: Any, handler: ModelWrapValidatorHandler[Scenario]) -> Scenario:
+        data, filled = with_algorithm_defaults(data)
+        scenario = handler(data)
+        scenario._defaulted = frozenset(filled) | frozenset(fill_start_regions(scenario))
+        return scenario
 
     @model_validator(mode="after")
     def _check_algorithm(self) -> Scenario:
@@ -338,9 +369,13 @@ class Scenario(_Strict):
             data["agents"]["trajectories"] = str(path.resolve())
         return data
 
+    def given_dict(self) -> dict[str, Any]:
+        """:meth:`to_dict` less the defaults that follow the rest of the scenario, which a change computes again."""
+        return without(self.to_dict(), self._defaulted)
+
     def with_overrides(self, overrides: dict[str, Any]) -> Scenario:
         """A copy with dotted-path fields replaced, e.g. ``{"radio.r_c": 1.5, "routers.count": 60}``."""
-        data = apply_overrides(self.to_dict(), overrides)
+        data = apply_overrides(self.given_dict(), overrides)
         return validate_scenario(data, base_dir=self.base_dir)
 
 

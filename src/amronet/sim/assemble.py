@@ -169,10 +169,38 @@ def _sample_start(
         if len(packed) < count:
             best = max(len(pts), len(packed))
             raise ScenarioError(field, f"could place only {best} of {count} robots without overlap in the start "
-                                       "region; enlarge the base station's region, move the base station away "
-                                       "from the walls or use fewer robots")
+                                       f"region ({region[0]:g} m x {region[1]:g} m); "
+                                       + _region_advice(world, centre, region, count, radius, max_dist, taken,
+                                                        taken_r))
         return packed
     return pts
+
+
+def _region_advice(
+    world: World, centre: np.ndarray, region: tuple[float, float], count: int, radius: float, max_dist: float,
+    taken: np.ndarray, taken_r: np.ndarray,
+) -> str:
+    """What to do about a start region too small for its robots: the smallest region that holds them here, if any.
+
+    The region is scaled up (its proportions kept, sides rounded up to 0.1 m) until the start packing places every
+    robot on this map; beyond the square that holds the disc of ``max_dist`` (where robots may start) a larger
+    region adds nothing.
+    """
+    def sides(f: float) -> tuple[float, float]:
+        return (float(np.ceil(region[0] * f * 10 - 1e-9)) / 10, float(np.ceil(region[1] * f * 10 - 1e-9)) / 10)
+
+    def fits(f: float) -> bool:
+        return len(_pack_start(world, centre, sides(f), count, radius, max_dist, taken, taken_r)) >= count
+
+    lo, hi = 1.0, max(1.0, 2.0 * max_dist / min(region)) * 1.01
+    if not fits(hi):
+        return (f"no region holds them within {max_dist:.3g} m of the base station (where they hear it): move it "
+                "away from the walls, use fewer robots or raise radio.r_c")
+    for _ in range(8):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if fits(mid) else (mid, hi)
+    w, h = sides(hi)
+    return f"a region of {w:g} m x {h:g} m holds them here: enlarge the base station's region, or use fewer robots"
 
 
 _PACK_LATTICE_MAX = 1_000_000

@@ -18,7 +18,7 @@ the potential field) are batched, and only scenarios without agents; :func:`batc
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from amronet.algorithms import ALGORITHMS
@@ -41,14 +41,21 @@ def batchable(scenario: Scenario) -> bool:
             and not medium_needs_rng(scenario) and not scenario.faults)
 
 
-def run_seeds(scenario: Scenario, seeds: Sequence[int]) -> list[RunResult]:
+def run_seeds(scenario: Scenario, seeds: Sequence[int],
+              on_result: Callable[[int, RunResult], None] | None = None) -> list[RunResult]:
     """Run ``scenario`` once per seed: stepped together when it is :func:`batchable`, else one by one.
 
     Either way every result is the one :meth:`Simulation.run <amronet.sim.loop.Simulation.run>` gives for its seed.
+    ``on_result(k, result)`` is called as the run of ``seeds[k]`` finishes (in a batch, while the others go on).
     """
     if len(seeds) > 1 and batchable(scenario):
-        return BatchSimulation(scenario, seeds).run()
-    return [Simulation(scenario, int(seed)).run() for seed in seeds]
+        return BatchSimulation(scenario, seeds).run(on_result)
+    results = []
+    for k, seed in enumerate(seeds):
+        results.append(Simulation(scenario, int(seed)).run())
+        if on_result is not None:
+            on_result(k, results[-1])
+    return results
 
 
 class BatchSimulation(Loop):
@@ -72,6 +79,9 @@ class BatchSimulation(Loop):
                                 "run them one by one (amronet.sim.Simulation)")
         super().__init__(scenario, seeds, omap, step=step)
 
-    def run(self) -> list[RunResult]:
-        """Run every run until its stop condition holds; results in the order of the seeds (see ``Loop.execute``)."""
-        return self.execute()
+    def run(self, on_result: Callable[[int, RunResult], None] | None = None) -> list[RunResult]:
+        """Run every run until its stop condition holds; results in the order of the seeds (see ``Loop.execute``).
+
+        ``on_result(k, result)`` is called as the run of the ``k``-th seed stops, while the others go on.
+        """
+        return self.execute(on_result=on_result)

@@ -21,6 +21,7 @@ import math
 from amronet import limits
 from amronet.errors import ScenarioError
 from amronet.scenario import Scenario
+from amronet.scenario.defaults import fitted_side
 from amronet.sim.assemble import robot_model
 from amronet.world.occupancy import OccupancyMap
 
@@ -60,17 +61,21 @@ def _check_bodies(scenario: Scenario, r_start: float) -> float:
             continue
         w, h = base.region
         grow = max(router if routers else 0.0, agent if agents else 0.0)
-        room = min((w + 2 * grow) * (h + 2 * grow), math.pi * (r_start + grow) ** 2)
+        disc = math.pi * (r_start + grow) ** 2
+        room = min((w + 2 * grow) * (h + 2 * grow), disc)
         need = math.pi * (routers * router**2 + agents * agent**2)
         if need > room:
             field = ("routers.count" if math.pi * routers * router**2 > room else
                      "agents.per_base" if math.pi * agents * agent**2 > room else f"base_stations[{i}].region")
             what = " and ".join(f"{n} {kind} (radius {r:g} m)" for n, kind, r in
                                 ((routers, "routers", router), (agents, "agents", agent)) if n)
+            side = fitted_side(routers + agents, grow, robot_model(base.robot, f"base_stations[{i}].robot").radius)
+            fix = (f"a {side:g} m x {side:g} m region holds them in open floor" if side <= math.sqrt(2) * r_start else
+                   f"no region does within {r_start:.3g} m; raise radio.r_c")
             raise ScenarioError(field, f"{what} need {need:.3g} m² of floor for their bodies, but the start region "
                                        f"of base_stations[{i}] ({w:g} m x {h:g} m, within {r_start:.3g} m of the "
                                        f"base) offers at most {room:.3g} m²; use fewer robots or enlarge "
-                                       f"base_stations[{i}].region")
+                                       f"base_stations[{i}].region ({fix})")
         density = (routers + agents) / (w * h)
         fit = (sc.radio.r_c + smallest) ** 2 / smallest**2  # bodies that fit in a disc of r_c around one
         degree = max(degree, min(density * math.pi * sc.radio.r_c**2, fit, routers + agents - 1.0))

@@ -299,7 +299,8 @@ class Loop:
 
     # -- the runs --------------------------------------------------------------------------------------------
     def execute(self, progress: Callable[[float, float], None] | None = None,
-                recorders: Sequence[Recorder | None] | None = None) -> list[RunResult]:
+                recorders: Sequence[Recorder | None] | None = None,
+                on_result: Callable[[int, RunResult], None] | None = None) -> list[RunResult]:
         """Step until every run's stop condition holds; one :class:`~amronet.sim.results.RunResult` per run.
 
         The coverage target is checked at recorded steps (every ``record_every`` steps, and when a run settles or
@@ -307,7 +308,8 @@ class Loop:
         settles *terminates*; one that hits the time limit first is *truncated*. A run that stops leaves the books
         at once; its robots stay in the arrays until the loop ends. A run's ``wall_time_s`` is its share of the
         loop's wall time until it stopped. A :class:`~amronet.outputs.recording.Recorder` given for a run is
-        shown that run in the metrics phase of every step and ends up in its result.
+        shown that run in the metrics phase of every step and ends up in its result. ``on_result(k, result)`` is
+        called as run ``k`` (its index) stops, while the others go on (a sweep stores it at once).
         """
         sim = self.scenario.sim
         recorders = list(recorders) if recorders is not None else [None] * len(self.runs)
@@ -318,6 +320,8 @@ class Loop:
             run.end(reason)  # (the metrics just recorded are the final ones: nothing has moved since)
             wall = (time.perf_counter() - start) / len(self.runs)
             results[run.index] = RunResult.from_run(run, final, wall_time_s=wall, recorder=recorders[run.index])
+            if on_result is not None:
+                on_result(run.index, results[run.index])
 
         active = []
         for run, m in zip(self.runs, metrics_of(self.runs), strict=True):

@@ -24,8 +24,8 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import time
-from collections.abc import Callable, Collection
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Collection, Sequence
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -42,7 +42,7 @@ from amronet.sim.simulation import Simulation
 from amronet.threads import threads_from
 from amronet.world.builtin import FLOOR_CORNERS, resolve_map
 
-__all__ = ["COMMON", "WarmupCase", "warm_up", "warm_up_if_cold", "warmup_cases"]
+__all__ = ["COMMON", "WarmupCase", "run_in_pool", "task_labels", "warm_up", "warm_up_if_cold", "warmup_cases"]
 
 COMMON: tuple[str, ...] = (
     "explorer frontier", "algorithm agent-assisted", "algorithm self-spreading", "algorithm potential-field",
@@ -126,6 +126,11 @@ def _tasks() -> list[tuple[str, int]]:
     return [(cases[k].label if k >= 0 else _TASKS[k][0], k) for k in order]
 
 
+def task_labels() -> list[str]:
+    """The labels of every warm-up task (the kernel groups ``amronet compile`` reports), in the order they start."""
+    return [label for label, _ in _tasks()]
+
+
 def _run_case(k: int) -> float:
     t = time.perf_counter()
     if k < 0:
@@ -135,9 +140,34 @@ def _run_case(k: int) -> float:
     return time.perf_counter() - t
 
 
+def run_in_pool(pool: Executor, tasks: Sequence[tuple[str, int]], slots: int, run: Callable[[int], float],
+                started: Callable[[str], None] | None = None,
+                progress: Callable[[str, float], None] | None = None) -> None:
+    """Run ``run(key)`` for each ``(label, key)`` in ``tasks`` on ``pool``, at most ``slots`` at a time, in order.
+
+    A task is handed to the pool only when one of the ``slots`` is free, so the ones handed over are the ones
+    running: ``started(label)`` is called as each is handed over, ``progress(label, seconds)`` as each finishes
+    (``seconds``: what ``run`` returned). The first exception a task raises is raised here.
+    """
+    waiting = list(reversed(tasks))
+    running: dict[Future[float], str] = {}
+    while waiting or running:
+        while waiting and len(running) < slots:
+            label, key = waiting.pop()
+            if started is not None:
+                started(label)
+            running[pool.submit(run, key)] = label
+        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in finished:
+            label = running.pop(future)
+            seconds = future.result()
+            if progress is not None:
+                progress(label, seconds)
+
+
 def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None,
             only: Collection[str] | None = None, initializer: Callable[..., object] | None = None,
-            initargs: tuple[Any, ...] = ()) -> float:
+            initargs: tuple[Any, ...] = (), started: Callable[[str], None] | None = None) -> float:
     """Run every warm-up case (:func:`warmup_cases`), the signal map and the static patterns; return the wall time.
 
     Args:
@@ -148,6 +178,8 @@ def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None,
         initializer: With several jobs, what each worker process runs first, with ``initargs`` (as for
             :class:`~concurrent.futures.ProcessPoolExecutor`).
         initargs: Its arguments.
+        started: Called with each case's label as it starts (:func:`run_in_pool`: with several jobs, as a worker
+            takes it).
 
     Raises:
         ValueError: ``only`` names a case that does not exist.
@@ -161,15 +193,15 @@ def warm_up(jobs: int = 1, progress: Callable[[str, float], None] | None = None,
     t0 = time.perf_counter()
     if jobs <= 1:
         for label, k in tasks:
+            if started is not None:
+                started(label)
             seconds = _run_case(k)
             if progress is not None:
                 progress(label, seconds)
     else:
         with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
                                  initializer=initializer, initargs=initargs) as pool:
-            for (label, _), seconds in zip(tasks, pool.map(_run_case, [k for _, k in tasks]), strict=True):
-                if progress is not None:
-                    progress(label, seconds)
+            run_in_pool(pool, tasks, jobs, _run_case, started, progress)
     if only is None or set(only) >= set(COMMON):  # noted for warm_up_if_cold
         mark_compiled(_ALL_STAMP if only is None else _COMMON_STAMP)
     return time.perf_counter() - t0

@@ -5,7 +5,8 @@
 * :mod:`~amronet.sweeps.identity` — a run's identity: the resolved scenario's canonical JSON and map content, hashed.
 * :mod:`~amronet.sweeps.store` — the SQLite result store (WAL; one transaction per finished run).
 * :mod:`~amronet.sweeps.executors` — a local process pool and a Dask executor behind one interface.
-* :mod:`~amronet.sweeps.engine` — run what is missing, record as it finishes, with a progress bar.
+* :mod:`~amronet.sweeps.engine` — run what is missing, record as it finishes, with a progress bar; Ctrl-C stops
+  at once with :class:`~amronet.sweeps.interrupt.SweepInterrupted`, which counts what the store holds.
 * :mod:`~amronet.sweeps.tables` and :mod:`~amronet.sweeps.plot` — tidy tables, CSV/Parquet export, plots.
 
 Example:
@@ -29,6 +30,7 @@ from amronet.sweeps.executors import (
     make_executor,
 )
 from amronet.sweeps.identity import canonical_json, resolve_scenario, scenario_hash
+from amronet.sweeps.interrupt import SweepInterrupted
 from amronet.sweeps.spec import Point, Sweep, SweepSpec, load_sweep, sweep_from_spec
 from amronet.sweeps.store import ResultStore, StoreError
 
@@ -41,6 +43,7 @@ __all__ = [
     "ResultStore",
     "StoreError",
     "Sweep",
+    "SweepInterrupted",
     "SweepReport",
     "SweepSpec",
     "canonical_json",

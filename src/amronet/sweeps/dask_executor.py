@@ -4,7 +4,9 @@
 ``dask scheduler`` + ``dask worker`` by hand, SLURM/PBS through ``dask-jobqueue``, Kubernetes...) or on a
 ``LocalCluster`` it starts. Dask is optional: ``pip install 'amronet[cluster]'``. Losing the scheduler, workers
 dying under a job, or no worker at all for ``worker_timeout`` seconds (the scheduler waits for workers forever)
-raises :class:`ClusterLostError`, one line, instead of Dask's own exceptions or an endless wait.
+raises :class:`ClusterLostError`, one line, instead of Dask's own exceptions or an endless wait. Leaving the
+results early (Ctrl-C) cancels the jobs not finished; a ``LocalCluster`` started here then ends its worker
+processes within a second as it closes (Dask cannot stop a running job: the nanny kills its process).
 """
 
 from __future__ import annotations
@@ -23,11 +25,13 @@ from amronet.sweeps.executor_base import Executor
 from amronet.sweeps.worker import on_one_thread
 from amronet.sweeps.worker_bounds import check_worker_timeout, check_workers
 
-__all__ = ["CLUSTER_HINT", "DEFAULT_WORKER_TIMEOUT_S", "ClusterLostError", "DaskExecutor"]
+__all__ = ["CLUSTER_HINT", "DEFAULT_WORKER_TIMEOUT_S", "STOP_TIMEOUT_S", "ClusterLostError", "DaskExecutor"]
 
 CLUSTER_HINT = "pip install 'amronet[cluster]'"
 DEFAULT_WORKER_TIMEOUT_S = 300.0
 """How long a sweep on Dask waits while the scheduler has no worker at all (``--worker-timeout``) before it stops."""
+STOP_TIMEOUT_S = 0.5
+"""How long an interrupted ``LocalCluster``'s worker processes get to end as it closes."""
 
 
 class ClusterLostError(AmronetError):
@@ -121,6 +125,7 @@ class DaskExecutor(Executor):
         self.worker_timeout = worker_timeout
         self.cluster = None
         self._quiet = _QuietWhenLost()
+        self._abandoned = False  # jobs were left running (Ctrl-C): close the LocalCluster's workers at once
         for name in _DASK_LOGGERS:
             logging.getLogger(name).addFilter(self._quiet)
         try:
@@ -129,6 +134,9 @@ class DaskExecutor(Executor):
                     n_workers=n_workers, threads_per_worker=1, processes=True,
                     dashboard_address=None, silence_logs=logging.ERROR)
                 self.client = distributed.Client(self.cluster)
+                from amronet.sweeps.dask_plugin import IgnoreInterrupt
+
+                self.client.register_plugin(IgnoreInterrupt())  # Ctrl-C is the sweep's to handle (see close())
             else:
                 self.client = distributed.Client(scheduler, timeout=f"{timeout}s")
         except (OSError, TimeoutError) as exc:
@@ -186,9 +194,11 @@ class DaskExecutor(Executor):
             self._quiet.lost = True
             raise ClusterLostError(_cause(exc)) from None
         finally:
-            if not self._quiet.lost:
+            left = [f for f in futures if not f.done()]
+            self._abandoned = self._abandoned or bool(left)
+            if left and not self._quiet.lost:
                 with contextlib.suppress(*lost):
-                    self.client.cancel([f for f in futures if not f.done()])
+                    self.client.cancel(left)
 
     def worker_count(self) -> int | None:
         """Workers the scheduler knows now; ``None`` when it does not answer within 10 s."""
@@ -196,6 +206,13 @@ class DaskExecutor(Executor):
             return len(self.client.nthreads(callback_timeout=10))
         except TimeoutError:
             return None
+
+    def _stop_local_workers(self) -> None:
+        async def stop() -> None:  # each nanny asks its worker to stop, and kills it after 80 % of the timeout
+            await asyncio.gather(*(w.close(timeout=STOP_TIMEOUT_S) for w in list(self.cluster.workers.values())))
+
+        with contextlib.suppress(Exception):  # else the cluster closes them as usual, waiting for their jobs
+            self.cluster.sync(stop)
 
     def _unquiet(self) -> None:
         for name in _DASK_LOGGERS:
@@ -205,8 +222,12 @@ class DaskExecutor(Executor):
         """Close the client (and the ``LocalCluster`` started here).
 
         After the cluster was lost the client is closed without waiting long, and Dask's loggers stay quiet about
-        it for the rest of the process (its background thread may still log the cancelled reconnection).
+        it for the rest of the process (its background thread may still log the cancelled reconnection). A
+        ``LocalCluster`` whose jobs were left running ends its workers within about a second (:data:`STOP_TIMEOUT_S`)
+        rather than waiting for their jobs.
         """
+        if self._abandoned and self.cluster is not None:
+            self._stop_local_workers()
         if self._quiet.lost:
             with contextlib.suppress(Exception):
                 self.client.close(timeout=2)

@@ -2,13 +2,15 @@
 
 :func:`run_sweep` is ``amronet sweep``; :func:`execute_into_store` is the loop it shares with
 :func:`amronet.experiments.runner.run_jobs` (the paper's figures): submit the runs that are not in the store
-yet, record every outcome in its own transaction as it arrives, and draw a progress bar (done / running /
-failed, elapsed, ETA) on stderr.
+yet, record every outcome in its own transaction as it arrives (a batch's runs one by one, as each finishes),
+and draw a progress bar (done / running / failed, elapsed, ETA) on stderr. Ctrl-C stops the workers at once and
+raises :class:`~amronet.sweeps.interrupt.SweepInterrupted`, which says what the store holds.
 """
 
 from __future__ import annotations
 
 import contextlib
+import itertools
 import os
 import sqlite3
 import threading
@@ -25,13 +27,16 @@ from amronet.scenario import load_scenario
 from amronet.sim.batch import batchable
 from amronet.sim.warmup import warm_up_if_cold
 from amronet.sweeps.executors import ClusterLostError, Executor, LocalExecutor, WorkerDiedError
+from amronet.sweeps.interrupt import interrupted
 from amronet.sweeps.spec import Sweep
-from amronet.sweeps.store import ClaimOwner, ResultStore
-from amronet.sweeps.worker import execute_batch, start_worker
+from amronet.sweeps.store import ClaimOwner, ResultStore, StoreError
+from amronet.sweeps.worker import STARTED, execute_batch, start_worker
 from amronet.sweeps.worker_bounds import pool_size
 
 if TYPE_CHECKING:
     from rich.progress import TaskID
+
+    from amronet.sweeps.store import RunKey
 
 __all__ = ["CLAIM_POLL_S", "MAX_BATCH", "SweepReport", "execute_into_store", "pending_runs", "plan_batches",
            "run_sweep", "warm_workers"]
@@ -42,7 +47,7 @@ StoreJob = tuple[str, int, dict[str, Any]]
 MAX_BATCH = 16
 """Most runs in one batch job. Per-run cost hardly falls beyond this (30 robots: 34 us per run-step at 10 runs,
 31 us at 25, against 115 us alone), while smaller batches share the work out more evenly and lose less when a
-sweep is interrupted (a batch's runs are recorded when the whole batch ends)."""
+sweep is interrupted (the runs of a batch still going are dropped)."""
 CLAIM_POLL_S = 0.5
 """How often a sweep looks again at runs that another process on the same store has claimed."""
 
@@ -159,6 +164,8 @@ def execute_into_store(
         ``(done, failed)`` among ``pending`` (with those another process finished meanwhile).
 
     Raises:
+        SweepInterrupted: Ctrl-C (``KeyboardInterrupt``): the workers were stopped (a local pool's at once), the
+            runs that finished are in the store, and the message counts them, those dropped and those not started.
         WorkerDiedError: A local worker process died (killed, out of memory); the runs recorded so far stay in the
             store, so running the same command again resumes.
         ClusterLostError: The Dask scheduler connection was lost, workers died under a job, or the scheduler had no
@@ -173,8 +180,10 @@ def execute_into_store(
     owner = ClaimOwner.new()
     counts = [0, 0]  # done, failed
     claimed = False
+    pending_keys, in_flight, recorded = list(remaining), set(), set()  # in_flight: being computed now
 
     def count(h: str, seed: int, outcome: dict[str, Any]) -> None:
+        recorded.add((h, int(seed)))
         counts[outcome["status"] != "done"] += 1
         bar.update(task, advance=1, done=already[0] + counts[0], failed=already[1] + counts[1])
         if on_outcome is not None:
@@ -194,12 +203,14 @@ def execute_into_store(
                 if claims.claimed:
                     bar.update(task, description=description)
                     claimed_runs = [remaining.pop(key) for key in claims.claimed]
-                    _run_claimed(store, claimed_runs, executor, bar, task, description, count)
+                    _run_claimed(store, claimed_runs, executor, (bar, task, description), count, in_flight)
                 elif remaining:
                     holders = ", ".join(sorted(set(claims.held.values())))
                     bar.update(task, running=0, description=f"{description} (waiting for {len(claims.held)} runs "
                                                             f"claimed by {holders})")
                     time.sleep(CLAIM_POLL_S)
+        except KeyboardInterrupt:
+            raise interrupted(store, total, pending_keys, seen, in_flight, recorded) from None
         except WorkerDiedError:
             raise WorkerDiedError(f"a worker process died (killed, or out of memory?); the finished runs are kept in "
                              f"{str(store.path)!r}: run the same command again to resume (with fewer --workers if "
@@ -210,7 +221,7 @@ def execute_into_store(
                 "command again to resume") from None
         finally:
             if claimed:
-                with contextlib.suppress(sqlite3.Error):
+                with contextlib.suppress(sqlite3.Error, StoreError):
                     store.release(owner)  # runs claimed but not recorded (interrupted): free for the next sweep now
     return counts[0], counts[1]
 
@@ -233,26 +244,58 @@ def warm_workers(executor: Executor, runs: int, bar: Progress, task: TaskID, des
         bar.update(task, description=description)
 
 
-def _run_claimed(store: ResultStore, runs: Sequence[StoreJob], executor: Executor, bar: Progress, task: TaskID,
-                 description: str, count: Callable[[str, int, dict[str, Any]], None]) -> None:
-    """Run ``runs`` (claimed) on ``executor`` in batches, recording each outcome as it arrives."""
+def _run_claimed(store: ResultStore, runs: Sequence[StoreJob], executor: Executor,
+                 progress: tuple[Progress, TaskID, str], count: Callable[[str, int, dict[str, Any]], None],
+                 in_flight: set[RunKey]) -> None:
+    """Run ``runs`` (claimed) on ``executor`` in batches, recording each outcome as it arrives.
+
+    ``in_flight`` holds the runs being computed meanwhile: the runs not recorded yet of the batches that started
+    (an executor that :attr:`~amronet.sweeps.executor_base.Executor.reports` says when), or else of the first
+    ``slots`` batches not finished.
+    """
+    bar, task, description = progress
     slots = executor.slots
+    reports = getattr(executor, "reports", False)
     batches = plan_batches(runs, slots)
     jobs = [{"scenario": runs[ks[0]][2], "seeds": [runs[k][1] for k in ks]} for ks in batches]
-    unfinished = dict(enumerate(len(ks) for ks in batches))  # in submission order: the first `slots` run
+    todo = {b: {(runs[k][0], int(runs[k][1])) for k in ks} for b, ks in enumerate(batches)}  # in submission order
 
-    def running() -> int:
-        return sum(list(unfinished.values())[:slots])
+    def flying() -> None:
+        if not reports:
+            in_flight.clear()
+            in_flight.update(*itertools.islice(todo.values(), slots))
+        bar.update(task, running=len(in_flight))
+
+    def record(b: int, k: int, outcome: dict[str, Any]) -> None:
+        h, seed, scenario = runs[k]
+        store.record(h, seed, scenario, outcome)
+        todo.get(b, set()).discard((h, int(seed)))
+        in_flight.discard((h, int(seed)))
+        flying()
+        count(h, seed, outcome)
+
+    def on_report(b: int, item: Any) -> None:
+        if item == STARTED:
+            in_flight.update(todo.get(b, ()))
+            flying()
+        else:
+            record(b, batches[b][item[0]], item[1])
 
     warm_workers(executor, len(runs), bar, task, description)
-    bar.update(task, running=running())
-    for b, outcomes in executor.imap_unordered(execute_batch, jobs):
-        del unfinished[b]
-        for k, outcome in zip(batches[b], outcomes, strict=True):
-            h, seed, scenario = runs[k]
-            store.record(h, seed, scenario, outcome)
-            bar.update(task, running=running())
-            count(h, seed, outcome)
+    flying()
+    results = (executor.imap_unordered(execute_batch, jobs, on_report=on_report) if reports
+               else executor.imap_unordered(execute_batch, jobs))
+    try:
+        for b, outcomes in results:
+            for k, outcome in zip(batches[b], outcomes, strict=True):
+                if outcome is not None:  # None: reported and recorded as it finished
+                    record(b, k, outcome)
+            del todo[b]
+            flying()
+    finally:
+        close = getattr(results, "close", None)
+        if close is not None:
+            close()  # left early (Ctrl-C, an error): the executor stops the workers now
 
 
 def run_sweep(

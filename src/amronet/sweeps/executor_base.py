@@ -17,6 +17,11 @@ class Executor:
     """Runs jobs somewhere and yields their results as they complete."""
 
     name = "executor"
+    reports = False
+    """Whether :meth:`imap_unordered` takes ``on_report``: called in the caller's thread with ``(index, STARTED)``
+    as a job starts and ``(index, item)`` for every item its function reports (:func:`amronet.sweeps.worker.
+    report`) while it runs, before the job's own ``(index, result)`` (:class:`~amronet.sweeps.executors.
+    LocalExecutor` does; elsewhere the result carries everything)."""
 
     @property
     def slots(self) -> int:

@@ -9,7 +9,8 @@ dies (killed, out of memory) raises :class:`WorkerDiedError`, one line, instead 
   jobs (:mod:`~amronet.sweeps.worker_bounds` bounds ``workers``); one worker runs the jobs in this process, one
   after another. Its workers end when this process dies, even by ``kill -9`` (:func:`~amronet.sweeps.worker.
   guard_worker`: a parent-death signal on Linux, a watchdog thread everywhere); they run their kernels on one
-  thread (:func:`amronet.threads.serial_only`).
+  thread (:func:`amronet.threads.serial_only`). Its jobs report as they go (a batch's runs as each finishes), and
+  leaving its results early (Ctrl-C, an error) ends its workers at once (:mod:`~amronet.sweeps.local_pool`).
 * :class:`DaskExecutor` (:mod:`~amronet.sweeps.dask_executor`) — a ``distributed.Client`` on an existing scheduler
   or on a ``LocalCluster`` it starts; losing the cluster raises :class:`ClusterLostError`, one line.
 
@@ -19,21 +20,26 @@ command-line style options.
 
 from __future__ import annotations
 
-import os
+import contextlib
+import functools
 import threading
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from amronet.errors import AmronetError
 from amronet.sweeps.dask_executor import DEFAULT_WORKER_TIMEOUT_S, ClusterLostError, DaskExecutor
 from amronet.sweeps.executor_base import Executor
-from amronet.sweeps.worker import start_worker
+from amronet.sweeps.local_pool import WorkerPool, sigint_deferred, sigint_elsewhere
+from amronet.sweeps.worker import STARTED, reporting_to
 from amronet.sweeps.worker_bounds import check_worker_timeout, check_workers, default_workers, pool_size
 
 __all__ = ["DEFAULT_WORKER_TIMEOUT_S", "ClusterLostError", "DaskExecutor", "Executor", "LocalExecutor",
            "WorkerDiedError", "check_worker_timeout", "default_workers", "make_executor"]
+
+REPORT_POLL_S = 0.05
+"""How often a local pool's parent reads its workers' reports while it waits for jobs to finish."""
 
 
 class WorkerDiedError(AmronetError):
@@ -56,11 +62,13 @@ class LocalExecutor(Executor):
     """
 
     name = "local"
+    reports = True
 
     def __init__(self, workers: int | None = None, force: bool = False) -> None:
         self.workers = check_workers(workers, force)
         self.started = 0  # processes of the running pool: at most workers, and at most the jobs it was started for
-        self._pool: ProcessPoolExecutor | None = None
+        self._pool: WorkerPool | None = None
+        self._pending: dict[Future[Any], int] = {}  # the jobs of the last imap_unordered not finished yet
 
     @property
     def slots(self) -> int:  # noqa: D102
@@ -69,37 +77,69 @@ class LocalExecutor(Executor):
     def describe(self) -> str:  # noqa: D102
         return f"local process pool, {self.workers} worker{'s' if self.workers != 1 else ''}"
 
-    def imap_unordered(self, fn: Callable[[Any], Any], jobs: Sequence[Any]) -> Iterator[tuple[int, Any]]:  # noqa: D102
+    def imap_unordered(self, fn: Callable[[Any], Any], jobs: Sequence[Any],
+                       on_report: Callable[[int, Any], None] | None = None) -> Iterator[tuple[int, Any]]:
+        """Run ``fn(job)`` for every job; yield ``(index, result)`` in the order the jobs finish.
+
+        ``on_report`` (see :attr:`Executor.reports`) is called in this thread. Leaving early (an exception here or
+        in the caller, ``close()`` of this generator) ends the workers at once, their jobs dropped, after passing
+        on what they reported; the next call starts a fresh pool.
+
+        Raises:
+            WorkerDiedError: A worker process died (killed, out of memory).
+        """
+        deliver = on_report or (lambda k, item: None)
         if self.workers == 1 or len(jobs) <= 1:
             for k, job in enumerate(jobs):
-                yield k, fn(job)
+                deliver(k, STARTED)
+                # in this process: a Ctrl-C must not land in a kernel (see amronet.sweeps.local_pool)
+                with sigint_elsewhere(), reporting_to(None if on_report is None else functools.partial(on_report, k)):
+                    result = fn(job)
+                yield k, result
             return
-        if self.started < pool_size(self.workers, len(jobs)):
-            self.close()  # none yet, or one started for fewer jobs (idle now): a larger one replaces it
+        if self.started < pool_size(self.workers, len(jobs)) or self._pending:
+            # none yet, one started for fewer jobs (idle now: a larger one replaces it), or one still running the
+            # jobs of a call whose results were left unread (and whose reports would be taken for this call's)
+            self.close()
             # the parent-death signal follows the thread that forks the workers: only from the main thread
             death_signal = threading.current_thread() is threading.main_thread()
             self.started = pool_size(self.workers, len(jobs))
-            self._pool = ProcessPoolExecutor(max_workers=self.started, initializer=start_worker,
-                                             initargs=(os.getpid(), death_signal))
+            self._pool = WorkerPool(self.started, death_signal)
+        pool = self._pool
         pending: dict[Future[Any], int] = {}
+        self._pending = pending
+        broken = False
         try:
-            for k, job in enumerate(jobs):
-                pending[self._pool.submit(fn, job)] = k
+            with sigint_deferred():  # the first submit forks the workers: none sees Ctrl-C before it ignores it
+                for k, job in enumerate(jobs):
+                    pending[pool.submit(fn, k, job, reports=on_report is not None)] = k
             while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                pool.wait(REPORT_POLL_S)  # a report, or time to look at the jobs
+                done, _ = wait(pending, timeout=0, return_when=FIRST_COMPLETED)
+                for k, item in pool.reports():  # after `done`: a job finished has all its reports in by now
+                    deliver(k, item)
                 for fut in sorted(done, key=pending.__getitem__):
                     k = pending.pop(fut)
                     yield k, fut.result()
         except BrokenProcessPool:
-            self.close()  # a broken pool runs nothing more; the next call starts a fresh one
+            broken = True
             raise WorkerDiedError() from None
         finally:
-            for fut in pending:
-                fut.cancel()
+            if pending or broken:  # left early: nobody wants the rest
+                if self._pool is pool:
+                    self._pool, self.started = None, 0
+                late = pool.stop()
+                with contextlib.suppress(Exception):  # the caller is leaving with its own exception
+                    for k, item in late:
+                        deliver(k, item)
 
-    def close(self) -> None:  # noqa: D102
+    def close(self) -> None:
+        """Release the workers: at once if jobs still run (results left unread), else once they are idle."""
         if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+            if self._pending:
+                self._pool.stop()
+            else:
+                self._pool.close()
             self._pool, self.started = None, 0
 
 

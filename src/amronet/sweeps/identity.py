@@ -31,11 +31,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from amronet.errors import MapError
+from amronet.errors import MapError, ScenarioError
 from amronet.scenario import Scenario
 from amronet.world.builtin import BUILTIN_MAPS
+from amronet.yaml_loading import load_yaml
 
 __all__ = ["canonical_json", "map_digest", "resolve_scenario", "scenario_hash"]
 
@@ -108,9 +107,9 @@ def _yaml_sha_and_image(path: str, mtime_ns: int, size: int) -> tuple[str, str |
         raw = Path(path).read_bytes()
     except OSError:
         return _MISSING, None
-    try:
-        data = yaml.safe_load(raw)
-    except yaml.YAMLError:
+    try:  # read as the map loader reads it (too deep, a key twice: no image; loading the map says why)
+        data = load_yaml(raw, "map")
+    except ScenarioError:
         data = None
     image = data.get("image") if isinstance(data, dict) else None
     return hashlib.sha256(raw).hexdigest(), image if isinstance(image, str) and image.strip() else None

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
+from amronet.sweeps.store_errors import stored_json
 from amronet.sweeps.store_schema import StoreError, StoreFile
 from amronet.sweeps.worker import SUMMARY_EXTRAS
 
@@ -13,6 +13,10 @@ __all__ = ["StoreReading"]
 
 class StoreReading(StoreFile):
     """The queries of a result store (tables: :mod:`amronet.sweeps.store_schema`)."""
+
+    def _json(self, text: str, what: str) -> Any:
+        """Stored JSON text decoded; damaged text is a :class:`StoreError` naming the column ``what``."""
+        return stored_json(text, self.path, self.option, what)
 
     def sweeps(self) -> list[dict[str, Any]]:
         """Every sweep with its run counts: ``id, name, created, runs, done, failed, missing``."""
@@ -59,11 +63,11 @@ class StoreReading(StoreFile):
         status, error, summary_text, ts_cols, wall, version, scenario = row
         out: dict[str, Any] = {"status": status, "error": error, "summary": None, "timeseries": None}
         if summary_text is not None:
-            summary = json.loads(summary_text)
-            summary.update(zip(SUMMARY_EXTRAS, (wall, version, json.loads(scenario)), strict=True))
+            summary = self._json(summary_text, "runs.summary")
+            summary.update(zip(SUMMARY_EXTRAS, (wall, version, self._json(scenario, "runs.scenario")), strict=True))
             out["summary"] = summary
         if timeseries and ts_cols is not None:
-            names = json.loads(ts_cols)
+            names = self._json(ts_cols, "runs.timeseries_columns")
             cols = ", ".join(f'"{x}"' for x in names)
             rows = self.conn.execute(f"SELECT {cols} FROM timeseries WHERE scenario_hash = ? AND seed = ? ORDER BY k",
                                      (scenario_hash, int(seed))).fetchall() if names else []
@@ -88,7 +92,7 @@ class StoreReading(StoreFile):
             row = dict(zip(names, values, strict=True))
             for key in ("scenario", "summary", "labels", "timeseries_columns"):
                 if row.get(key) is not None:
-                    row[key] = json.loads(row[key])
+                    row[key] = self._json(row[key], key)
             out.append(row)
         return out
 
@@ -101,7 +105,7 @@ class StoreReading(StoreFile):
             sql, args = sql + " WHERE l.sweep_id = ?", (sweep_id,)
         cur = self.conn.execute(sql + " ORDER BY l.sweep_id, l.point, l.seed", args)
         names = [d[0] for d in cur.description]
-        return [{**dict(zip(names, v, strict=True)), "labels": json.loads(v[-1])} for v in cur]
+        return [{**dict(zip(names, v, strict=True)), "labels": self._json(v[-1], "sweep_runs.labels")} for v in cur]
 
     def timeseries_rows(self, sweep_id: int | None = None) -> tuple[list[str], list[tuple[Any, ...]]]:
         """Column names and rows of ``timeseries`` (all runs, or those of one sweep)."""

@@ -23,6 +23,7 @@ for byte as it was.
 
 from __future__ import annotations
 
+import contextlib
 import sqlite3
 import time
 from collections.abc import Iterator
@@ -31,7 +32,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Self
 
-from amronet.errors import AmronetError
+from amronet.sweeps.store_errors import GuardedConnection, StoreError, store_error
 
 __all__ = ["APPLICATION_ID", "METRIC_COLUMNS", "SCHEMA_VERSION", "RunKey", "RunVersion", "StoreError", "StoreFile",
            "check_store_path"]
@@ -116,10 +117,6 @@ RunVersion = tuple[str, str, float | None]
 """A stored run's ``(status, finished_at, wall_time_s)``: tells one recording of a run from the next."""
 
 
-class StoreError(AmronetError):
-    """The result store cannot be used (not a store, unreadable, a newer schema)."""
-
-
 def utc_now() -> str:
     """The time now, UTC, to the second (ISO 8601): what ``created``, ``finished_at`` and ``claimed_at`` hold."""
     return datetime.now(UTC).isoformat(timespec="seconds")
@@ -177,13 +174,16 @@ class StoreFile:
 
     def __init__(self, path: str | Path, must_exist: bool = False, option: str = "--store") -> None:
         self.path = Path(path)
+        self.option = option
         exists = check_store_path(self.path, must_exist=must_exist, option=option)
         try:
             if not exists:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.conn = sqlite3.connect(self.path, isolation_level=None, timeout=60.0)
+            conn = sqlite3.connect(self.path, isolation_level=None, timeout=60.0)
         except (OSError, sqlite3.Error) as exc:
             raise StoreError(f"{option}: cannot open {str(self.path)!r}: {exc}") from None
+        self.conn = GuardedConnection(conn, self.path, option)
+        """The connection: its SQLite errors are :class:`StoreError` (:mod:`amronet.sweeps.store_errors`)."""
         try:
             self.conn.execute("PRAGMA busy_timeout = 60000")
             if not exists:
@@ -195,6 +195,8 @@ class StoreFile:
                 if version > SCHEMA_VERSION:
                     raise StoreError(f"{option}: {str(self.path)!r} was written by a newer amronet "
                                      f"(schema {version}); upgrade amronet")
+                if not must_exist:
+                    self._check_pages()
             self._use_wal()
             self.conn.execute("PRAGMA synchronous = FULL")
             self._ts_columns = [r[1] for r in self.conn.execute("PRAGMA table_info(timeseries)")]
@@ -202,9 +204,22 @@ class StoreFile:
             if not must_exist and not self._claims_table:
                 self.conn.execute(CLAIMS_TABLE)  # a store from before claims: add the table (nothing else changes)
                 self._claims_table = True
-        except sqlite3.DatabaseError as exc:
-            self.conn.close()
-            raise StoreError(f"{option}: {str(self.path)!r} is damaged or not a result store: {exc}") from None
+        except StoreError:
+            conn.close()
+            raise
+
+    def _check_pages(self) -> None:
+        """Before writing to an existing store, check its pages (SQLite's ``quick_check``: about 1.5 s per GB).
+
+        Some damage reads without an error (a page of a long text zeroed, a value that breaks its table's
+        ``CHECK``): a sweep would take such runs as missing and write over them. A damaged store is refused and
+        left as it was.
+        """
+        problems = [row[0] for row in self.conn.execute("PRAGMA quick_check(4)")]
+        if problems != ["ok"]:
+            first = next((p for p in problems if not p.startswith("***")), problems[0])
+            raise store_error(sqlite3.DatabaseError(f"database disk image is malformed: {first}"), self.path,
+                              self.option)
 
     def _use_wal(self, timeout: float = 60.0) -> None:
         """Switch the file to WAL mode (once; a no-op after).
@@ -213,14 +228,15 @@ class StoreFile:
         new store, so this retries for ``timeout`` seconds.
         """
         deadline = time.monotonic() + timeout
+        raw = self.conn.raw
         while True:
             try:
-                if self.conn.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
-                    self.conn.execute("PRAGMA journal_mode = WAL")
+                if raw.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
+                    raw.execute("PRAGMA journal_mode = WAL")
                 return
-            except sqlite3.OperationalError as exc:
+            except sqlite3.DatabaseError as exc:
                 if ("locked" not in str(exc) and "busy" not in str(exc)) or time.monotonic() > deadline:
-                    raise
+                    raise store_error(exc, self.path, self.option) from None
                 time.sleep(0.01)
 
     def _has_claims(self) -> bool:
@@ -238,11 +254,13 @@ class StoreFile:
         self.close()
 
     @contextmanager
-    def _transaction(self) -> Iterator[sqlite3.Connection]:
+    def _transaction(self) -> Iterator[GuardedConnection]:
         self.conn.execute("BEGIN IMMEDIATE")
         try:
             yield self.conn
         except BaseException:
-            self.conn.execute("ROLLBACK")
+            if self.conn.in_transaction:  # SQLite may have rolled back itself (a damaged page, a full disk)
+                with contextlib.suppress(StoreError):
+                    self.conn.execute("ROLLBACK")
             raise
         self.conn.execute("COMMIT")

@@ -66,8 +66,8 @@ def point_summary(rows: list[dict[str, Any]], keys: list[str]) -> list[dict[str,
     """Aggregate runs per sweep point.
 
     Returns:
-        Per point: the swept keys' values, runs, done, failed, mean ± 95 % CI of ``nodes_total``, means of
-        ``coverage`` and ``connected_coverage``, and the most common stop reason.
+        Per point: its index, the swept keys' values, its ``scenario_hash``, runs, done, failed, mean ± 95 % CI
+        of ``nodes_total``, means of ``coverage`` and ``connected_coverage``, and the most common stop reason.
     """
     groups: dict[Any, list[dict[str, Any]]] = {}
     for row in rows:
@@ -77,7 +77,8 @@ def point_summary(rows: list[dict[str, Any]], keys: list[str]) -> list[dict[str,
         done = [r for r in sel if r["status"] == "done"]
         mean, half = mean_ci(np.array([r["nodes_total"] for r in done], dtype=float))
         reasons = Counter(r.get("stop_reason") for r in done)
-        entry = {"point": point, **{k: sel[0].get(k) for k in keys}, "runs": len(sel), "done": len(done),
+        entry = {"point": point, **{k: sel[0].get(k) for k in keys}, "scenario_hash": sel[0]["scenario_hash"],
+                 "runs": len(sel), "done": len(done),
                  "failed": len(sel) - len(done), "nodes_total_mean": mean, "nodes_total_ci95": half,
                  "coverage_mean": float(np.mean([r["coverage"] for r in done])) if done else math.nan,
                  "connected_coverage_mean": (float(np.mean([r["connected_coverage"] for r in done]))

@@ -1,7 +1,8 @@
 """What a worker does with one job: run it and hand back plain data, never raising for a failed run.
 
 Workers (local processes or Dask workers) never touch the result store; the parent process records what they
-return, one transaction per run.
+return, one transaction per run. A batch's runs are handed over one by one as they finish (:func:`report`), not
+only when the whole batch ends, so an interrupted sweep keeps every run that finished.
 
 A local pool's worker also never outlives the sweep that started it (:func:`guard_worker`, the pool's
 initializer): on Linux the kernel kills it when its parent dies (``prctl(PR_SET_PDEATHSIG, SIGKILL)``), and on
@@ -11,14 +12,17 @@ parent's pid gone, or the worker re-parented). So ``kill -9`` of ``amronet sweep
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
+import pickle
 import signal
 import socket
+import struct
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from amronet.errors import AmronetError
@@ -29,6 +33,7 @@ from amronet.threads import serial_only
 from amronet.version import __version__
 
 __all__ = [
+    "STARTED",
     "SUMMARY_EXTRAS",
     "execute_batch",
     "execute_job",
@@ -36,6 +41,10 @@ __all__ = [
     "on_one_thread",
     "one_line_error",
     "pid_alive",
+    "report",
+    "reporting_to",
+    "run_reporting",
+    "start_pool_worker",
     "start_worker",
 ]
 
@@ -47,6 +56,15 @@ PR_SET_PDEATHSIG = 1
 """``prctl`` option (``<linux/prctl.h>``): the signal the kernel sends this process when its parent dies."""
 WATCHDOG_INTERVAL_S = 0.5
 """How often a worker's watchdog looks at its parent."""
+STARTED = "job started"
+"""What a local pool reports for a job as a worker takes it (:func:`run_reporting`)."""
+
+_sink: Callable[[Any], None] | None = None
+"""Where :func:`report` sends items in this process now (``None``: nowhere)."""
+_outbox: Any = None
+"""A local pool's worker: the pool's channel to its parent, ``(connection, lock)``."""
+FRAME = struct.Struct("!Q")
+"""The header of a report in the channel: the length of the pickled ``(job, item)`` that follows."""
 
 
 def pid_alive(pid: int) -> bool:
@@ -128,6 +146,67 @@ def start_worker(parent_pid: int, death_signal: bool = True) -> str:
     return guard_worker(parent_pid, death_signal)
 
 
+def start_pool_worker(parent_pid: int, death_signal: bool, outbox: Any) -> str:
+    """The initializer of :class:`~amronet.sweeps.executors.LocalExecutor`'s workers: :func:`start_worker`, and more.
+
+    The worker ignores ``SIGINT`` (its parent forked it with the signal blocked; unblocked once ignored): Ctrl-C in
+    a terminal reaches every process of the sweep, and the sweep's own process stops its workers itself (it
+    terminates them), after recording what they reported. ``outbox`` is the pool's channel to that process,
+    ``(connection, lock)`` (:func:`run_reporting`).
+    """
+    global _outbox
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    _outbox = outbox
+    return start_worker(parent_pid, death_signal)
+
+
+def report(item: Any) -> None:
+    """Hand ``item`` (a finished run of a batch) to the process running the sweep now, while the job goes on.
+
+    In a local pool's worker it goes through the pool's channel, and when the job runs in the sweep's own process
+    to the executor's callback (:func:`run_reporting`, :func:`reporting_to`); elsewhere (a Dask worker) nowhere:
+    the job's result carries it anyway.
+    """
+    if _sink is not None:
+        _sink(item)
+
+
+@contextlib.contextmanager
+def reporting_to(sink: Callable[[Any], None] | None) -> Iterator[None]:
+    """Within the block, :func:`report` hands its items to ``sink``."""
+    global _sink
+    before, _sink = _sink, sink
+    try:
+        yield
+    finally:
+        _sink = before
+
+
+def run_reporting(fn: Callable[[Any], Any], k: int, job: Any, reports: bool = True) -> Any:
+    """``fn(job)`` in a local pool's worker, sending ``(k, STARTED)`` and then ``(k, item)`` for each report.
+
+    Each item is written whole into the channel, as one frame (:data:`FRAME`, then the pickle), before this
+    returns, so the parent has it before the job's result. Without ``reports`` (nobody reads them)
+    :func:`report` sends nothing, and the result carries everything.
+    """
+
+    def send(item: Any) -> None:
+        connection, lock = _outbox
+        data = pickle.dumps((k, item), protocol=pickle.HIGHEST_PROTOCOL)
+        frame = memoryview(FRAME.pack(len(data)) + data)
+        with lock:
+            while frame:
+                frame = frame[os.write(connection.fileno(), frame):]
+
+    if _outbox is None or not reports:
+        return fn(job)
+    send(STARTED)
+    with reporting_to(send):
+        return fn(job)
+
+
 def on_one_thread(fn: Callable[[Any], Any], job: Any) -> Any:
     """``fn(job)`` with this process's kernels on one thread: a cluster's workers run one job per core each.
 
@@ -170,21 +249,35 @@ def _done(result: Any) -> dict[str, Any]:
     return {"status": "done", "error": None, "summary": summary, "timeseries": timeseries}
 
 
-def execute_batch(job: dict[str, Any]) -> list[dict[str, Any]]:
+def execute_batch(job: dict[str, Any]) -> list[dict[str, Any] | None]:
     """Run the seeds of one job ``{"scenario": resolved dict, "seeds": [int, ...]}``; one outcome per seed.
 
     Several seeds of a batchable scenario are stepped together (:class:`~amronet.sim.batch.BatchSimulation`), with
     the same results as one by one; a run's ``wall_time_s`` is then its share of the batch. If the batch raises,
-    its seeds run again one by one, so every run gets its own outcome (and a failure names its own error).
+    the seeds not finished yet run again one by one, so every run gets its own outcome (and a failure names its
+    own error).
+
+    Each run's outcome is reported as ``(k, outcome)`` (``k``: its place in ``seeds``) as soon as it finishes
+    (:func:`report`); where a report reached the sweep's process, the returned list holds ``None`` in its place.
     """
     seeds = [int(s) for s in job["seeds"]]
+    outcomes: list[dict[str, Any] | None] = [None] * len(seeds)
+    handed: list[bool] = [False] * len(seeds)
+
+    def finished(k: int, outcome: dict[str, Any]) -> None:
+        outcomes[k] = outcome
+        report((k, outcome))
+        handed[k] = _sink is not None
+
     if len(seeds) > 1:
         out: dict[str, Any] = {"host": socket.gethostname(), "amronet_version": __version__}
         try:
 
-            results = run_seeds(load_scenario(job["scenario"]), seeds)
+            run_seeds(load_scenario(job["scenario"]), seeds,
+                      lambda k, r: finished(k, {**out, **_done(r), "wall_time_s": r.summary["wall_time_s"]}))
         except Exception:
-            pass  # each run again on its own, below, so that it records its own outcome
-        else:
-            return [{**out, **_done(r), "wall_time_s": r.summary["wall_time_s"]} for r in results]
-    return [execute_job({"scenario": job["scenario"], "seed": seed}) for seed in seeds]
+            pass  # the runs not finished again on their own, below, so that each records its own outcome
+    for k, seed in enumerate(seeds):
+        if outcomes[k] is None:
+            finished(k, execute_job({"scenario": job["scenario"], "seed": seed}))
+    return [None if sent else outcome for outcome, sent in zip(outcomes, handed, strict=True)]

@@ -1,8 +1,8 @@
 """How nodes, links, disks and trails look, shared by snapshots, animation frames and the replay page.
 
 Routers are shaped by state (explore: hollow circle, reference: filled circle, triangle: triangle, hollow while
-moving) and coloured by status (which base station; grey for none yet); links thin out and fade when there are
-many of them.
+moving) and coloured by status (which base station; grey for none yet); a failed node is a dark cross, as in the
+legend and the animation; links thin out and fade when there are many of them.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
+from matplotlib.markers import MarkerStyle
 from matplotlib.patches import Patch
 
 from amronet.viz.decorations import marker_handle
@@ -95,7 +96,9 @@ def draw_nodes(ax: Axes, xy: np.ndarray, state: np.ndarray, colours: np.ndarray)
         if not sel.any():
             continue
         x, y = xy[sel].T
-        if filled:
+        if filled and not MarkerStyle(marker).is_filled():  # a line marker (failed: x) is all edge, drawn dark
+            ax.scatter(x, y, s=size * shrink, marker=marker, c="0.15", linewidths=0.4, zorder=z)
+        elif filled:
             ec = "black" if st in ("base", "agent") else "0.15"
             ax.scatter(
                 x, y, s=size * shrink, marker=marker, c=colours[sel], edgecolors=ec, linewidths=0.4, zorder=z

@@ -22,12 +22,12 @@ from importlib.resources.abc import Traversable
 from pathlib import Path
 from types import MappingProxyType
 
-import yaml
 from PIL import Image
 
 from amronet.errors import MapError
 from amronet.world.loading import load_map_yaml
 from amronet.world.occupancy import OccupancyMap
+from amronet.yaml_loading import load_yaml
 
 __all__ = ["BUILTIN_MAPS", "FLOOR_CORNERS", "MapInfo", "list_builtin_maps", "load_builtin_map", "resolve_map"]
 
@@ -93,7 +93,7 @@ def list_builtin_maps() -> list[MapInfo]:
     infos = []
     for name, description in BUILTIN_MAPS.items():
         with resources.as_file(_maps_dir()) as folder:
-            meta = yaml.safe_load((folder / f"{name}.yaml").read_text(encoding="utf-8"))
+            meta = load_yaml((folder / f"{name}.yaml").read_text(encoding="utf-8"), "map", repr(name), error=MapError)
             with Image.open(folder / meta["image"]) as img:
                 width, height = img.size
         res = float(meta["resolution"])

@@ -7,12 +7,14 @@ The YAML keys and their meaning follow ROS ``map_server`` (ROS 1 ``image_loader`
 * ``origin`` (required): ``[x, y, yaw]``, world pose of the lower-left pixel; only ``yaw == 0`` is supported. The
   map must lie within ``MAX_COORDINATE_M`` (10^9 m) of the world origin, so that positions and cell indices stay
   exact, finite numbers.
-* ``negate`` (required): ``0``/``1`` (or ``false``/``true``); ``1`` swaps black and white.
+* ``negate`` (required): ``0``/``1`` (or ``false``/``true``, ``no``/``yes``, ``off``/``on``); ``1`` swaps black
+  and white.
 * ``occupied_thresh``, ``free_thresh`` (required): in ``[0, 1]`` with ``free_thresh < occupied_thresh``.
 * ``mode`` (optional): ``trinary`` (default), ``scale`` or ``raw``.
 * ``licence`` (optional, amronet's own addition): licence note of the map's source.
 
-Any other key is an error, so that a misspelt key is not silently ignored.
+Any other key is an error, so that a misspelt key is not silently ignored. The file is read as scenario files are
+(:func:`amronet.yaml_loading.load_yaml`: YAML 1.2's numbers and booleans, a key given twice refused).
 
 Each pixel's grey value ``v`` is the mean of its colour channels (alpha excluded), as ``map_server`` does.
 Then, in ``trinary`` and ``scale`` mode, ``p = (255 - v) / 255`` (``negate: 0``) or ``p = v / 255``
@@ -50,12 +52,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from PIL import Image, UnidentifiedImageError
 
 from amronet import limits
 from amronet.errors import MapError
 from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from amronet.yaml_loading import as_bool, load_yaml
 
 __all__ = ["MAP_MODES", "MAP_YAML_KEYS", "MAX_COORDINATE_M", "image_occupancy", "load_map_yaml"]
 
@@ -96,10 +98,10 @@ def _read_yaml(path: Path) -> dict[str, Any]:
         what = "is a folder, not a file" if path.is_dir() else "not found"
         raise MapError("map", f"map file '{path}' {what}; give the path of a ROS map_server YAML file")
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError, OSError) as exc:
-        reason = _one_line(exc)
-        raise MapError("map", f"cannot read '{path}' as YAML ({reason}); fix the file's syntax") from None
+        text = path.read_text(encoding="utf-8")
+    except (UnicodeDecodeError, OSError) as exc:
+        raise MapError("map", f"cannot read '{path}' as YAML ({_one_line(exc)}); fix the file") from None
+    data = load_yaml(text, "map", f"'{path}'", error=MapError)
     if not isinstance(data, dict):
         raise MapError(
             "map", f"'{path}' holds a {type(data).__name__}, not a mapping; write 'key: value' lines"
@@ -143,7 +145,7 @@ def _parse_params(data: dict[str, Any]) -> tuple[float, tuple[float, float], boo
         raise MapError("map.origin", f"[{coords[0]:g}, {coords[1]:g}] is more than {MAX_COORDINATE_M:g} m from the "
                                      "world origin; give the map's lower-left corner in metres near it")
 
-    negate = data["negate"]
+    negate = as_bool(data["negate"])
     if negate not in (0, 1) or isinstance(negate, float):
         raise MapError("map.negate", f"must be 0 or 1, got {negate!r}")
 

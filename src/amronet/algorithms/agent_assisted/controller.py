@@ -41,6 +41,8 @@ the drop rule's view and the realism switches (:mod:`.drop_switches`) and the re
 
 from __future__ import annotations
 
+from typing import Any, ClassVar
+
 import numpy as np
 
 from amronet.algorithms.agent_assisted.drop_switches import DropSwitches
@@ -72,6 +74,10 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
     params: AgentAssistedParams
     default_coverage_target = DEFAULT_COVERAGE_TARGET
     follows_paths = True
+    scenario_defaults: ClassVar[dict[str, Any]] = {"routers.count": 0, "agents.per_base": 3, "radio.r_c": 6.0}
+    """Agents release the routers (no free ones), three of them per base station, and the range of the paper's
+    agent-assisted setups (5.1): with the schema's 1 m an agent's step at the default ``sim.dt`` spans the whole
+    'about to lose' band."""
 
     def __init__(self, params: AgentAssistedParams, setup: Setup) -> None:
         super().__init__(params, setup)

@@ -38,13 +38,15 @@ import math
 from typing import Annotated
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
+from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
 from amronet.algorithms.common.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
 from amronet.engine.robots import Role, State
 from amronet.engine.streams import RunStreams
 from amronet.errors import ScenarioError
+from amronet.limits import MAX_COUNT
+from amronet.yaml_fields import YamlBool
 
 __all__ = ["DSSA", "DSSAParams"]
 
@@ -69,12 +71,12 @@ class DSSAParams(BaseModel):
 
     sensing_radius_factor: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] = 0.5
     field_area: _Positive | None = None
-    obstacle_forces: StrictBool = True
+    obstacle_forces: YamlBool = True
     obstacle_gain: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 1.0
-    oscillation_limit: Annotated[StrictInt, Field(ge=1)] = 10
+    oscillation_limit: Annotated[StrictInt, Field(ge=1, le=MAX_COUNT)] = 10
     oscillation_radius: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.05
     stable_fraction: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.1
-    stable_steps: Annotated[StrictInt, Field(ge=1)] = 20
+    stable_steps: Annotated[StrictInt, Field(ge=1, le=MAX_COUNT)] = 20
 
 
 def _expected_density(nodes: int, r_s: float, area: float, r_c: float, field: str) -> float:

@@ -46,7 +46,7 @@ from __future__ import annotations
 from typing import Annotated
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt
+from pydantic import BaseModel, ConfigDict, Field, StrictInt
 
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
 from amronet.algorithms.common.forces import inverse_square_obstacle_forces
@@ -56,6 +56,8 @@ from amronet.algorithms.potential_field.kernels import come_to_rest, wake_and_ac
 from amronet.algorithms.stepping import FastStep, StepContext
 from amronet.engine.kernel_data import Csr
 from amronet.engine.robots import Role, State, state_lookup
+from amronet.limits import MAX_COUNT
+from amronet.yaml_fields import YamlBool
 
 __all__ = ["PotentialField", "PotentialFieldParams"]
 
@@ -85,7 +87,7 @@ class PotentialFieldParams(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    connectivity_k: Annotated[StrictInt, Field(ge=0)] = 1
+    connectivity_k: Annotated[StrictInt, Field(ge=0, le=MAX_COUNT)] = 1
     damping: _Positive = 0.25
     safety_factor: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] = 0.8
     mass: _Positive = 1.0
@@ -93,10 +95,10 @@ class PotentialFieldParams(BaseModel):
     balance_fraction: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.75
     k_cover: _Positive | None = None
     k_degree: _Positive | None = None
-    obstacle_forces: StrictBool = True
+    obstacle_forces: YamlBool = True
     k_obstacle: _Positive | None = None
     rest_fraction: Annotated[float, Field(strict=True, gt=0, lt=1, allow_inf_nan=False)] = 0.05
-    rest_steps: Annotated[StrictInt, Field(ge=1)] = 20
+    rest_steps: Annotated[StrictInt, Field(ge=1, le=MAX_COUNT)] = 20
     force_cap_factor: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 4.0
 
 

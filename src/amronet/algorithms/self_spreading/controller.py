@@ -90,6 +90,7 @@ from amronet.algorithms.self_spreading.walks import Walker
 from amronet.algorithms.stepping import FastStep, StepContext
 from amronet.engine.motion import random_walk
 from amronet.engine.robots import SETTLING_STATES, Role, State, state_lookup
+from amronet.limits import MAX_COUNT
 
 __all__ = ["SelfSpreading", "SelfSpreadingParams"]
 
@@ -131,7 +132,7 @@ class SelfSpreadingParams(BaseModel):
     triangular: TriangularMode = "local"
     loss_margin: Annotated[float, Field(strict=True, gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
     turn_noise: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 1.0
-    give_up_steps: Annotated[StrictInt, Field(ge=1)] = 20
+    give_up_steps: Annotated[StrictInt, Field(ge=1, le=MAX_COUNT)] = 20
     stop_rule: Literal["distance", "link-quality"] = "distance"
     stop_margin_db: Decibels = 3.0
     loss_margin_db: Decibels = 1.0

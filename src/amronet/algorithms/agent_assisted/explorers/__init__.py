@@ -1,5 +1,8 @@
 """Exploration strategies of the agents, registered by name in :data:`EXPLORERS` (the paper uses ``"random"``).
 
+The default is ``"frontier"`` (:data:`amronet.algorithms.agent_assisted.params.DEFAULT_EXPLORER`): the one that
+finishes on real floor plans; the paper's ``"random"`` stays in rooms whose doors are narrower than 1.2 m.
+
 An explorer sets the headings of the agents it is given from their sonar readings; it may keep its own state.
 A new one subclasses :class:`Explorer` and registers itself with ``@EXPLORERS.register("name")``
 (:mod:`~amronet.algorithms.agent_assisted.explorers.base`); scenarios pick it with ``algorithm.params.explorer``.
