@@ -46,3 +46,25 @@ def runs_in(store: Path) -> int:
             con.close()
     except sqlite3.Error:
         return 0
+
+
+def proc_stats() -> dict[int, list[bytes]]:
+    """Each live process's ``/proc/PID/stat`` fields after the command name (state, ppid, pgrp, session, ...)."""
+    out = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                out[int(entry.name)] = (entry / "stat").read_bytes().rsplit(b")", 1)[1].split()
+            except (OSError, IndexError):
+                continue
+    return out
+
+
+def children(pid):
+    """Pids of the processes whose parent is ``pid``."""
+    return [p for p, fields in proc_stats().items() if int(fields[1]) == pid]
+
+
+def session(sid):
+    """Pids of the live (not zombie) processes of session ``sid``."""
+    return [p for p, fields in proc_stats().items() if int(fields[3]) == sid and fields[0] not in (b"Z", b"X")]

@@ -26,7 +26,7 @@ import pytest
 from amronet.cli import main
 from amronet.sweeps import ResultStore, sweep_from_spec
 from amronet.sweeps.worker import execute_job
-from sweep_helpers import runs_in, tiny_sweep, write_sweep
+from sweep_helpers import children, runs_in, tiny_sweep, write_sweep
 from test_dask import start_cluster, stop_cluster
 
 LINUX = sys.platform.startswith("linux")
@@ -38,19 +38,6 @@ def slow_sweep(name, points=(0.8, 1.0, 1.2), seeds=3, time_limit=100.0):
     return {"name": name, "base": "self-spreading-6x6", "overrides": {"sim.time_limit": time_limit},
             "grid": {"radio.r_c": list(points)}, "seeds": seeds}
 
-
-def children(pid):
-    """Pids of the processes whose parent is ``pid`` (from /proc)."""
-    out = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_bytes().rsplit(b")", 1)[1].split()
-            except (OSError, IndexError):
-                continue
-            if int(fields[1]) == pid:
-                out.append(int(entry.name))
-    return out
 
 
 def pool_workers(pid):

@@ -8,6 +8,8 @@
 * The workers of a local pool or of a ``LocalCluster`` ignore ``SIGINT`` (the sweep stops them); an executor that
   does not report (Dask) still gets honest counts, and an interrupted ``LocalCluster`` closes within a second or so.
 * A worker that dies half-way through a report makes the pool raise ``WorkerDiedError``, it does not hang it.
+* Ctrl-C of runs in the sweep's own process (``--workers 1``) never crashes it: a ``SIGINT`` landing in a numba
+  kernel used to end it with a segmentation fault.
 """
 
 import os
@@ -15,8 +17,8 @@ import signal
 import sqlite3
 import subprocess
 import sys
+import textwrap
 import time
-from pathlib import Path
 
 import pytest
 
@@ -27,7 +29,7 @@ from amronet.sweeps import ResultStore, run_sweep, sweep_from_spec
 from amronet.sweeps.executors import LocalExecutor
 from amronet.sweeps.interrupt import SweepInterrupted
 from amronet.sweeps.worker import execute_batch, reporting_to
-from sweep_helpers import runs_in, tiny_sweep, write_sweep
+from sweep_helpers import runs_in, session, tiny_sweep, write_sweep
 
 LINUX = sys.platform.startswith("linux")
 EXIT_BOUND_S = 4.0
@@ -40,19 +42,6 @@ def short_and_long(name, long=(200000.0,)):
             "overrides": {"sim.stop_when_settled": False, "sim.record_every": 100},
             "grid": {"sim.time_limit": [20.0, *long]}, "seeds": 1}
 
-
-def session(sid):
-    """Pids of the live processes of session ``sid`` (from /proc)."""
-    out = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_bytes().rsplit(b")", 1)[1].split()
-            except (OSError, IndexError):
-                continue
-            if int(fields[4]) == sid and fields[0] not in (b"Z", b"X"):
-                out.append(int(entry.name))
-    return out
 
 
 def stored(store):
@@ -202,6 +191,42 @@ def test_a_worker_dying_half_way_through_a_report_is_one_error_not_a_hang():
     thread.join(30)
     assert not thread.is_alive(), "the pool hangs on a report cut short"
     assert len(raised) == 1
+
+
+IN_PROCESS = textwrap.dedent("""
+    import sys
+    from amronet.sweeps import sweep_from_spec
+    from amronet.sweeps.executors import LocalExecutor
+    from amronet.sweeps.worker import execute_batch
+
+    spec = {"name": "in-process", "base": "self-spreading-autolab", "overrides": {"sim.time_limit": 100000.0},
+            "seeds": 1}
+    job = {"scenario": sweep_from_spec(spec).points[0].scenario, "seeds": [0, 1, 2, 3]}
+    with LocalExecutor(1) as ex:
+        for _ in range(3):
+            try:
+                print("running", flush=True)
+                list(ex.imap_unordered(execute_batch, [job]))
+            except KeyboardInterrupt:
+                print("interrupted", flush=True)
+""")
+
+
+@pytest.mark.skipif(not LINUX, reason="the crash this guards against was seen on Linux")
+def test_ctrl_c_of_runs_in_the_sweeps_own_process_never_crashes_it():
+    # a SIGINT that lands in a numba kernel crashed the process (SIGSEGV) most times: with --workers 1 the runs
+    # are in the sweep's own process
+    proc = subprocess.Popen([sys.executable, "-c", IN_PROCESS], stdout=subprocess.PIPE, text=True)
+    try:
+        for _ in range(3):
+            assert proc.stdout.readline() == "running\n"
+            time.sleep(0.5)  # well into the batch's kernels
+            proc.send_signal(signal.SIGINT)
+            assert proc.stdout.readline() == "interrupted\n", f"exit status {proc.wait()}"
+        assert proc.wait(timeout=30) == 0
+    finally:
+        proc.kill()
+        proc.wait()
 
 
 class _Interrupted:
