@@ -12,7 +12,6 @@ from typing import Annotated, Any, Literal
 
 from pydantic import (
     BaseModel,
-    ConfigDict,
     Discriminator,
     Field,
     ModelWrapValidatorHandler,
@@ -20,19 +19,19 @@ from pydantic import (
     StrictInt,
     Tag,
     ValidationError,
-    ValidationInfo,
     field_validator,
     model_validator,
 )
 
 from amronet.algorithms import ALGORITHMS
-from amronet.engine.propagation import RADIO_BOUNDS, LinkBudget, median_range
-from amronet.engine.radio import DEFAULT_WALL_DB, MEDIA
+from amronet.engine.radio import MEDIA
 from amronet.errors import ScenarioError
 from amronet.limits import MAX_COUNT
 from amronet.scenario.defaults import fill_start_regions, with_algorithm_defaults, without
+from amronet.scenario.fields import MAX_RANGE_M, Count, FiniteFloat, NodeId, NonNegativeFloat, PositiveFloat, Strict
 from amronet.scenario.messages import to_scenario_error
 from amronet.scenario.overrides import apply_overrides
+from amronet.scenario.radio_spec import RadioSpec
 from amronet.yaml_fields import YamlBool
 
 __all__ = [
@@ -51,29 +50,18 @@ __all__ = [
     "validate_scenario",
 ]
 
-PositiveFloat = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
-NonNegativeFloat = Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)]
-FiniteFloat = Annotated[float, Field(strict=True, allow_inf_nan=False)]
-Count = Annotated[StrictInt, Field(ge=0, le=MAX_COUNT)]
-"""A number of robots (at most :data:`~amronet.limits.MAX_COUNT`: larger ones are typos)."""
-NodeId = Annotated[StrictInt, Field(ge=0, lt=MAX_COUNT)]
 
-MAX_RANGE_M = 1e5
-"""The longest median range ``radio.r_c`` (100 km): longer ones overflow the controllers' squared ranges and the
-pictures' arithmetic, and no floor plan needs them."""
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class RobotSpec(_Strict):
+class RobotSpec(Strict):
     """A robot model given field by field instead of by name."""
 
     radius: PositiveFloat
+    """Body radius (m)."""
     max_speed: NonNegativeFloat
+    """Top speed (m/s); 0 for an immobile node."""
     sensor_beams: Annotated[StrictInt, Field(ge=1, le=360)]
+    """Range sensors, evenly spaced around the body."""
     sensor_range: PositiveFloat
+    """Range of each sensor (m)."""
 
 
 def _robot_ref_tag(value: Any) -> str:
@@ -84,110 +72,40 @@ RobotRef = Annotated[Annotated[str, Tag("name")] | Annotated[RobotSpec, Tag("spe
 """A robot model by name (``bebot``), or field by field (a mapping: errors then name the field inside it)."""
 
 
-class RadioSpec(_Strict):
-    """The radio medium and its link budget (:mod:`amronet.engine.propagation`, :mod:`amronet.engine.radio`).
-
-    Fields left out (``None``) take the model's defaults: path-loss exponent 2.5 for ``log-distance`` and the
-    unit disk's RSSI, 2.0 for ``multi-wall``; shadowing 5 dB for ``log-distance``, none otherwise; 6.9 dB per
-    wall (COST 231 heavy wall) for ``multi-wall``.
-    """
-
-    model: str = "unit-disk"
-    r_c: PositiveFloat = 1.0
-    """Median range without walls and shadowing (m): the usable threshold is derived from it."""
-    tx_dbm: FiniteFloat = 20.0
-    pl0_db: FiniteFloat = 40.0
-    """Path loss at 1 m (dB)."""
-    path_loss_exponent: PositiveFloat | None = None
-    wall_db: NonNegativeFloat | None = None
-    """Loss per wall crossed (dB); ``multi-wall`` only."""
-    shadowing_db: NonNegativeFloat | None = None
-    """Standard deviation of the spatially correlated log-normal shadowing (dB); not for the unit disk."""
-    shadowing_corr_m: PositiveFloat = 2.0
-    threshold_dbm: FiniteFloat | None = None
-    """The usable-link threshold (dBm); given, it sets ``r_c`` (the median range it implies), so give one of the two."""
-    packet_loss: YamlBool = False
-    """Drop each link in each step with probability one minus its packet delivery ratio."""
-
-    @field_validator(*RADIO_BOUNDS, mode="before")
-    @classmethod
-    def _in_bounds(cls, value: Any, info: ValidationInfo) -> Any:
-        """Refuse a number outside the field's physical range (:data:`~amronet.engine.propagation.RADIO_BOUNDS`)."""
-        problem = RADIO_BOUNDS[str(info.field_name)].problem(value)
-        if problem is not None:
-            raise ValueError(f"@radio.{info.field_name}@{problem}")
-        return value
-
-    @model_validator(mode="after")
-    def _check_budget(self) -> RadioSpec:
-        if self.r_c > MAX_RANGE_M:
-            raise ValueError(f"@radio.r_c@{self.r_c:g} m is beyond the longest range amronet models, "
-                             f"{MAX_RANGE_M:g} m; give a range in metres, e.g. 1.5")
-        cls = MEDIA.get(self.model)
-        if cls is None:
-            return self  # the scenario names the unknown model
-        given = self.model_fields_set
-        if not cls.uses_walls and self.wall_db is not None:
-            raise ValueError(f"@radio.wall_db@the {self.model} model has no walls; use radio.model=multi-wall or "
-                             "leave wall_db out")
-        if not cls.uses_shadowing and (self.shadowing_db or 0.0) > 0:
-            raise ValueError(f"@radio.shadowing_db@the {self.model} model has no shadowing; use radio.model="
-                             "log-distance or multi-wall, or leave shadowing_db out")
-        if self.threshold_dbm is not None:
-            n = self.path_loss_exponent or cls.default_exponent
-            implied = median_range(self.tx_dbm, self.pl0_db, n, self.threshold_dbm)
-            if implied < 0.05:
-                at = self.tx_dbm - self.pl0_db - 10.0 * n * math.log10(0.05)
-                raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm is never reached: the transmitter "
-                                 f"delivers {at:.1f} dBm at 5 cm; lower the threshold or raise radio.tx_dbm")
-            if implied > MAX_RANGE_M:
-                raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm puts the median range at "
-                                 f"{implied:.3g} m; raise the threshold (or give radio.r_c instead)")
-            if "r_c" in given and not math.isclose(implied, self.r_c, rel_tol=1e-9):
-                raise ValueError(f"@radio.threshold_dbm@{self.threshold_dbm:g} dBm implies r_c = {implied:.6g} m but "
-                                 f"radio.r_c is {self.r_c:g}; give only one of the two")
-            object.__setattr__(self, "r_c", implied)
-        return self
-
-    def link_budget(self) -> LinkBudget:
-        """The link budget of this radio, the model's defaults filled in."""
-        cls = MEDIA.lookup(self.model, "radio.model")
-        shadowing = self.shadowing_db if self.shadowing_db is not None else cls.default_shadowing_db
-        wall = self.wall_db if self.wall_db is not None else DEFAULT_WALL_DB
-        return LinkBudget(r_c=self.r_c, tx_dbm=self.tx_dbm, pl0_db=self.pl0_db,
-                          exponent=self.path_loss_exponent or cls.default_exponent,
-                          wall_db=wall if cls.uses_walls else 0.0,
-                          shadowing_db=shadowing if cls.uses_shadowing else 0.0,
-                          shadowing_corr_m=self.shadowing_corr_m)
-
-
-class BaseStationSpec(_Strict):
+class BaseStationSpec(Strict):
     """A base station: its immobile reference node and the region its routers start in."""
 
     x: FiniteFloat
+    """Position of the base station's reference node (m, in the map's frame)."""
     y: FiniteFloat
+    """Position of the base station's reference node (m, in the map's frame)."""
     region: tuple[PositiveFloat, PositiveFloat] = (1.0, 1.0)
     """Width and height (m) of the rectangle around the base its robots start in; left out, the smallest square of
     at least 1 m that holds them (:mod:`amronet.scenario.defaults`)."""
     robot: RobotRef = "amigobot"
+    """The reference node's robot model (immobile)."""
 
 
-class RoutersSpec(_Strict):
+class RoutersSpec(Strict):
     """The routers of the AMRoNet."""
 
     count: Count = 30
+    """Free routers that start at the base stations (agent-assisted deployment: 0 unless given; agents carry
+    them)."""
     robot: RobotRef = "bebot"
+    """The routers' robot model."""
     start: Literal["base", "uniform"] = "base"
     """``base``: in the base stations' regions (the paper); ``uniform``: scattered over the reachable free space
     (dropped from the air; used by the benchmark)."""
 
 
-class AgentsSpec(_Strict):
+class AgentsSpec(Strict):
     """The agents: fast explorers that use (and, in agent-assisted deployment, build) the AMRoNet."""
 
     per_base: Count = 0
     """Agents per base station; they start next to its reference node with its status."""
     robot: RobotRef = "pioneer"
+    """The agents' robot model."""
     routers_carried: Count | None = None
     """Routers each agent carries; ``null`` for unlimited (DARPA SubT robots carried 6 to 12)."""
     when_empty: Literal["tether", "continue"] = "tether"
@@ -209,18 +127,25 @@ class AgentsSpec(_Strict):
     :mod:`amronet.algorithms.agent_assisted.explorers.trajectory`. ``null``: the agents explore."""
 
 
-class SimSpec(_Strict):
+class SimSpec(Strict):
     """The simulation loop."""
 
     dt: PositiveFloat = 0.1
+    """Simulated seconds per step."""
     time_limit: PositiveFloat = 300.0
+    """Simulated seconds after which a run stops (truncated)."""
     record_every: Annotated[StrictInt, Field(ge=1, le=MAX_COUNT)] = 10
+    """Steps between two recorded rows of the time series (and frames of a recording)."""
     coverage_target: float | str | None = None
     """Coverage at which a run ends, in (0, 1]; ``null``: the algorithm's default (0.99 for agent-assisted deployment,
     none for the others); ``off``: none (the run goes on until it settles or reaches its time limit)."""
     coverage_method: Literal["raster", "exact"] = "raster"
+    """``raster``: coverage counted cell by cell on the map's grid; ``exact``: the union of disks in closed form
+    (unit disk only)."""
     stop_when_settled: YamlBool = True
+    """End the run when no router can move any more."""
     robot_collisions: YamlBool = True
+    """Robots' bodies block each other (as well as walls)."""
 
     @field_validator("coverage_target", mode="before")
     @classmethod
@@ -234,7 +159,7 @@ class SimSpec(_Strict):
         return value
 
 
-class FaultSpec(_Strict):
+class FaultSpec(Strict):
     """One entry of ``faults``: nodes that fail (they stop sending and relaying and stay where they are).
 
     Exactly one of ``routers`` (this fraction of the routers deployed at ``at``, drawn by the run's generator),
@@ -243,10 +168,15 @@ class FaultSpec(_Strict):
     """
 
     at: NonNegativeFloat | None = None
+    """Time (s) at which the nodes fail (for ``rate_per_hour``: from when failures start; default 0)."""
     routers: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] | None = None
+    """Fraction of the routers deployed at ``at`` that fail, drawn by the run's generator."""
     ids: Annotated[list[NodeId], Field(min_length=1)] | None = None
+    """The node ids that fail at ``at``."""
     rate_per_hour: PositiveFloat | None = None
+    """Each deployed router fails as a Poisson process of this rate (per hour)."""
     base_station: NodeId | None = None
+    """Index of the base station whose reference node fails at ``at``."""
 
     @property
     def kind(self) -> str:
@@ -257,14 +187,16 @@ class FaultSpec(_Strict):
 FAULT_KINDS = ("routers", "ids", "rate_per_hour", "base_station")
 
 
-class AlgorithmSpec(_Strict):
+class AlgorithmSpec(Strict):
     """Which deployment algorithm runs, with its own parameters (validated by the algorithm)."""
 
     name: str = "self-spreading"
+    """The deployment algorithm (its registry name)."""
     params: dict[str, Any] = Field(default_factory=dict)
+    """The algorithm's own parameters (see its section below); unknown ones are errors."""
 
 
-class Scenario(_Strict):
+class Scenario(Strict):
     """A whole run, validated.
 
     Attributes:
@@ -273,14 +205,23 @@ class Scenario(_Strict):
     """
 
     name: str = "unnamed"
+    """A name for the scenario (goes into the outputs)."""
     description: str = ""
+    """One line saying what the scenario is for."""
     map: str
+    """A built-in map (``amronet maps list``) or the path of a ROS ``map_server`` YAML file."""
     algorithm: AlgorithmSpec = Field(default_factory=AlgorithmSpec)
+    """Which algorithm runs, with its parameters."""
     radio: RadioSpec = Field(default_factory=RadioSpec)
+    """The radio medium."""
     base_stations: Annotated[list[BaseStationSpec], Field(min_length=1)]
+    """The base stations, at least one; each has an immobile reference node."""
     routers: RoutersSpec = Field(default_factory=RoutersSpec)
+    """The free routers."""
     agents: AgentsSpec = Field(default_factory=AgentsSpec)
+    """The agents."""
     sim: SimSpec = Field(default_factory=SimSpec)
+    """The simulation loop."""
     faults: list[FaultSpec] = Field(default_factory=list)
     """Node failures (:class:`FaultSpec`); none by default."""
     base_dir: str | None = Field(default=None, exclude=True)

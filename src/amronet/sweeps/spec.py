@@ -71,15 +71,21 @@ class SweepSpec(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     name: str = Field(min_length=1)
+    """The sweep's name (its key in the result store)."""
     description: str = ""
+    """One line saying what the sweep measures."""
     base: Any
     """A preset name, a scenario file path (relative to the sweep file) or an inline scenario mapping."""
     overrides: dict[str, Any] = Field(default_factory=dict)
+    """``--set`` keys applied to every point."""
     grid: dict[str, list[Any]] | None = None
+    """Keys and lists of values: every combination is a point."""
     points: list[dict[str, Any]] | None = None
+    """Explicit points (mappings of keys to values), after the grid's."""
     seeds: Any
     """A number of seeds (``>= 1``; seeds ``seed_start, seed_start + 1, ...``) or a list of distinct seeds."""
     seed_start: StrictInt = Field(default=0, ge=0)
+    """The first seed when ``seeds`` is a count."""
 
     @model_validator(mode="after")
     def _check(self) -> SweepSpec:
@@ -142,6 +148,7 @@ class Point:
 
     index: int
     overrides: dict[str, Any]
+    """``--set`` keys applied to every point."""
     scenario: dict[str, Any]
     hash: str
 
@@ -159,7 +166,9 @@ class Sweep:
 
     spec: SweepSpec
     points: list[Point]
+    """Explicit points (mappings of keys to values), after the grid's."""
     seeds: list[int]
+    """Seeds per point: a count (``seed_start`` .. ``seed_start + n - 1``) or a list."""
     keys: list[str]
 
     @property
