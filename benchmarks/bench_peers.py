@@ -49,6 +49,24 @@ TURN_NOISE = 1.0  # rad per sqrt(s), SelfSpreadingParams.turn_noise default
 AREA_PER_ROBOT = 0.25  # m², run_bench's default
 
 
+def walk(model: Any, position: Any, heading: float) -> tuple[float, float, float]:
+    """One random-walk move of ``model.step_len`` along ``heading``, reflected at the square's walls.
+
+    Returns:
+        The new ``(x, y, heading)``.
+    """
+    x, y = position
+    x += model.step_len * math.cos(heading)
+    y += model.step_len * math.sin(heading)
+    if not 0.0 <= x <= model.side:
+        x = -x if x < 0.0 else 2.0 * model.side - x
+        heading = math.pi - heading
+    if not 0.0 <= y <= model.side:
+        y = -y if y < 0.0 else 2.0 * model.side - y
+        heading = -heading
+    return x, y, heading
+
+
 class Walker(ContinuousSpaceAgent):
     """A random walker that looks up its neighbours within ``r_c`` every step."""
 
@@ -61,16 +79,7 @@ class Walker(ContinuousSpaceAgent):
     def step(self) -> None:
         """Turn by Gaussian noise, move one step (reflected at the bounds), query the neighbours in radius."""
         m = self.model
-        self.heading += self.random.gauss(0.0, m.sigma)
-        x, y = self.position
-        x += m.step_len * math.cos(self.heading)
-        y += m.step_len * math.sin(self.heading)
-        if not 0.0 <= x <= m.side:
-            x = -x if x < 0.0 else 2.0 * m.side - x
-            self.heading = math.pi - self.heading
-        if not 0.0 <= y <= m.side:
-            y = -y if y < 0.0 else 2.0 * m.side - y
-            self.heading = -self.heading
+        x, y, self.heading = walk(m, self.position, self.heading + self.random.gauss(0.0, m.sigma))
         self.position = (x, y)
         self.neighbours, _ = self.get_neighbors_in_radius(radius=m.r_c)
 
@@ -102,16 +111,7 @@ class StableWalker(mesa.Agent):
     def step(self) -> None:
         """Turn by Gaussian noise, move one step (reflected at the bounds), query the neighbours in radius."""
         m = self.model
-        self.heading += self.random.gauss(0.0, m.sigma)
-        x, y = self.pos
-        x += m.step_len * math.cos(self.heading)
-        y += m.step_len * math.sin(self.heading)
-        if not 0.0 <= x <= m.side:
-            x = -x if x < 0.0 else 2.0 * m.side - x
-            self.heading = math.pi - self.heading
-        if not 0.0 <= y <= m.side:
-            y = -y if y < 0.0 else 2.0 * m.side - y
-            self.heading = -self.heading
+        x, y, self.heading = walk(m, self.pos, self.heading + self.random.gauss(0.0, m.sigma))
         m.space.move_agent(self, (min(max(x, 0.0), m.side), min(max(y, 0.0), m.side)))
         self.neighbours = m.space.get_neighbors(self.pos, m.r_c, include_center=False)
 

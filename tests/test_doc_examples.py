@@ -15,6 +15,7 @@ A documented value that the code refuses fails here. What is checked, per fenced
 
 from __future__ import annotations
 
+import functools
 import re
 import shlex
 from dataclasses import dataclass
@@ -66,6 +67,7 @@ def _is_scenario(doc: object) -> bool:
     return isinstance(doc, dict) and "map" in doc and "base_stations" in doc
 
 
+@functools.cache
 def _yaml_docs() -> list[tuple[Block, dict]]:
     from amronet.yaml_loading import load_yaml
 
@@ -124,6 +126,7 @@ def _scenario_of(words: list[str], page_scenarios: dict[str, dict]) -> object | 
     return None
 
 
+@functools.cache
 def _named_scenarios() -> dict[str, dict]:
     """Scenario examples written in the pages, by the file name their page gives them (``# my-scenario.yaml``)."""
     named = {}
