@@ -10,11 +10,11 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	@echo "installing amronet and its dependencies into $(VENV) (about 2 minutes)..."
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,cluster,docs]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,cluster,docs,rl]'
 	@# compile the numba kernels into their on-disk cache now, not in the first run; it prints a line per group of
 	@# kernels as it starts (one updating line on a terminal). Should it fail, runs still work and compile what they
 	@# use (tests/test_warmup.py runs the same warm-up and fails)
-	@echo "compiling the simulator's kernels once (about 2 minutes on 2 cores, up to 4 on a busy machine)..."
+	@echo "compiling the simulator's kernels once (about a minute on 2 cores, a few on a busy machine)..."
 	$(BIN)/amronet compile || echo "amronet compile failed: runs will compile their kernels on first use"
 	touch $(STAMP)
 

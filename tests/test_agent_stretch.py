@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.algorithms.agent_assisted import kernels, stretch_kernels
+from amronet.algorithms.agent_assisted import kernels, rule_kernels, stretch_kernels
 from amronet.algorithms.agent_assisted.controller import _pair_key
 from amronet.algorithms.agent_assisted.explorers.frontier import knowledge, planning
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
-from amronet.algorithms.agent_assisted.stretch_kernels import TRIANGLES_LOCAL, TRIANGLES_NONE, _triangle_goes
+from amronet.algorithms.agent_assisted.stretch_kernels import TRIANGLES_LOCAL, TRIANGLES_NONE, triangle_goes
 from amronet.algorithms.common.triangular import select_triangles
 from amronet.algorithms.stepping import AgentBooks
 from amronet.engine.kernel_data import Csr, Grid
@@ -109,7 +109,7 @@ def test_the_kernels_triangle_rule_is_select_triangles(seed, rule):
                                 np.ones(n + m, dtype=bool)).any()
     code = TRIANGLES_NONE if rule == "none" else TRIANGLES_LOCAL
     served_rows = np.array(sorted(served), dtype=np.int64).reshape(-1, 3)
-    assert _triangle_goes((code, 3.0, disabled, served_rows), agents, current, other, left, xy) == expected
+    assert triangle_goes((code, 3.0, disabled, served_rows), agents, current, other, left, xy) == expected
 
 
 def test_steps_stepped_one_by_one_take_no_stretch():
@@ -140,7 +140,7 @@ def test_a_recorded_run_is_stepped_one_by_one_to_the_same_end():
         np.testing.assert_array_equal(_books(recorded)[key], value, err_msg=key)
 
 
-K, S = kernels, stretch_kernels
+K, S, R = kernels, stretch_kernels, rule_kernels
 UNPACKED = {  # (module, kernel): {tuple it unpacks: the named structure laid out in it}
     (K, "sense_track_agents"): {"grid": Grid, "robots": K.Robots, "ring": K.Ring, "near": Csr,
                                 "tracking": K.Tracking, "table": Csr},
@@ -149,7 +149,10 @@ UNPACKED = {  # (module, kernel): {tuple it unpacks: the named structure laid ou
     (S, "quiet_stretch"): {"grid": Grid, "robots": K.Robots, "ring": K.Ring, "moves": S.Moves, "radio": S.Radio,
                            "tracking": K.Tracking, "moving": S.Moving, "knowledge": K.Knowledge,
                            "cells": knowledge.Cells, "frontier": S.Frontier},
-    (S, "_triangle_goes"): {"triangles": S.Triangles},
+    (S, "triangle_goes"): {"triangles": S.Triangles},
+    (R, "rule_quiet"): {"books": R.RuleBooks, "inputs": R.RuleInputs},
+    (R, "rule_commit"): {"books": R.RuleBooks},
+    (R, "rule_acts"): {"rules": R.RuleStep},
     (S, "_observe"): {"books": AgentBooks, "arrays": S.Links},
     (knowledge, "integrate_readings"): {"cells": knowledge.Cells},
     (planning, "search_target"): {"targets": planning.Targets, "claims": planning.Claims},

@@ -10,6 +10,7 @@ from amronet.algorithms.self_spreading import fast as compiled_step
 from amronet.algorithms.self_spreading.controller import SelfSpreading
 from amronet.algorithms.self_spreading.fast import CompiledSpreading
 from amronet.engine.robots import State
+from amronet.experiments.walks import walk_scenario
 from amronet.scenario import load_scenario
 from amronet.sim import BatchSimulation, Simulation
 
@@ -36,6 +37,28 @@ CASES = {
                                                 {"sim.time_limit": 40, "algorithm.params.obstacle_forces": False}),
     "potential field on autolab": ("potential-field-6x6", 6, {"sim.time_limit": 40, "map": "autolab",
                                                             "base_stations": [{"x": 3.0, "y": 3.0}]}),
+    **{f"walk {walk}, obstacles, global rule": ("self-spreading-obstacles-6x6", 5, {
+        "sim.time_limit": 40, "algorithm.params.triangular": "global", "algorithm.params.walk": walk})
+       for walk in ("straight", "growth", "guided")},
+    **{f"walk {walk}, office, two bases": ("self-spreading-office", 2, {
+        "sim.time_limit": 150, "algorithm.params.triangular": "none", "algorithm.params.walk": walk})
+       for walk in ("straight", "growth", "guided")},
+    **{f"walk {walk}, hospital floor plan": (walk_scenario("hospital_section", walk, 60.0), 80_000, {})
+       for walk in ("random", "straight", "growth", "guided")},
+    "walk growth, multi-wall radio": ("self-spreading-office", 5, {"sim.time_limit": 40, "radio.model": "multi-wall",
+                                                                   "algorithm.params.walk": "growth"}),
+    "link-quality stop rule": ("self-spreading-6x6", 3, {"sim.time_limit": 40,
+                                                         "algorithm.params.stop_rule": "link-quality"}),
+    "link-quality stop rule, two bases": ("self-spreading-office", 2, {
+        "sim.time_limit": 150, "algorithm.params.triangular": "none", "algorithm.params.stop_rule": "link-quality"}),
+    "link-quality triangles": ("self-spreading-office", 2, {
+        "sim.time_limit": 150, "algorithm.params.triangular": "none",
+        "algorithm.params.triangle_rule": "link-quality"}),
+    "link-quality rules, guided walk, hospital floor plan": (walk_scenario("hospital_section", "guided", 60.0), 3, {
+        "algorithm.params.stop_rule": "link-quality", "algorithm.params.triangle_rule": "link-quality"}),
+    "link-quality rules, multi-wall radio with packet loss": ("self-spreading-office", 5, {
+        "sim.time_limit": 30, "radio.model": "multi-wall", "radio.packet_loss": True, "radio.shadowing_db": 4.0,
+        "algorithm.params.stop_rule": "link-quality", "algorithm.params.triangle_rule": "link-quality"}),
     "agents, paper's random explorer": ("agent-assisted-office", 1, {"sim.time_limit": 150}),
     "agents, frontier explorer": ("agent-assisted-office", 2, {"sim.time_limit": 200, "radio.r_c": 4.0,
                                                                "algorithm.params.explorer": "frontier"}),
@@ -60,6 +83,15 @@ def _state(sim):
     return sw.xy, sw.heading, sw.state, sw.status, sw.distance
 
 
+def _walkers_memory(sim):
+    """What self-spreading's walk and stop rules keep per router (edge following, growth, smoothed margins)."""
+    c = sim.controller
+    if not isinstance(c, SelfSpreading):
+        return ()
+    smoothed = () if c.smoother is None else (c.smoother.value,)
+    return (c.walker.follow, c.walker.side, c.walker.deployed_at, *smoothed)
+
+
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_the_compiled_step_gives_the_reference_run_bit_for_bit(name):
     preset, seed, overrides = CASES[name]
@@ -67,7 +99,8 @@ def test_the_compiled_step_gives_the_reference_run_bit_for_bit(name):
     compiled, reference = Simulation(sc, seed), Simulation(sc, seed, step="reference")
     assert compiled.compiled is not None and reference.compiled is None
     a, b = compiled.run(), reference.run()
-    for x, y in zip(_state(compiled), _state(reference), strict=True):
+    for x, y in zip(_state(compiled) + _walkers_memory(compiled), _state(reference) + _walkers_memory(reference),
+                    strict=True):
         np.testing.assert_array_equal(x, y)
     for name in ("current", "disabled", "velocity", "rest_count", "held_force", "wakeups", "left", "refused",
                  "released_by"):
@@ -103,10 +136,8 @@ def test_it_steps_through_triangular_deployments_by_the_controllers_rules(monkey
     np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
 
 
-def test_agents_that_act_and_routers_that_drive_go_through_the_controllers_rules(monkeypatch):
-    """Steps in which an agent acts go through ``decide_tracked``; while a triangle router drives, whole steps go
-    through ``decide`` (the phases); the other steps through neither, and the runs still agree."""
-    calls = {"decide": 0, "decide_tracked": 0}
+def _count_calls(monkeypatch, names):
+    calls = dict.fromkeys(names, 0)
     for name in calls:
         original = getattr(AgentAssisted, name)
 
@@ -115,6 +146,13 @@ def test_agents_that_act_and_routers_that_drive_go_through_the_controllers_rules
             return _original(self, *args)
 
         monkeypatch.setattr(AgentAssisted, name, counting)
+    return calls
+
+
+def test_agents_that_act_and_routers_that_drive_go_through_the_controllers_rules(monkeypatch):
+    """Steps in which an agent acts go through ``decide_tracked``; while a triangle router drives, the compiled step
+    senses it and the controller steers it (``movers_command``); no step goes through the phases, and the runs agree."""
+    calls = _count_calls(monkeypatch, ("decide", "decide_tracked", "movers_command"))
     sc = load_scenario("agent-assisted-office-4bs", {"sim.time_limit": 120, "agents.per_base": 1,
                                                      "algorithm.params.explorer": "frontier"})
     compiled, reference = Simulation(sc, 3), Simulation(sc, 3, step="reference")
@@ -123,15 +161,33 @@ def test_agents_that_act_and_routers_that_drive_go_through_the_controllers_rules
     in_compiled = dict(calls)
     reference.run()
     assert reference.steps == calls["decide"] - in_compiled["decide"]  # the reference decides every step
-    assert 0 < in_compiled["decide"] < compiled.steps  # the phases: while triangle routers drive
-    assert 0 < in_compiled["decide_tracked"] - in_compiled["decide"] < compiled.steps  # agents acting
+    assert in_compiled["decide"] == 0  # never the phases
+    assert 0 < in_compiled["decide_tracked"] < compiled.steps  # agents acting
+    assert in_compiled["movers_command"] > in_compiled["decide_tracked"]  # quiet steps that steer triangle routers
     assert np.count_nonzero(compiled.swarm.state == State.TRIANGLE_SETTLED) > 0
+    np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
+    np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
+
+
+def test_routers_of_the_agents_model_that_drive_take_the_phases(monkeypatch):
+    """Triangle routers of the agents' own model: the steps they drive in go phase by phase; the runs agree."""
+    calls = _count_calls(monkeypatch, ("decide",))
+    sc = load_scenario("agent-assisted-office-4bs", {"sim.time_limit": 120, "agents.per_base": 1,
+                                                     "routers.robot": "pioneer"})
+    compiled, reference = Simulation(sc, 3), Simulation(sc, 3, step="reference")
+    compiled.run()
+    in_compiled = calls["decide"]
+    reference.run()
+    assert 0 < in_compiled < compiled.steps
     np.testing.assert_array_equal(compiled.swarm.xy, reference.swarm.xy)
     np.testing.assert_array_equal(compiled.swarm.state, reference.swarm.state)
 
 
 @pytest.mark.parametrize(("preset", "overrides"), [
     ("self-spreading-office", {"sim.time_limit": 60, "algorithm.params.triangular": "global"}),
+    ("self-spreading-office", {"sim.time_limit": 60, "algorithm.params.walk": "growth"}),
+    ("self-spreading-obstacles-6x6", {"sim.time_limit": 40, "algorithm.params.walk": "guided",
+                                      "algorithm.params.stop_rule": "link-quality"}),
     ("potential-field-obstacles-6x6", {"sim.time_limit": 30}),
 ])
 def test_batched_runs_are_the_same_with_either_step(preset, overrides):
@@ -148,10 +204,6 @@ def test_batched_runs_are_the_same_with_either_step(preset, overrides):
 
 
 @pytest.mark.parametrize("overrides", [
-    {"algorithm.params.walk": "growth"},
-    {"algorithm.params.walk": "straight"},
-    {"algorithm.params.stop_rule": "link-quality"},
-    {"algorithm.params.triangle_rule": "link-quality"},
     {"faults": [{"at": 5.0, "routers": 0.5}]},
 ])
 def test_rules_it_does_not_compile_take_the_reference_path(overrides):
@@ -167,15 +219,9 @@ def test_each_algorithm_gets_its_compiled_step_or_none():
                      "dssa-6x6": type(None), "agent-assisted-office": CompiledAgents}
 
 
-@pytest.mark.parametrize("overrides", [
-    {"algorithm.params.drop_rule": "radius"},
-    {"agents.when_empty": "continue", "agents.routers_carried": 3},
-    {"agents.drop_settle_s": 2.0},
-    {"algorithm.params.repair": "relocate"},
-    {"faults": [{"at": 5.0, "routers": 0.5}]},
-])
-def test_agent_runs_it_does_not_compile_take_the_reference_path(overrides):
-    sim = Simulation(load_scenario("agent-assisted-office", {"sim.time_limit": 5, **overrides}), 1)
+def test_agent_runs_with_repair_take_the_reference_path():
+    sc = load_scenario("agent-assisted-office", {"sim.time_limit": 5, "algorithm.params.repair": "relocate"})
+    sim = Simulation(sc, 1)
     assert sim.compiled is None and "sense" in sim.phase_seconds
 
 
@@ -187,7 +233,9 @@ def test_an_unknown_step_kind_is_refused():
 THREADED_CASES = {
     "triangle routers": ("self-spreading-office", 2, {"sim.time_limit": 150, "algorithm.params.triangular": "none"}),
     **{name: CASES[name] for name in ("office, two bases, local rule", "obstacles, global rule",
-                                      "base station by a wall", "no body collisions")},
+                                      "base station by a wall", "no body collisions", "walk growth, office, two bases",
+                                      "walk guided, obstacles, global rule", "walk straight, hospital floor plan",
+                                      "link-quality stop rule")},
 }
 
 
@@ -209,7 +257,7 @@ def test_the_threaded_step_gives_the_reference_run_bit_for_bit(name, monkeypatch
     fast.run()
     reference.run()
     assert len(calls) > 0
-    for x, y in zip(_state(fast), _state(reference), strict=True):
+    for x, y in zip(_state(fast) + _walkers_memory(fast), _state(reference) + _walkers_memory(reference), strict=True):
         np.testing.assert_array_equal(x, y)
     np.testing.assert_array_equal(fast.controller.refused, reference.controller.refused)
     assert fast.rows == reference.rows

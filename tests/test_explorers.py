@@ -27,7 +27,7 @@ PACKAGE = Path(explorers_pkg.__file__).parent
 
 def test_the_registry_holds_the_random_the_frontier_and_the_wall_following_explorer():
     assert isinstance(EXPLORERS, Registry)
-    assert list(EXPLORERS) == ["random", "random-escape", "frontier", "wall-follow"]
+    assert list(EXPLORERS) == ["external", "random", "random-escape", "frontier", "wall-follow"]
     assert EXPLORERS["random"] is RandomExplorer and EXPLORERS["frontier"] is FrontierExplorer
     assert EXPLORERS["random-escape"] is RandomEscapeExplorer
     assert RandomExplorer.name == "random" and FrontierExplorer.name == "frontier"
@@ -56,7 +56,7 @@ def test_any_module_imports_first_and_registers_every_explorer(module):
     code = (f"import {module}; from amronet.algorithms.agent_assisted.explorers import EXPLORERS; "
             "print(sorted(EXPLORERS))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "['frontier', 'random', 'random-escape', 'wall-follow']"
+    assert out.strip() == "['external', 'frontier', 'random', 'random-escape', 'wall-follow']"
 
 
 def test_modules_of_the_explorers_import_no_private_names():

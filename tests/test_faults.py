@@ -122,13 +122,40 @@ def test_the_failures_experiment_writes_its_table_and_figure(tmp_path):
 
     out = tmp_path / "failures"
     report = run_failures(out, maps=("autolab",), fractions=(0.3,), runs=2, fault_at=40.0, after=20.0,
-                          options=RunOptions(workers=1, show_progress=False))
-    assert len(report["rows"]) == 6 and {r["algorithm"] for r in report["rows"]} == {
-        "self-spreading", "agent-assisted", "agent-assisted-relocate"}
+                          options=RunOptions(workers=1, show_progress=False), radios=("unit-disk", "multi-wall"))
+    assert len(report["rows"]) == 12
+    cells = {(r["radio"], r["algorithm"]) for r in report["rows"]}
+    assert cells == {("unit-disk", a) for a in ("self-spreading", "agent-assisted", "agent-assisted-relocate",
+                                                "agent-assisted-retrace")} | {
+        ("multi-wall", "agent-assisted-relocate"), ("multi-wall", "agent-assisted-retrace")}
     for r in report["rows"]:
         assert r["failed"] >= 1 and r["connected_after"] <= r["connected_before"] + 1e-12
-    assert (out / "failures.png").read_bytes()[:4] == b"\x89PNG"
-    assert "| autolab | agent-assisted | 30 % |" in (out / "failures.md").read_text()
+    for name in ("failures.png", "failures-multi-wall.png"):
+        assert (out / name).read_bytes()[:4] == b"\x89PNG"
+    text = (out / "failures.md").read_text()
+    assert "## unit-disk" in text and "## multi-wall" in text and "| autolab | agent-assisted | 30 % |" in text
+    assert "| autolab | agent-assisted-retrace | 30 % |" in text.split("## multi-wall")[1]
+
+
+def test_the_failures_experiment_keeps_the_seeds_of_its_first_cells_and_refuses_unknown_names(tmp_path):
+    from amronet.errors import AmronetError
+    from amronet.experiments.failures import _cell_index, _scenario, run_failures
+    from amronet.experiments.options import RunOptions
+
+    # the first version's cells, in its order (map, algorithm, fraction; 20 runs each): the same seeds as then
+    assert _cell_index("office-32x32", "unit-disk", "self-spreading", 0.1) == 0
+    assert _cell_index("autolab", "unit-disk", "agent-assisted-relocate", 0.3) == 17
+    later = {_cell_index(m, r, "agent-assisted-retrace", f) for m in ("autolab", "hospital_section")
+             for r in ("unit-disk", "multi-wall") for f in (0.1, 0.2, 0.3)}
+    assert len(later) == 12 and min(later) >= 18
+    walls = _scenario("agent-assisted-retrace", "autolab", 0.2, 60.0, 60.0, "frontier", "multi-wall")
+    assert walls["radio"]["model"] == "multi-wall" and walls["algorithm"]["params"]["drop_rule"] == "link-quality"
+    assert walls["algorithm"]["params"]["repair"] == "retrace"
+    plain = _scenario("agent-assisted-relocate", "autolab", 0.2, 60.0, 60.0, "frontier")
+    assert plain["radio"] == {"model": "unit-disk", "r_c": 4.0} and "drop_rule" not in plain["algorithm"]["params"]
+    with pytest.raises(AmronetError, match="unknown radio 'walls'"):
+        run_failures(tmp_path / "x", radios=("walls",), options=RunOptions(workers=1, show_progress=False))
+    assert not (tmp_path / "x").exists()
 
 
 def test_coverage_target_off_lets_agents_go_on_after_full_coverage():

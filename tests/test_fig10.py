@@ -3,7 +3,7 @@ import csv
 import numpy as np
 from PIL import Image
 
-from amronet.experiments.fig10 import _hold, _time_to_fraction, run_coverage_over_time
+from amronet.experiments.fig10 import ALGORITHMS, _hold, _time_to_fraction, run_coverage_over_time
 from amronet.experiments.options import RunOptions
 
 
@@ -23,17 +23,20 @@ def test_fig10_and_fig11_small(tmp_path):
     f10 = run_coverage_over_time("fig10", tmp_path / "fig10", runs=2, options=_options(20.0))
     out = tmp_path / "fig10"
     rows = list(csv.DictReader((out / "fig10_runs.csv").open()))
-    assert len(rows) == 6 and {r["algorithm"] for r in rows} == {"self-spreading", "dssa", "potential-field"}
+    assert len(rows) == 12 and {r["algorithm"] for r in rows} == {"self-spreading", "dssa", "potential-field", "vor",
+                                                                  "minimax", "lloyd"}
     # paired comparison: run k of every algorithm starts from the same seed
     assert {(r["run"], r["seed"]) for r in rows} == {("0", "0"), ("1", "1")}
     ts = list(csv.DictReader((out / "fig10_timeseries.csv").open()))
-    assert {r["algorithm"] for r in ts} == {"self-spreading", "dssa", "potential-field"}
+    assert {r["algorithm"] for r in ts} == set(ALGORITHMS)
     assert all(0.0 <= float(r["connected_coverage"]) <= float(r["coverage"]) + 1e-9 <= 1.0 + 1e-9 for r in ts)
     for algorithm, curves in f10["curves"].items():
         assert curves["coverage"].shape == (2, 21), algorithm
         assert curves["coverage"][:, -1].mean() > curves["coverage"][:, 0].mean()  # everybody spreads
     text = (out / "fig10_claims.md").read_text()
     assert "| claim (paper) |" in text and "slightly lower" in text
+    assert "| VOR (location-aware) |" in text  # an extra line of the table, not a party to the paper's claims
+    assert all("VOR" not in c.ours and "Lloyd" not in c.ours for c in f10["claims"])
     # self-spreading never disconnects a router: both of its runs count as connected, DSSA's (spread apart) not
     by_algorithm = {e["algorithm"]: e for e in f10["table"]}
     assert by_algorithm["self-spreading"]["runs_all_connected"] == 2
@@ -61,7 +64,7 @@ def test_reproduce_fig10_quick_on_a_dask_local_cluster_resumes_from_the_store(tm
     args = ["reproduce", "fig10", "--quick", "--out", str(out), "-q"]
     assert main([*args, "--cluster", "local", "--workers", "1"]) == 0
     first = (out / "fig10_runs.csv").read_text()
-    assert (out / "results.sqlite").is_file() and len(first.splitlines()) == 7
+    assert (out / "results.sqlite").is_file() and len(first.splitlines()) == 13
     # again on the local pool: every run comes from the store, the table is the same
     assert main([*args, "--workers", "1"]) == 0
     again = (out / "fig10_runs.csv").read_text()

@@ -69,6 +69,13 @@ def test_point_in_a_wall_is_refused(tmp_path, capsys):
 def test_missing_file_and_bad_options(tmp_path, capsys):
     assert _run(tmp_path, extra=["--folds", "1"]) == 2
     assert "--folds" in capsys.readouterr().err
+    assert _run(tmp_path, extra=["--block-m", "0"]) == 2
+    assert "--block-m: 0 must be a side in metres" in capsys.readouterr().err
+    assert _run(tmp_path, extra=["--block-m", "50"]) == 2  # the positions span 5 m: one block
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("amronet: error: --block-m: blocks of 50 m hold the positions in 1 blocks"), err
+    assert "\n" not in err
+    assert not (tmp_path / "fit").exists()
     code = main(["radio-fit", "--map", "open-6x6", "--anchors", str(tmp_path / "none.csv"), "--rssi", "x.csv"])
     assert code == 2 and "cannot read" in capsys.readouterr().err
 
@@ -100,6 +107,10 @@ def test_ble_flat_fit_matches_the_recorded_values(flat, tmp_path, capsys):
     cv = {c["model"]: c["cv_rmse_db"] for c in doc["comparison"]}
     assert cv["multi-wall"] < cv["log-distance"] - 0.8
     assert cv["multi-wall per-anchor"] < cv["multi-wall"]
+    # blocks of 3 x 0.74 m: held-out areas cost every model more than held-out positions, per-anchor most
+    assert doc["cross_validation"]["block_m"] == 2.21 and doc["cross_validation"]["blocks"] == 12
+    gap = {c["model"]: c["cv_rmse_db"] - c["cv_position_rmse_db"] for c in doc["comparison"]}
+    assert 0.0 < gap["multi-wall"] < 0.3 and gap["log-distance per-anchor"] > 0.2, gap
     assert doc["chosen"] == "multi-wall"
     assert doc["radio"]["path_loss_exponent"] == 1.0  # the fitted 0.975 is below amronet's bound
     assert np.isclose(doc["radio"]["wall_db"], 5.75, atol=0.02)

@@ -17,6 +17,9 @@ CASES = {
     "self-spreading, global rule, without collisions": ("self-spreading-office", (3, 4), {
         "sim.time_limit": 100, "algorithm.params.triangular": "global", "sim.robot_collisions": False}),
     # routers at rest wake up again: runs that stay in the books while settled, unsettle and settle again
+    # the walk rules' headings inside the stretch (a kernel of their own; the paper's random walk has its own)
+    **{f"self-spreading, walk {walk}": ("self-spreading-office", (1, 2), {
+        "sim.time_limit": 120, "algorithm.params.walk": walk}) for walk in ("straight", "growth", "guided")},
     "potential field, settled runs go on": ("potential-field-6x6", (1, 2, 3), {
         "sim.time_limit": 300, "sim.stop_when_settled": False, "routers.count": 10}),
     "potential field, obstacle forces": ("potential-field-obstacles-6x6", (1, 2), {"sim.time_limit": 60}),

@@ -10,6 +10,7 @@ import pytest
 import amronet.sim.warmup as warmup
 from amronet.algorithms.agent_assisted.drops.base import DROP_RULES
 from amronet.algorithms.agent_assisted.explorers.base import EXPLORERS
+from amronet.algorithms.agent_assisted.warmups import driven_inside
 from amronet.algorithms.base import ALGORITHMS, Controller
 from amronet.algorithms.self_spreading.walks import WALKS
 from amronet.cli.main import main
@@ -32,7 +33,7 @@ from amronet.sim import Simulation
 from amronet.sim.warmup import warm_up
 from amronet.threads import threads_from
 
-warm_up(jobs=1)
+warm_up(jobs=1, large=True)  # with the threaded kernels of large runs (run below)
 compiled = []
 
 class Listener(event.Listener):
@@ -81,9 +82,12 @@ def test_cases_cover_every_registered_name():
         assert controller.warm_ups()[0].label == f"algorithm {name}"
     labels = {case.label for case in cases}
     assert len(labels) == len(cases)
-    for kind, names in (("explorer", EXPLORERS), ("drop rule", DROP_RULES), ("walk", WALKS), ("radio", MEDIA),
-                        ("algorithm", ALGORITHMS)):
+    for kind, names in (("explorer", driven_inside(EXPLORERS)), ("drop rule", driven_inside(DROP_RULES)),
+                        ("walk", WALKS), ("radio", MEDIA), ("algorithm", ALGORITHMS)):
         assert {f"{kind} {name}" for name in names} <= labels
+    # only what amronet.env drives is left out (it cannot run alone)
+    assert set(EXPLORERS) - set(driven_inside(EXPLORERS)) == {"external"}
+    assert set(DROP_RULES) - set(driven_inside(DROP_RULES)) == {"external"}
 
 
 @pytest.mark.parametrize("name", sorted(ALGORITHMS))
@@ -99,6 +103,17 @@ def test_an_algorithm_with_a_fast_step_warms_it_up(name):
                          step=case.step)
         fast.append(sim.compiled is not None)
     assert any(fast), f"{name} offers a fast step but none of its warm-up runs takes it"
+
+
+def test_self_spreadings_walk_and_link_quality_warm_ups_take_its_compiled_step():
+    """Every walk rule and the link-quality rules step through the compiled kernels, so their warm-ups compile them."""
+    cases = [case for case in ALGORITHMS["self-spreading"].warm_ups()
+             if case.label.startswith("walk ") or "link-quality" in case.label]
+    assert len(cases) == len(WALKS) + 1
+    for case in cases:
+        sim = Simulation(load_scenario(case.preset, {"sim.time_limit": 1.0, **case.overrides}), case.seeds[0],
+                         step=case.step)
+        assert sim.compiled is not None, case.label
 
 
 def test_a_fast_step_missing_from_the_warm_up_is_found(monkeypatch):

@@ -38,7 +38,7 @@ ENUM_FIELDS = [  # (dotted path, algorithm, the words the field takes: a value o
     ("algorithm.params.stop_rule", "self-spreading", {"distance", "link-quality"}),
     ("algorithm.params.triangle_rule", "self-spreading", {"geometric", "link-quality"}),
     ("algorithm.params.walk", "self-spreading", {"random", "straight", "growth", "guided"}),
-    ("algorithm.params.repair", "agent-assisted", {"none", "relocate"}),
+    ("algorithm.params.repair", "agent-assisted", {"none", "relocate", "retrace"}),
     ("algorithm.params.drop_rule", "agent-assisted", set(DROP_RULES)),
 ]
 TEXT_FIELDS = [  # any text when the scenario is read (a name is looked up when the run is set up)
@@ -135,6 +135,10 @@ def test_a_text_field_takes_every_word_and_asks_to_quote_a_boolean_or_a_number(d
         with pytest.raises(ScenarioError) as info:
             _value(_scenario(algorithm, dotted, word, how, tmp_path), dotted)
         assert info.value.field == _field(dotted)
+    elif dotted == "map" and how == "file":  # a file's map must exist: the word is read as text, and named
+        with pytest.raises(MapError) as info:
+            _value(_scenario(algorithm, dotted, word, how, tmp_path), dotted)
+        assert info.value.field == "map" and f"unknown map '{word}'" in info.value.message
     else:
         assert _value(_scenario(algorithm, dotted, word, how, tmp_path), dotted) == word
 

@@ -29,7 +29,9 @@ A warm-up (:mod:`amronet.sim.warmup`) that finished leaves a note in the folder 
 
 A cache entry that cannot be loaded (an empty, truncated or garbled index or data file) is recompiled, never
 fatal (:mod:`amronet.kernel_cache_repair`, installed by :func:`configure`); :func:`clear` (``amronet compile
---fresh``) empties the folder of the kernels' present source.
+--fresh``) empties the folder of the kernels' present source. Processes that share the folder (``amronet
+compile``'s workers, a sweep's) compile each kernel once between them: the others wait and load it
+(:mod:`amronet.kernel_cache_lock`, its lock files in ``locks/``).
 
 :func:`configure` must run before the first kernel is defined: :mod:`amronet.numba_setup` (installed by
 ``amronet/__init__.py``) calls it as soon as numba is imported.
@@ -53,9 +55,9 @@ STAMP = "amronet-kernel-cache"
 """The file that marks a cache folder as amronet's; it holds the folder's name (``numba-HASH``)."""
 
 _FOLDER_NAME = re.compile(r"^numba-[0-9a-f]{16}$")
-_OURS = re.compile(r"^(?:compiled-[\w-]+|.+\.nb[ic](?:\.tmp\.[\w-]+)?)$")
+_OURS = re.compile(r"^(?:compiled-[\w-]+|.+\.nb[ic](?:\.tmp\.[\w-]+)?|.+\.lock)$")
 """Files amronet or numba write in a cache folder: the warm-up notes, numba's index and data files (and the
-temporary files numba writes them through)."""
+temporary files numba writes them through), the locks of kernels being compiled (:mod:`amronet.kernel_cache_lock`)."""
 
 _PACKAGE = Path(__file__).resolve().parent
 _KERNEL = re.compile(r"^@(numba\.)?njit\b", re.MULTILINE)
@@ -156,12 +158,14 @@ def configure() -> Path | None:
     """Point numba's cache at :func:`cache_folder` unless ``NUMBA_CACHE_DIR`` is set; return the folder used.
 
     ``None``: the user's ``NUMBA_CACHE_DIR`` applies, or no folder could be written (numba's default applies).
-    Whichever folder applies, an entry that cannot be loaded is recompiled (:mod:`amronet.kernel_cache_repair`).
+    Whichever folder applies, an entry that cannot be loaded is recompiled (:mod:`amronet.kernel_cache_repair`);
+    in amronet's folder, processes compile each kernel once between them (:mod:`amronet.kernel_cache_lock`).
     """
     global _folder
-    from amronet.kernel_cache_repair import install
+    from amronet import kernel_cache_lock, kernel_cache_repair
 
-    install(lambda: _folder)
+    kernel_cache_repair.install(lambda: _folder)
+    kernel_cache_lock.install(lambda: _folder)
     _folder = None
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None

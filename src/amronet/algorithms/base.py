@@ -9,8 +9,9 @@ medium's neighbour table (who hears whom, how far). A robot's decision reads its
 it hears; nothing else of the world reaches a controller: not the map, not the scenario, not the loop. Metrics and
 stop conditions live in :mod:`amronet.sim`, not here. What the loop needs to know of an algorithm it asks through
 the declared interface below (:meth:`Controller.start_range`, :attr:`Controller.default_coverage_target`,
-:meth:`Controller.unsettled`, :attr:`Controller.follows_paths`, :meth:`Controller.fast_step`); what the scenario
-needs to know, through :attr:`Controller.scenario_defaults`.
+:meth:`Controller.unsettled`, :meth:`Controller.fast_step`); what the scenario needs to know (its parameters'
+model, its scenario defaults, whether it follows given paths), through its declaration
+(:mod:`amronet.algorithms.declaration`), which does not import the controller.
 """
 
 from __future__ import annotations
@@ -23,9 +24,9 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal
 import numpy as np
 from pydantic import BaseModel
 
+from amronet.algorithms.declaration import ALGORITHMS
 from amronet.algorithms.stepping import Command, Readings, StepInput
 from amronet.engine.robots import RobotModel, Swarm
-from amronet.registry import Registry
 
 if TYPE_CHECKING:
     from amronet.algorithms.stepping import FastStep, StepContext
@@ -95,7 +96,8 @@ class Setup:
         area: What the algorithm may know of the area beforehand.
         stock: The routers agents carry (``None`` without agents).
         paths: The agents' given paths (``agents.trajectories``; agent ``a`` is the ``a``-th agent of ``robots``),
-            or ``None``: the agents explore. Only a controller with :attr:`Controller.follows_paths` is given any.
+            or ``None``: the agents explore. Only a controller declared ``follows_paths`` is given any
+            (:class:`~amronet.algorithms.declaration.Declaration`).
         links_by_distance: Whether the radio links every pair within ``r_c`` and no other (the unit disk without
             packet loss): then a node within ``r_c`` is heard, and a rule that keeps a robot within ``r_c`` of a node
             keeps their link. Otherwise (walls, shadowing, packet loss) only the neighbour table says who hears whom.
@@ -159,11 +161,6 @@ class Controller(ABC):
     """Whether the controller can step several runs in one swarm (see the class docstring)."""
     default_coverage_target: ClassVar[float | None] = None
     """The coverage at which a run of this algorithm ends when the scenario sets none (``None``: no target)."""
-    follows_paths: ClassVar[bool] = False
-    """Whether the controller drives agents along given paths (:attr:`Setup.paths`, ``agents.trajectories``)."""
-    scenario_defaults: ClassVar[dict[str, Any]] = {}
-    """Scenario fields (``section.field``) that take these values when a scenario of this algorithm leaves them out,
-    instead of the schema's defaults (:mod:`amronet.scenario.defaults`)."""
 
     def __init__(self, params: BaseModel, setup: Setup) -> None:
         self.params = params
@@ -232,6 +229,3 @@ class Controller(ABC):
         """``True`` when no robot of the algorithm will move again."""
         return not self.unsettled().any()
 
-
-ALGORITHMS: Registry[type[Controller]] = Registry("algorithm")
-"""Deployment algorithms by name; a controller registers itself with ``@ALGORITHMS.register(name)``."""

@@ -1,10 +1,13 @@
 """The ``amronet compile`` subcommand: compile the simulator's kernels into numba's cache, saying how far it is.
 
-``amronet compile [--jobs N] [--fresh] [-q]`` runs the warm-up (:func:`amronet.sim.warmup.warm_up`): short runs
-that reach every kernel, grouped by what they warm up (an algorithm, an explorer, a radio model, ...). As each
-group starts, stderr gets one line naming it, its number, how many are left and the seconds elapsed
-(``[  12 s] compiling kernel group 3 of 35 (32 to go): explorer frontier``); on a terminal, one line updated in
-place instead (:class:`CompileProgress`). ``--quiet`` prints only the closing line, on stdout.
+``amronet compile [--jobs N] [--fresh] [--large-runs] [-q]`` runs the warm-up (:func:`amronet.sim.warmup.warm_up`):
+short runs that reach every kernel, grouped by what they warm up (an algorithm, an explorer, a radio model, ...),
+on ``--jobs`` worker processes that compile each kernel once between them (:mod:`amronet.kernel_cache_lock`). The
+threaded kernels that only runs of 30 000 robots or more use compile with ``--large-runs`` (or in such a run's
+first step). As each group starts, stderr gets one line naming it, its number, how many are left and the seconds
+elapsed (``[  12 s] compiling kernel group 3 of 32 (29 to go): signal map``); on a terminal, one line updated in
+place instead (:class:`CompileProgress`). ``--quiet`` prints only the closing line, on stdout. A group that fails
+ends it with one line (``amronet: error: kernel group ... failed (...)``) and exit status 2.
 """
 
 from __future__ import annotations
@@ -123,7 +126,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
         raise AmronetError(f"--jobs: must be >= 1, got {args.jobs}")
     if args.fresh:
         _empty_cache(args.quiet)
-    report = CompileProgress(len(task_labels()), sys.stderr, live=sys.stderr.isatty() and not args.quiet)
+    report = CompileProgress(len(task_labels(args.large_runs)), sys.stderr, live=sys.stderr.isatty() and not args.quiet)
     logger = logging.getLogger("amronet")
     level = logger.level
     quiet_warnings()
@@ -131,14 +134,15 @@ def cmd_compile(args: argparse.Namespace) -> int:
         with report:
             seconds = warm_up(jobs=args.jobs, initializer=quiet_warnings,
                               started=None if args.quiet else report.started,
-                              progress=None if args.quiet else report.finished)
+                              progress=None if args.quiet else report.finished, large=args.large_runs)
     except KeyboardInterrupt:  # not "nothing was written": what was compiled stays in the cache, and is sound
         print("amronet: interrupted; the kernels compiled so far stay cached, runs compile the rest",
               file=sys.stderr)
         return 130
     finally:
         logger.setLevel(level)
-    print(f"amronet's kernels are compiled and cached ({seconds:.1f} s): a first run no longer compiles")
+    print(f"amronet's kernels are compiled and cached ({seconds:.1f} s): a first run no longer compiles"
+          + ("" if args.large_runs else " (one of 30 000 robots or more: amronet compile --large-runs)"))
     return 0
 
 
@@ -152,5 +156,8 @@ def add_parser(sub: Any) -> None:
                    help="first remove the kernels already compiled into amronet's cache folder (and its warm-up "
                         "notes), then compile them all again; a damaged cache entry needs no --fresh: runs "
                         "recompile it by themselves. Refused when NUMBA_CACHE_DIR (your own folder) is set")
+    c.add_argument("--large-runs", action="store_true",
+                   help="also compile the threaded kernels that only runs of 30 000 robots or more use (a sixth "
+                        "more compiling); without it, such a run compiles them in its first step")
     c.add_argument("-q", "--quiet", action="store_true", help="print only the closing line")
     c.set_defaults(func=cmd_compile)

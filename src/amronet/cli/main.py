@@ -126,7 +126,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     # the run options given on the command line (None: not given, the figure's own default applies); each
     # figure must take each of them: checked before anything runs
     given = {"explorer": args.explorer, "time_limit": args.time_limit, "workers": args.workers,
-             "retry_failed": args.retry_failed or None}
+             "retry_failed": args.retry_failed or None, "optimum": args.optimum}
     check_options([FIGURES[name] for name in names], given, args.figure if several else "all")
     outs = {name: Path(args.out or "runs") / name if several else Path(args.out or f"runs/{name}")
             for name in names}
@@ -223,6 +223,10 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--time-limit", type=float, default=None,
                     help="simulated seconds per run at most (default: the figure's own, 6000 for fig5 and fig7)")
     rp.add_argument("--quick", action="store_true", help="a small subset, for a smoke test")
+    rp.add_argument("--optimum", type=float, nargs="?", const=60.0, metavar="SECONDS",
+                    help="also the fewest routers on a lattice of r_c / 2 (amronet optimum) per map and r_c, and each "
+                         "algorithm's ratio to it, searched for SECONDS each (default 60) and kept in the store "
+                         "(only fig5 takes it)")
     rp.add_argument("--retry-failed", action="store_true",
                     help="run again the runs the store holds as failed (otherwise the figure stops at them)")
     add_executor_arguments(rp)
@@ -249,6 +253,23 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _ctrl_c_behind(exc: BaseException) -> KeyboardInterrupt | None:
+    """The ``KeyboardInterrupt`` that ``exc`` was raised while handling (its context or cause, at any depth)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def _interrupted(exc: KeyboardInterrupt) -> int:
+    """Say that Ctrl-C stopped the command (a ``SweepInterrupted`` says what its store holds); exit status 130."""
+    print(f"amronet: {exc}" if str(exc) else "amronet: interrupted; nothing was written", file=sys.stderr)
+    return 130
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``amronet`` command."""
     args = build_parser().parse_args(argv)
@@ -258,12 +279,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"amronet: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # a sweep's runs (reproduce): SweepInterrupted says what its store holds
-        print(f"amronet: {exc}" if str(exc) else "amronet: interrupted; nothing was written", file=sys.stderr)
-        return 130
+        return _interrupted(exc)
     except BrokenPipeError:
         # the reader of stdout went away (amronet results STORE | head -1): stop quietly, as other tools do;
         # stdout goes to devnull so that flushing it at exit does not raise again
         with contextlib.suppress(AttributeError, OSError, ValueError):
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1  # as rich does when its console meets a closed pipe
+    except Exception as exc:
+        stop = _ctrl_c_behind(exc)
+        if stop is None:
+            raise
+        return _interrupted(stop)  # a library turned Ctrl-C into an error of its own (numba, stopped mid-compile)
 

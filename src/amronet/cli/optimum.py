@@ -1,9 +1,11 @@
 """The ``amronet optimum`` subcommand: the fewest routers that could cover a building, with a proven bound.
 
 ``amronet optimum --map office-32x32 --base 1,1 [--base X,Y ...] --rc 4 [--spacing 2] [--radio multi-wall
-[--wall-db 6.9] [--shadowing-db 4 --seed 0]] [--time-limit 60] [--no-coarse] [--out DIR] [--json] [-q]`` prints the
-best placement found, the proven lower bound, the gap and the bounds that explain it (see :mod:`amronet.optimum`);
-``--out DIR`` writes ``optimum.json`` and ``optimum.png`` (replaced atomically, an amronet output folder).
+[--wall-db 6.9] [--shadowing-db 4 --seed 0]] [--time-limit 60] [--no-coarse] [--store S] [--out DIR] [--json] [-q]``
+prints the best placement found, the proven lower bound, the gap and the bounds that explain it (see
+:mod:`amronet.optimum`); ``--out DIR`` writes ``optimum.json`` and ``optimum.png`` (replaced atomically, an amronet
+output folder); ``--store S`` keeps the answer in a result store and loads it the next time the same problem is
+asked (:mod:`amronet.optimum.stored`).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import argparse
 import json
 import math
 import sys
+from pathlib import Path
 
 from amronet.cli.common import parse_base
 from amronet.errors import AmronetError
@@ -21,11 +24,14 @@ __all__ = ["add_parser", "cmd_optimum"]
 
 def cmd_optimum(args: argparse.Namespace) -> int:
     """Run ``amronet optimum`` (see the module docstring)."""
-    from amronet.optimum import find_optimum, write_optimum
+    from amronet.optimum import find_or_load_optimum, write_optimum
     from amronet.outputs.files import check_output_folder
+    from amronet.sweeps.store import check_store_path
 
     if args.out is not None:  # before the search: a folder holding a user's files is refused, untouched
         check_output_folder(args.out)
+    if args.store is not None:  # likewise a file that is not an amronet store
+        check_store_path(Path(args.store))
     bases = [parse_base(b) for b in args.base or []]
     if not bases:
         raise AmronetError("--base: give at least one base station as --base X,Y")
@@ -44,8 +50,9 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         if not quiet:
             print(f"  {line}", file=sys.stderr, flush=True)
 
-    opt = find_optimum(args.map, bases, args.rc, spacing, radio=radio or None, seed=args.seed,
-                       time_limit=args.time_limit, coarse=False if args.no_coarse else None, log=log)
+    opt = find_or_load_optimum(args.map, bases, args.rc, spacing, radio=radio or None, seed=args.seed,
+                               time_limit=args.time_limit, coarse=False if args.no_coarse else None,
+                               store=args.store, instance=args.out is not None, log=log)
     if args.out is not None:
         write_optimum(opt, args.out)
     if args.json:
@@ -81,6 +88,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--no-coarse", action="store_true",
                    help="do not search the lattice of twice the spacing first (done on large lattices)")
     p.add_argument("--out", metavar="DIR", help="write optimum.json and optimum.png (replaced atomically)")
+    p.add_argument("--store", metavar="S", help="result store: keep the answer, and load it instead of solving when "
+                                                "the same problem (map, bases, radio, spacing, time limit) was solved")
     p.add_argument("--json", action="store_true", help="print the answer as JSON (no progress lines)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(func=cmd_optimum)

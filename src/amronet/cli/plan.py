@@ -72,11 +72,15 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 
 def _optimum(args: argparse.Namespace, bases: list[tuple[float, float]]) -> dict[str, Any]:
-    """``--optimum SECONDS``: the fewest routers on a lattice of ``r_c / 2`` (:func:`amronet.optimum.find_optimum`)."""
-    from amronet.optimum import find_optimum
+    """``--optimum SECONDS``: the fewest routers on a lattice of ``r_c / 2``, kept in ``--store`` when given.
+
+    See :func:`amronet.optimum.find_or_load_optimum`.
+    """
+    from amronet.optimum import find_or_load_optimum
 
     radio = _mission(args).radio
-    opt = find_optimum(args.map, bases, args.rc, args.rc / 2, radio=radio, seed=args.seed, time_limit=args.optimum)
+    opt = find_or_load_optimum(args.map, bases, args.rc, args.rc / 2, radio=radio, seed=args.seed,
+                               time_limit=args.optimum, store=args.store)
     return {"routers": opt.count, "lower_bound": opt.lower, "gap": opt.gap, "optimal": opt.optimal,
             "spacing_m": opt.spacing, "time_limit_s": args.optimum, "solver_status": opt.solver["status"]}
 
@@ -161,7 +165,8 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:
                    help="also the fewest routers on a lattice of r_c / 2 (amronet optimum) and the recommendation's "
                         "ratio to it, searched for SECONDS (default 60)")
     p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
-    p.add_argument("--store", help="keep the runs in this result store (and reuse them next time)")
+    p.add_argument("--store", help="keep the runs (and the --optimum answer) in this result store and reuse them "
+                                   "next time")
     p.add_argument("--retry-failed", action="store_true",
                    help="run again the runs --store holds as failed (otherwise they stay failed, as with sweep)")
     add_executor_arguments(p)

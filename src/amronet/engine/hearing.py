@@ -33,7 +33,7 @@ from numba import njit
 from amronet.engine.kernel_data import Grid
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.shadowing import FieldGrid, ShadowingField, _lookup, field_at, link_shadowing
-from amronet.engine.walls import count_walls, wall_grid
+from amronet.engine.walls import box_clear, count_walls, wall_grid, wall_sums
 from amronet.world.occupancy import OccupancyMap
 
 __all__ = ["BLOCK", "Cells", "HearingInputs", "best_margin_grid", "cells_of", "heard_box", "heard_cells",
@@ -51,6 +51,7 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 _NO_WALLS = _frozen(np.zeros((0, 0), np.uint8))
 _NO_JUMP = _frozen(np.zeros((0, 0), np.float32))
 _NO_SHADOW = _frozen(np.zeros((1, 1)))
+_NO_SUMS = _frozen(np.zeros((1, 1), np.int32))
 
 
 class HearingInputs(NamedTuple):
@@ -71,6 +72,9 @@ class HearingInputs(NamedTuple):
     """The shadowing's decorrelation distance (m)."""
     clip: float
     """The largest shadowing of a link (dB); 0 without shadowing."""
+    wall_sums: np.ndarray
+    """The summed-area table of the wall cells (:func:`~amronet.engine.walls.wall_sums`): a link whose rectangle of
+    cells holds no wall needs no walk; 1x1 without walls."""
 
     @classmethod
     def from_budget(cls, budget: LinkBudget, omap: OccupancyMap | None, field: ShadowingField | None,
@@ -78,12 +82,13 @@ class HearingInputs(NamedTuple):
         """The inputs of ``budget``; walls come from ``omap`` when ``walls`` and ``budget.wall_db > 0``."""
         use_walls = walls and budget.wall_db > 0 and omap is not None
         cells, jump = wall_grid(omap) if use_walls else (_NO_WALLS, _NO_JUMP)
+        sums = wall_sums(omap) if use_walls else _NO_SUMS
         ox, oy = (float(omap.origin[0]), float(omap.origin[1])) if omap is not None else (0.0, 0.0)
         res = float(omap.resolution) if omap is not None else 1.0
         grid = FieldGrid(_NO_SHADOW, 0.0, 0.0, 1.0) if field is None else field.kernel_grid
         return cls(float(budget.r_c), 10.0 * budget.exponent, float(budget.wall_db) if use_walls else 0.0,
                    Grid(cells, jump, ox, oy, res), grid, float(budget.shadowing_corr_m),
-                   0.0 if field is None else budget.shadowing_clip * budget.shadowing_db)
+                   0.0 if field is None else budget.shadowing_clip * budget.shadowing_db, sums)
 
     def plain(self) -> tuple:
         """The inputs as the kernels take them: a plain tuple in the fields' order, ``walls`` and ``field`` too.
@@ -91,15 +96,16 @@ class HearingInputs(NamedTuple):
         numba dispatches a plain tuple four times faster than a named one (0.5 against 2.2 microseconds); the
         kernels name it again (:func:`named_inputs`) before they hand it to a margin kernel.
         """
-        return (self.r_c, self.n10, self.wall_db, tuple(self.walls), tuple(self.field), self.corr, self.clip)
+        return (self.r_c, self.n10, self.wall_db, tuple(self.walls), tuple(self.field), self.corr, self.clip,
+                self.wall_sums)
 
 
 @njit(cache=True, inline="always")
 def named_inputs(t):  # pragma: no cover - numba
     """The :class:`HearingInputs` of its :meth:`~HearingInputs.plain` tuple (in compiled code: no cost)."""
-    r_c, n10, wall_db, walls, field, corr, clip = t
+    r_c, n10, wall_db, walls, field, corr, clip, sums = t
     return HearingInputs(r_c, n10, wall_db, Grid(walls[0], walls[1], walls[2], walls[3], walls[4]),
-                         FieldGrid(field[0], field[1], field[2], field[3]), corr, clip)
+                         FieldGrid(field[0], field[1], field[2], field[3]), corr, clip, sums)
 
 
 @njit(cache=True, inline="always")
@@ -113,10 +119,22 @@ def path_loss_margin(xa, ya, xb, yb, d, sa, sb, floor_db, h):  # pragma: no cove
     if h.clip > 0.0:
         m += link_shadowing(sa, sb, d, h.corr, h.clip)
     if h.wall_db > 0.0 and m >= floor_db:
-        limit = int(math.floor((m - floor_db) / h.wall_db)) + 1
-        w = h.walls
-        m -= h.wall_db * count_walls(w.blocked, w.clear, w.ox, w.oy, w.res, xa, ya, xb, yb, limit)
+        m -= h.wall_db * walls_crossed(xa, ya, xb, yb, int(math.floor((m - floor_db) / h.wall_db)) + 1, h)
     return m
+
+
+@njit(cache=True, inline="always")
+def walls_crossed(xa, ya, xb, yb, limit, h):  # pragma: no cover - numba
+    """Walls crossed by the segment ``a -> b`` on the radio's map ``h``, counting stopped above ``limit``.
+
+    :func:`~amronet.engine.walls.count_walls`, or 0 at once where the rectangle of cells between the two ends holds
+    no wall (:func:`~amronet.engine.walls.box_clear`: the walk's own answer, without the walk). A model's margin
+    kernel that counts walls calls this.
+    """
+    w = h.walls
+    if box_clear(h.wall_sums, w.ox, w.oy, w.res, xa, ya, xb, yb):
+        return 0
+    return count_walls(w.blocked, w.clear, w.ox, w.oy, w.res, xa, ya, xb, yb, limit)
 
 
 @njit(cache=True, inline="always")

@@ -50,20 +50,6 @@ def mirror(indptr, indices):  # pragma: no cover - numba
     return out
 
 
-@njit(cache=True, inline="always")
-def _find(indptr, indices, i, j):  # pragma: no cover - numba
-    """Position of entry ``(i, j)`` in a CSR with sorted rows, -1 if absent."""
-    lo = indptr[i]
-    hi = indptr[i + 1]
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if indices[mid] < j:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo if lo < indptr[i + 1] and indices[lo] == j else -1
-
-
 @njit(cache=True)
 def candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indices, prev_margin,
                       hearing):  # pragma: no cover - numba
@@ -86,6 +72,8 @@ def candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indi
         ya = xy[i, 1]
         still_i = i < n_prev and xa == prev_xy[i, 0] and ya == prev_xy[i, 1]
         sa = _cell_value(values, x0, y0, cell, xa, ya) if shadowed else 0.0
+        p = prev_indptr[i] if still_i else 0  # row i of the previous table, merged along this one (both sorted)
+        p_end = prev_indptr[i + 1] if still_i else 0
         for e in range(indptr[i], indptr[i + 1]):
             j = indices[e]
             if j < i:
@@ -94,7 +82,10 @@ def candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indi
             yb = xy[j, 1]
             f = -1
             if still_i and j < n_prev and xb == prev_xy[j, 0] and yb == prev_xy[j, 1]:
-                f = _find(prev_indptr, prev_indices, i, j)
+                while p < p_end and prev_indices[p] < j:
+                    p += 1
+                if p < p_end and prev_indices[p] == j:
+                    f = p
             if f >= 0:
                 m = prev_margin[f]
             else:

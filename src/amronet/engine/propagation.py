@@ -36,10 +36,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from scipy.special import erfc
+
+from amronet.engine.radio_traits import RADIO_BOUNDS, RadioBound, median_range
 
 __all__ = [
     "MIN_DISTANCE_M",
@@ -63,57 +64,6 @@ PDR_AT_THRESHOLD: float = 0.9
 """Delivery ratio of a link exactly at the usable threshold (at most 10 % packet error, as 802.11 sensitivity)."""
 
 
-class RadioBound(NamedTuple):
-    """The physically meaningful range of one field of a link budget, and where it comes from."""
-
-    lo: float
-    hi: float
-    unit: str
-    source: str
-    """Why these bounds, in a few words (the values measured or published)."""
-    example: float
-    """A typical value, for the error message."""
-
-    def problem(self, value: object) -> str | None:
-        """What is wrong with ``value`` as this field (one line ending in the fix), or ``None`` if it is in range.
-
-        Only numbers are judged (not ``bool``): anything else is left to the type's own check.
-        """
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            return None
-        if self.lo <= value <= self.hi:  # NaN fails both comparisons
-            return None
-        unit = f" {self.unit}" if self.unit else ""
-        try:
-            shown = f"{value:g}"
-        except OverflowError:  # an integer beyond any float
-            shown = f"a {value.bit_length()}-bit integer"
-        return (f"{shown}{unit} is outside [{self.lo:g}, {self.hi:g}]{unit}, {self.source}; "
-                f"give e.g. {self.example:g}")
-
-
-RADIO_BOUNDS: dict[str, RadioBound] = {
-    "tx_dbm": RadioBound(-60.0, 60.0, "dBm", "transmit power plus antenna gains from 1 nW to 1 kW (Wi-Fi: 20)",
-                         20.0),
-    "pl0_db": RadioBound(0.0, 100.0, "dB", "the free-space loss at 1 m (12 dB at 100 MHz, 40 at 2.4 GHz, "
-                                          "68 at 60 GHz)", 40.0),
-    "path_loss_exponent": RadioBound(1.0, 8.0, "", "around the exponents measured indoors (COST 231: 1.4 along "
-                                                   "corridors to 4 in dense offices; ITU-R P.1238: 2.2 to 3; up to "
-                                                   "6 when obstructed)", 2.5),
-    "wall_db": RadioBound(0.0, 60.0, "dB", "the loss of one wall (COST 231: light 3.4, heavy 6.9; concrete "
-                                           "without windows 15; 60 is a metal wall)", 6.9),
-    "shadowing_db": RadioBound(0.0, 30.0, "dB", "around the standard deviations measured (3-12 dB indoors; "
-                                                "Stage and ns-3: 5)", 5.0),
-    "shadowing_corr_m": RadioBound(0.1, 1000.0, "m", "around the decorrelation distances measured (1-5 m indoors, "
-                                                     "tens to hundreds of metres outdoors: Gudmundson)", 2.0),
-    "threshold_dbm": RadioBound(-174.0, 60.0, "dBm", "from the thermal noise in 1 Hz (-174 dBm) to the strongest "
-                                                     "transmitter (receiver sensitivities: -148 to -60 dBm)", -75.0),
-}
-"""Bounds of the fields of a scenario's ``radio`` section (``radio.<name>``) that are numbers of the link budget;
-``r_c`` has its own, (0, 100 km] (:data:`amronet.scenario.MAX_RANGE_M`). Within them no arithmetic of the budget
-overflows (the longest reach, ``r_c * 10 ** (3 * 30 / 10)``, is 10^9 ``r_c``)."""
-
-
 def _pdr_of_snr_db(snr_db: np.ndarray | float) -> np.ndarray:
     snr = np.power(10.0, np.asarray(snr_db, dtype=float) / 10.0)
     return np.power(1.0 - erfc(np.sqrt(snr)), PACKET_BYTES)
@@ -131,11 +81,6 @@ The root of ``_pdr_of_snr_db(s) - PDR_AT_THRESHOLD`` on [0, 20] dB that ``scipy.
 def delivery_ratio(margin_db: np.ndarray | float) -> np.ndarray:
     """Packet delivery ratio of links whose RSSI is ``margin_db`` above the usable threshold (see module doc)."""
     return _pdr_of_snr_db(np.asarray(margin_db, dtype=float) + SNR_AT_THRESHOLD_DB)
-
-
-def median_range(tx_dbm: float, pl0_db: float, exponent: float, threshold_dbm: float) -> float:
-    """Distance (m) at which the median RSSI without walls and shadowing equals ``threshold_dbm``."""
-    return 10.0 ** ((tx_dbm - pl0_db - threshold_dbm) / (10.0 * exponent))
 
 
 @dataclass(frozen=True)

@@ -67,6 +67,7 @@ from amronet.engine.links import NO_PREVIOUS, keep_entries, losses
 from amronet.engine.margin_kernels import MarginKernels, margin_kernels
 from amronet.engine.neighbours import GroupIds, neighbour_csr_checked
 from amronet.engine.propagation import LinkBudget
+from amronet.engine.radio_traits import DEFAULT_WALL_DB
 from amronet.engine.shadowing import ShadowingField
 from amronet.engine.table import NeighbourTable
 from amronet.registry import Registry
@@ -76,9 +77,6 @@ __all__ = ["DEFAULT_WALL_DB", "MEDIA", "LogDistance", "MultiWall", "NeighbourTab
            "make_medium"]
 
 LOG = logging.getLogger(__name__)
-
-DEFAULT_WALL_DB: float = 6.9
-"""Loss per wall crossed when none is given: COST 231's heavy internal wall (dB)."""
 
 _ANNOUNCED: set[tuple[type, tuple[str, ...]]] = set()
 """The models whose slower paths the log has been told of in this process, with those paths."""

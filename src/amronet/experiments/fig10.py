@@ -1,5 +1,8 @@
 """Paper Figs. 10 and 11: coverage over time of self-spreading, DSSA and the potential field (paper 5.2.1).
 
+Beyond the paper, the same runs of three location-aware Voronoi baselines are extra lines: VOR and Minimax (Wang,
+Cao and La Porta) and Lloyd's algorithm (Cortés et al.); the paper's claims are judged on the paper's three only.
+
 30 routers start at random in the 1 m x 1 m base region at the centre of a 6 m x 6 m field (``open-6x6`` for
 Fig. 10, ``obstacles-6x6`` for Fig. 11), with the immobile reference node at the origin and ``r_c`` = 1 m. Run
 ``k`` of every algorithm uses the same seed, hence the same initial configuration: the comparison is paired.
@@ -25,13 +28,18 @@ from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
 from amronet.sweeps.stats import mean_ci, mean_ci_columns, mean_ci_text
 
-__all__ = ["ALGORITHMS", "run_coverage_over_time"]
+__all__ = ["ALGORITHMS", "BASELINES", "PAPER_ALGORITHMS", "run_coverage_over_time"]
 
-ALGORITHMS = ("self-spreading", "dssa", "potential-field")
+PAPER_ALGORITHMS = ("self-spreading", "dssa", "potential-field")
 """The three algorithms of Figs. 10 and 11, in the paper's order of presentation."""
+BASELINES = ("vor", "minimax", "lloyd")
+"""The location-aware Voronoi baselines beyond the paper, drawn as extra (dashed) lines."""
+ALGORITHMS = PAPER_ALGORITHMS + BASELINES
+"""Every algorithm the figures compare by default: the paper's three first (they keep their colours)."""
 MAPS = {"fig10": "open-6x6", "fig11": "obstacles-6x6"}
 TIMESERIES_COLUMNS = ("algorithm", "run", "seed", "t", "coverage", "connected_coverage")
-LABELS = {"self-spreading": "self-spreading", "dssa": "DSSA", "potential-field": "potential field (K = 1)"}
+LABELS = {"self-spreading": "self-spreading", "dssa": "DSSA", "potential-field": "potential field (K = 1)",
+          "vor": "VOR (location-aware)", "minimax": "Minimax (location-aware)", "lloyd": "Lloyd (location-aware)"}
 DEFAULT_HORIZON_S = 900.0
 """Simulated seconds per run (the paper does not print its horizon; self-spreading has levelled off by then)."""
 EARLY_S = 10.0
@@ -40,8 +48,8 @@ EARLY_S = 10.0
 
 def spreading_scenario(map_name: str, algorithm: str, obstacle_forces: bool, time_limit: float) -> dict[str, Any]:
     """The scenario of paper 5.2 for one algorithm, as plain data."""
-    params: dict[str, Any] = {"triangular": "local"} if algorithm == "self-spreading" else {
-        "obstacle_forces": obstacle_forces}
+    params: dict[str, Any] = {"triangular": "local"} if algorithm == "self-spreading" else {} \
+        if algorithm in BASELINES else {"obstacle_forces": obstacle_forces}
     return {
         "name": f"{algorithm}-{map_name}",
         "map": map_name,
@@ -120,7 +128,7 @@ def run_coverage_over_time(
     if obstacles:
         folder = baseline_dir if baseline_dir is not None else Path(out_dir).parent / "fig10"
         baseline, why_not = _load_baseline(folder, runs, time_limit)
-    claims = _claims(figure, table, baseline, why_not)
+    claims = _claims(figure, [e for e in table if e["algorithm"] in PAPER_ALGORITHMS], baseline, why_not)
     markdown = _markdown(figure, map_name, runs, time_limit, table, claims)
     files = {f"{figure}_timeseries.csv": csv_table_text(TIMESERIES_COLUMNS, chain.from_iterable(ts_rows)),
              f"{figure}_runs.csv": csv_text(rows),
@@ -289,14 +297,15 @@ def _figure(figure: str, map_name: str, grid: np.ndarray, curves: dict[str, dict
             if len(d[col]) == 0:
                 continue
             mean, half = mean_ci_columns(d[col])
-            (line,) = ax.plot(grid, 100 * mean, label=LABELS[algorithm])
+            (line,) = ax.plot(grid, 100 * mean, label=LABELS[algorithm],
+                              linestyle="--" if algorithm in BASELINES else "-")
             ax.fill_between(grid, 100 * (mean - half), 100 * (mean + half), color=line.get_color(), alpha=0.25,
                             linewidth=0)
         ax.set_xlabel("time (s)")
         ax.set_ylabel(f"{label} (%)")
         ax.set_ylim(0, 100)
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="lower right")
+        ax.legend(loc="lower right", fontsize="small")
     fig.suptitle(f"Fig. {figure[3:]}: {map_name}, 30 routers, r_c = 1 m, mean and 95 % CI of {runs} runs")
     fig.tight_layout()
     buf = io.BytesIO()

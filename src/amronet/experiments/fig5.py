@@ -4,7 +4,8 @@
 agents, each with 5 start locations (the four corners and the centre), so 20 runs per radius and map. Each
 run stops when 99 % of the reachable free space is covered; the count includes the base reference node. Beside
 it: the placed (minimum) and estimated counts of the four static patterns on the same area, and the planning
-estimate 0.77 A / r^2 the paper proposes (section 6.1).
+estimate 0.77 A / r^2 the paper proposes (section 6.1). With ``options.optimum`` the table gains the optimum and
+each count's ratio to it (:mod:`~amronet.experiments.fig5_optimum`).
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ from amronet.sweeps.stats import mean_ci, mean_ci_text
 __all__ = ["PATTERNS", "run_fig5"]
 
 PATTERNS = ("r-strip", "hexagonal", "square", "triangular")
+SHORT = {"r-strip": "RSTR", "hexagonal": "HEX", "square": "SQR", "triangular": "TRI"}
+"""A pattern's column title in the tables."""
 AREA = (32.0, 32.0)
 
 
@@ -54,6 +57,7 @@ def run_fig5(
     agents: tuple[int, ...] = (1, 2, 3, 4),
     starts: int = 5,
     options: RunOptions | None = None,
+    optimum_spacing: float | None = None,
 ) -> dict[str, Any]:
     """Run the Fig. 5 experiment and write ``fig5_runs.csv``, ``fig5.png`` and ``fig5_claims.md`` to ``out_dir``.
 
@@ -65,13 +69,22 @@ def run_fig5(
         starts: How many of the five start locations (corners, then the centre).
         options: How the runs are made (default :class:`RunOptions`): the agents' ``explorer``, ``time_limit``
             (default :data:`~amronet.experiments.options.AGENT_TIME_LIMIT_S`), and ``seed``: job ``k`` uses
-            ``seed * 100000 + k``; the others say where the runs execute (:func:`run_jobs`).
+            ``seed * 100000 + k``; ``optimum``: also the optimum per map and radius, searched for that many
+            seconds each and kept in ``store`` (:func:`~amronet.experiments.fig5_optimum.solve_optima`), before the
+            runs; the others say where the runs execute (:func:`run_jobs`).
+        optimum_spacing: The optimum's candidate spacing (m); ``None``: ``r_c / 2``.
 
     Returns:
         ``{"rows": per-run rows, "table": per-(map, r_c) statistics, "claims": [Claim], "markdown": str}``.
     """
     options = options or RunOptions()
     time_limit = options.time_limit_or(AGENT_TIME_LIMIT_S)
+    optima = None
+    if options.optimum is not None:  # before the runs: bad input fails at once, and a rerun loads them
+        from amronet.experiments.fig5_optimum import solve_optima
+
+        optima = solve_optima(maps, [float(r) for r in radii], options.optimum, optimum_spacing, options.store,
+                              options.show_progress)
     jobs = []
     for map_name in maps:
         for r in radii:
@@ -112,6 +125,11 @@ def run_fig5(
             table.append(entry)
     claims = _claims(table)
     markdown = _markdown(table, claims)
+    if optima is not None:
+        from amronet.experiments.fig5_optimum import add_optimum, optimum_markdown
+
+        add_optimum(table, optima, PATTERNS)
+        markdown += "\n" + optimum_markdown(table, PATTERNS, SHORT)
     files = {"fig5_runs.csv": csv_text(rows), "fig5_table.csv": csv_text(table), "fig5_claims.md": markdown,
              "fig5.png": _figure(table, maps)}
     write_outputs(out_dir, files)
@@ -178,6 +196,11 @@ def _figure(table: list[dict[str, Any]], maps: tuple[str, ...]) -> bytes:
         half = np.array([e["ard_ci95"] for e in t])
         ax.errorbar(r, mean, yerr=half, color="C0", marker="D", capsize=3, lw=2, label="ARD (mean, 95 % CI)")
         ax.plot(r, [e["ard_est_077"] for e in t], color="C0", ls=":", label="0.77 A / r² (planning estimate)")
+        if t and "opt_best_nodes" in t[0]:  # reproduce fig5 --optimum
+            best = [e["opt_best_nodes"] for e in t]
+            ax.fill_between(r, [e["opt_bound_nodes"] for e in t], best, color="0.5", alpha=0.25, lw=0,
+                            label="optimum: proven bound to best")
+            ax.plot(r, best, color="k", marker="x", ms=5, lw=1.2, label="optimum on a lattice (best found)")
         for name, (colour, marker) in styles.items():
             ax.plot(r, [e[f"{name}_placed"] for e in t], color=colour, marker=marker, ms=4, label=f"{name} placed")
             ax.plot(r, [e[f"{name}_estimated"] for e in t], color=colour, ls="--", lw=0.8,

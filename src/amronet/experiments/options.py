@@ -40,6 +40,8 @@ class RunOptions:
         executor: Where the runs execute (:class:`~amronet.sweeps.executors.Executor`, e.g. Dask); ``None``: a
             local process pool with ``workers`` processes.
         retry_failed: Run again the runs ``store`` holds as failed (otherwise they stay failed).
+        optimum: Compare with the optimum (:mod:`amronet.optimum`), searched for this many seconds per problem and
+            kept in ``store``; ``None``: no optimum (only Fig. 5 takes it).
     """
 
     explorer: str = "frontier"
@@ -50,6 +52,7 @@ class RunOptions:
     store: str | Path | None = None
     executor: Executor | None = None
     retry_failed: bool = False
+    optimum: float | None = None
 
     def time_limit_or(self, default: float) -> float:
         """``time_limit``, or ``default`` when it is ``None``."""

@@ -22,7 +22,8 @@ separators), and the chain inequality (:mod:`~amronet.optimum.bounds`). Before s
 sites merge, rows implied by a smaller row go, and dominated sites — covered rows *and* links contained in another
 site's — go (:mod:`~amronet.optimum.reduce`). Solved with HiGHS through :func:`scipy.optimize.milp` under a time
 limit, after a greedy connected cover, local search over windows and, on fine lattices, the lattice of twice the
-spacing (:mod:`~amronet.optimum.solve`).
+spacing (:mod:`~amronet.optimum.solve`). A result store keeps solved problems like runs, under a hash of the
+problem (:mod:`~amronet.optimum.stored`).
 
 **What is proven.** The lower bound is the largest of HiGHS's proven dual bound of the model, the set cover ILP's
 bound (coverage alone) and the hop bounds; the gap is ``(best - bound) / bound`` and the answer is optimal when it
@@ -48,6 +49,8 @@ Example:
 from amronet.optimum.instance import Instance, build_instance
 from amronet.optimum.report import CAVEAT, Optimum
 from amronet.optimum.solve import find_optimum, verify
+from amronet.optimum.stored import find_or_load_optimum
 from amronet.optimum.writing import write_optimum
 
-__all__ = ["CAVEAT", "Instance", "Optimum", "build_instance", "find_optimum", "verify", "write_optimum"]
+__all__ = ["CAVEAT", "Instance", "Optimum", "build_instance", "find_optimum", "find_or_load_optimum", "verify",
+           "write_optimum"]

@@ -24,13 +24,14 @@ from amronet.engine.coverage import CoverageArea
 from amronet.engine.network import hop_counts
 from amronet.engine.radio import RadioMedium
 from amronet.errors import AmronetError, ScenarioError
-from amronet.scenario import load_scenario
+from amronet.scenario import Scenario, load_scenario
 from amronet.sim.assemble import build_medium, build_world, robot_model
 from amronet.world.builtin import resolve_map
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance, wall_distance
 
-__all__ = ["MAX_INCIDENCES", "MAX_SITES", "Instance", "build_instance", "check_feasible"]
+__all__ = ["MAX_INCIDENCES", "MAX_SITES", "Instance", "build_instance", "check_feasible", "check_lengths",
+           "instance_scenario", "scenario_option_error"]
 
 MAX_SITES = 20_000
 """Most candidate sites an instance may have (a finer ``--spacing`` is refused: no solver proves anything there)."""
@@ -115,10 +116,30 @@ def _fail(option: str, message: str) -> AmronetError:
     return AmronetError(f"{option}: {message}")
 
 
-def _scenario_error(exc: ScenarioError) -> AmronetError:
+def scenario_option_error(exc: ScenarioError) -> AmronetError:
+    """A scenario's error as one line naming the ``amronet optimum`` option a user typed (``--rc``, ``--map``)."""
     option = next((o for f, o in _OPTION_OF_FIELD if exc.field == f or exc.field.startswith(f + ".")
                    or exc.field.startswith(f + "[")), None)
     return AmronetError(f"{option}: {exc.message}" if option else str(exc))
+
+
+def check_lengths(r_c: float, spacing: float) -> None:
+    """Refuse an ``r_c`` or a spacing that is not a finite number > 0 (one line naming ``--rc`` or ``--spacing``)."""
+    if not (isinstance(spacing, int | float) and math.isfinite(spacing) and spacing > 0):
+        raise _fail("--spacing", f"must be a finite number > 0 (metres), got {spacing!r}")
+    if not (isinstance(r_c, int | float) and math.isfinite(r_c) and r_c > 0):
+        raise _fail("--rc", f"must be a finite number > 0 (metres), got {r_c!r}")
+
+
+def instance_scenario(map_name: str, bases: Sequence[tuple[float, float]], r_c: float,
+                      radio: dict[str, Any] | None = None) -> Scenario:
+    """The scenario an instance takes its map, base stations, routers' robot and radio from (validated as a run's).
+
+    Raises:
+        ScenarioError: A field is bad (:func:`scenario_option_error` names the option a user typed).
+    """
+    return load_scenario({"map": map_name, "radio": {**(radio or {}), "r_c": float(r_c)}, "routers": {"count": 0},
+                          "base_stations": [{"x": float(x), "y": float(y)} for x, y in bases]})
 
 
 def build_instance(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, float]], r_c: float, spacing: float,
@@ -136,10 +157,7 @@ def build_instance(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, flo
     Raises:
         AmronetError: Bad input (one line naming the option), or a lattice on which no placement can work.
     """
-    if not (isinstance(spacing, int | float) and math.isfinite(spacing) and spacing > 0):
-        raise _fail("--spacing", f"must be a finite number > 0 (metres), got {spacing!r}")
-    if not (isinstance(r_c, int | float) and math.isfinite(r_c) and r_c > 0):
-        raise _fail("--rc", f"must be a finite number > 0 (metres), got {r_c!r}")
+    check_lengths(r_c, spacing)
     if len(bases) == 0:
         raise _fail("--base", "give at least one base station as --base X,Y")
     radio = dict(radio or {})
@@ -147,13 +165,12 @@ def build_instance(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, flo
         raise _fail("--radio", "packet loss draws links at random each step; the optimum needs fixed links")
     try:
         omap = map_ref if isinstance(map_ref, OccupancyMap) else resolve_map(map_ref)
-        scenario = load_scenario({"map": omap.name if isinstance(map_ref, OccupancyMap) else str(map_ref),
-                                  "radio": {**radio, "r_c": float(r_c)}, "routers": {"count": 0},
-                                  "base_stations": [{"x": float(x), "y": float(y)} for x, y in bases]})
+        scenario = instance_scenario(omap.name if isinstance(map_ref, OccupancyMap) else str(map_ref), bases, r_c,
+                                     radio)
         world = build_world(scenario, omap)
         medium = build_medium(scenario, omap, np.random.default_rng(seed), packet_loss=False)
     except ScenarioError as exc:  # MapError too
-        raise _scenario_error(exc) from None
+        raise scenario_option_error(exc) from None
     _w, _h = omap.size_m
     if r_c < 2 * omap.resolution:
         raise _fail("--rc", f"{r_c:g} m is under two cells of map '{omap.name}' ({omap.resolution:g} m a cell): "

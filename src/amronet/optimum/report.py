@@ -59,6 +59,8 @@ class Optimum:
     history: list[dict[str, Any]] = field(default_factory=list)
     instance: Instance | None = field(default=None, repr=False)
     """The instance it was found on (for the picture); not written."""
+    from_store: bool = field(default=False, repr=False)
+    """Loaded from a result store, solved before (:mod:`amronet.optimum.stored`); not written."""
 
     @property
     def count(self) -> int:
@@ -90,6 +92,16 @@ class Optimum:
             "coarse": self.coarse, "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
             "verified": self.verified, "history": self.history, "caveat": CAVEAT,
         }
+
+    @classmethod
+    def from_dict(cls, doc: dict[str, Any]) -> Optimum:
+        """The answer back from what :meth:`to_dict` gave (``optimum.json``, a result store); without its instance."""
+        best = doc["best"]
+        return cls(map=doc["map"], bases=[(float(x), float(y)) for x, y in doc["bases"]], radio=doc["radio"],
+                   spacing=float(doc["spacing_m"]), routers=np.asarray(best["positions"], dtype=float).reshape(-1, 2),
+                   source=best["found_by"], lower=int(doc["lower_bound"]), bounds=doc["bounds"], solver=doc["solver"],
+                   sample=doc["sample"], candidates=doc["candidates"], seconds=dict(doc["seconds"]),
+                   verified=doc["verified"], coarse=doc["coarse"], history=list(doc["history"]))
 
     def text(self) -> str:
         """A few lines for the terminal."""

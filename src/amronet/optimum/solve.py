@@ -37,7 +37,7 @@ from amronet.optimum.report import Optimum
 from amronet.optimum.search import improve
 from amronet.world.occupancy import OccupancyMap
 
-__all__ = ["COARSE_FROM", "MAX_TIME_LIMIT_S", "find_optimum", "verify"]
+__all__ = ["COARSE_FROM", "MAX_TIME_LIMIT_S", "check_time_limit", "find_optimum", "verify"]
 
 COARSE_FROM = 400
 """Kept sites from which the lattice of twice the spacing is searched first."""
@@ -76,9 +76,7 @@ def find_optimum(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, float
     Raises:
         AmronetError: Bad input, one line naming the option.
     """
-    if not (isinstance(time_limit, int | float) and math.isfinite(time_limit) and 0 < time_limit <= MAX_TIME_LIMIT_S):
-        raise AmronetError(f"--time-limit: must be a number of seconds > 0 and at most {MAX_TIME_LIMIT_S:g}, "
-                           f"got {time_limit!r}")
+    check_time_limit(time_limit)
     say = log or (lambda line: None)
     t0 = time.perf_counter()
     inst = build_instance(map_ref, bases, r_c, spacing, radio=radio, seed=seed)
@@ -89,6 +87,17 @@ def find_optimum(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, float
     out = _search(inst, red, float(time_limit), coarse, say)
     out.seconds.update(build=t_build, reduce=t_reduce, total=time.perf_counter() - t0)
     return out
+
+
+def check_time_limit(time_limit: float, option: str = "--time-limit") -> None:
+    """Refuse a time limit that is not a number of seconds > 0 and at most :data:`MAX_TIME_LIMIT_S` (one line).
+
+    Raises:
+        AmronetError: Naming ``option``.
+    """
+    if not (isinstance(time_limit, int | float) and math.isfinite(time_limit) and 0 < time_limit <= MAX_TIME_LIMIT_S):
+        raise AmronetError(f"{option}: must be a number of seconds > 0 and at most {MAX_TIME_LIMIT_S:g}, "
+                           f"got {time_limit!r}")
 
 
 def _search(inst: Instance, red: Reduced, time_limit: float, coarse: bool | None, say: Callable[[str], None],

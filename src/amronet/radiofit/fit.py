@@ -4,7 +4,9 @@
 then for each:
 
 * the uncertainty of every parameter by a bootstrap over spots (seeded; readings of one spot stay together);
-* RMSE and mean error by k-fold cross-validation over spots (the same folds for every model);
+* RMSE and mean error by k-fold cross-validation (the same folds for every model), twice: over square *blocks* of
+  spots (the headline: a held-out spot's correlated neighbours are held out with it, see :func:`block_size`) and
+  over single spots;
 * the residuals' spread (``shadowing_db``) and their decorrelation distance (``shadowing_corr_m``, from the
   variogram, :mod:`amronet.radiofit.variogram`);
 * what the receiver's floor changes (:mod:`amronet.radiofit.tobit`);
@@ -21,12 +23,25 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from amronet.engine.propagation import RADIO_BOUNDS
-from amronet.radiofit.data import Readings
-from amronet.radiofit.linear import LinearModel, design, fit_weighted, fold_of_spots, spot_weights
+from amronet.radiofit.data import RadioFitError, Readings
+from amronet.radiofit.linear import (
+    MODELS,
+    LinearModel,
+    block_of_spots,
+    design,
+    fit_weighted,
+    fold_of_blocks,
+    fold_of_spots,
+    spot_weights,
+)
 from amronet.radiofit.tobit import fit_censored, fit_tobit
-from amronet.radiofit.variogram import Variogram, empirical_variogram, fit_gudmundson
+from amronet.radiofit.variogram import CORR_BOUNDS_M, Variogram, empirical_variogram, fit_gudmundson
 
-__all__ = ["FitOptions", "ModelFit", "RadioFit", "fit_radio"]
+__all__ = ["BLOCK_CORR_LENGTHS", "FitOptions", "ModelFit", "RadioFit", "block_size", "fit_radio"]
+
+BLOCK_CORR_LENGTHS = 3.0
+"""The blocks' side by default, in correlation distances of the multi-wall residuals: at 3 of them Gudmundson's
+correlation ``exp(-h / d_corr)`` has fallen to 5 %."""
 
 
 @dataclass(frozen=True)
@@ -38,6 +53,9 @@ class FitOptions:
         per_anchor: One constant per anchor in the detailed fits.
         n_boot: Bootstrap resamples.
         folds: Cross-validation folds.
+        block_m: Side of the square blocks of spots that cross-validation holds out together (m); ``None``:
+            :data:`BLOCK_CORR_LENGTHS` correlation distances of the multi-wall fit's residuals (see
+            :func:`block_size`).
         seed: Seed of the folds and the bootstrap.
         floor_dbm: The receivers' floor (dBm); ``None``: the weakest reading.
         max_lag: Longest lag of the variogram (m).
@@ -50,6 +68,7 @@ class FitOptions:
     seed: int = 0
     floor_dbm: float | None = None
     max_lag: float = 3.0
+    block_m: float | None = None
 
 
 @dataclass
@@ -61,9 +80,16 @@ class ModelFit:
     coef: np.ndarray
     sigma: float
     rmse: float
-    cv_rmse: float
-    cv_mean_error: float
-    cv_fold_rmse: np.ndarray
+    cv_rmse: float = float("nan")
+    """Cross-validated RMSE over blocks of spots (the headline)."""
+    cv_mean_error: float = float("nan")
+    """Cross-validated mean error (measured minus predicted) over blocks of spots."""
+    cv_fold_rmse: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """RMSE of each fold of blocks."""
+    cv_position_rmse: float = float("nan")
+    """Cross-validated RMSE over single spots."""
+    cv_position_mean_error: float = float("nan")
+    """Cross-validated mean error over single spots."""
     boot: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     """Bootstrap coefficients ``(B, p)``."""
     boot_sigma: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -97,6 +123,12 @@ class RadioFit:
     table: list[ModelFit]
     fits: list[ModelFit]
     best: ModelFit
+    block_m: float
+    """Side of the cross-validation's blocks (m); 0: each spot is its own block."""
+    n_blocks: int
+    """Blocks that hold spots."""
+    block_rule: str
+    """How ``block_m`` was chosen, in words."""
 
 
 def _cross_validate(x: np.ndarray, y: np.ndarray, spot: np.ndarray, fold: np.ndarray, k: int
@@ -112,14 +144,62 @@ def _cross_validate(x: np.ndarray, y: np.ndarray, spot: np.ndarray, fold: np.nda
     return float(np.sqrt(np.mean(err**2))), float(np.mean(err)), per_fold
 
 
-def _basic(r: Readings, m: LinearModel, fold: np.ndarray, k: int) -> ModelFit:
+def _basic(r: Readings, m: LinearModel) -> ModelFit:
     x = design(m, r.anchor, r.d, r.walls, r.n_anchors)
     coef, *_ = np.linalg.lstsq(x, r.rssi, rcond=None)
     resid = r.rssi - x @ coef
     rmse = float(np.sqrt(np.mean(resid**2)))
     sigma = float(np.sqrt(np.sum(resid**2) / (len(resid) - x.shape[1])))
-    cv, me, per = _cross_validate(x, r.rssi, r.spot, fold, k)
-    return ModelFit(m, m.names(r.anchor_ids), coef, sigma, rmse, cv, me, per)
+    return ModelFit(m, m.names(r.anchor_ids), coef, sigma, rmse)
+
+
+def _validate(r: Readings, fit: ModelFit, block_fold: np.ndarray, spot_fold: np.ndarray, k: int) -> None:
+    x = design(fit.model, r.anchor, r.d, r.walls, r.n_anchors)
+    fit.cv_rmse, fit.cv_mean_error, fit.cv_fold_rmse = _cross_validate(x, r.rssi, r.spot, block_fold, k)
+    fit.cv_position_rmse, fit.cv_position_mean_error, _ = _cross_validate(x, r.rssi, r.spot, spot_fold, k)
+
+
+def _variogram(r: Readings, fit: ModelFit, max_lag: float) -> None:
+    """The residuals' variogram and its Gudmundson fit, into ``fit``."""
+    resid = r.rssi - fit.predict(r)
+    fit.variogram = empirical_variogram(r.spot_xy, r.spot, r.anchor, resid, max_lag=max_lag)
+    fit.gudmundson = fit_gudmundson(fit.variogram.lag, fit.variogram.gamma, fit.variogram.pairs)
+
+
+def block_size(spot_xy: np.ndarray, corr_m: float, k: int, given: float | None = None
+               ) -> tuple[float, np.ndarray, str]:
+    """The side of the cross-validation's blocks, each spot's block, and how the side was chosen.
+
+    Readings at spots closer than the residuals' correlation distance share their shadowing, so a spot held out
+    while its neighbours stay in the training folds is predicted with help the model will not have at a new
+    place. Blocks hold neighbours out together. Given ``given``, blocks of that side; else
+    :data:`BLOCK_CORR_LENGTHS` times ``corr_m`` (rounded to 1 cm), shrunk by factors of 0.8 until there are at
+    least ``2 k`` blocks; when the residuals show no correlation (``corr_m`` not finite, or at the lower bound of
+    the variogram's fit), each spot is its own block (side 0).
+
+    Raises:
+        RadioFitError: ``given`` leaves fewer than ``2 k`` blocks.
+    """
+    if given is not None:
+        block = block_of_spots(spot_xy, given)
+        n = int(block.max()) + 1
+        if n < 2 * k:
+            raise RadioFitError(f"--block-m: blocks of {given:g} m hold the positions in {n} blocks, too few for "
+                                f"{k}-fold cross-validation (at least {2 * k}); give a smaller --block-m or fewer "
+                                "--folds")
+        return float(given), block, "given (--block-m)"
+    if not np.isfinite(corr_m) or corr_m <= 1.01 * CORR_BOUNDS_M[0]:
+        return 0.0, np.arange(len(spot_xy)), "no spatial correlation in the residuals: each position is its own block"
+    side = round(BLOCK_CORR_LENGTHS * float(corr_m), 2)
+    rule = f"{BLOCK_CORR_LENGTHS:g} x the multi-wall residuals' correlation distance ({corr_m:.2f} m)"
+    block = block_of_spots(spot_xy, side)
+    shrunk = False
+    while int(block.max()) + 1 < 2 * k:
+        side, shrunk = round(0.8 * side, 2), True
+        block = block_of_spots(spot_xy, side)
+    if shrunk:
+        rule += f", shrunk to give at least {2 * k} blocks"
+    return side, block, rule
 
 
 def _hold_at_bounds(r: Readings, fit: ModelFit) -> None:
@@ -172,11 +252,9 @@ def _detail(r: Readings, fit: ModelFit, weights: np.ndarray, floor: float, max_l
     fit.boot = fit_weighted(x, r.rssi, w)
     resid_b = r.rssi[None, :] - fit.boot @ x.T
     fit.boot_sigma = np.sqrt(np.sum(w * resid_b**2, axis=1) / np.sum(w, axis=1))
-    resid = r.rssi - x @ fit.coef
-    v = empirical_variogram(r.spot_xy, r.spot, r.anchor, resid, max_lag=max_lag)
-    fit.variogram = v
-    fit.gudmundson = fit_gudmundson(v.lag, v.gamma, v.pairs)
-    lag, gamma, n = v.resampled(weights)
+    if fit.variogram is None:
+        _variogram(r, fit, max_lag)
+    lag, gamma, n = fit.variogram.resampled(weights)
     fit.boot_gudmundson = np.array([fit_gudmundson(lag[b], gamma[b], n[b]) for b in range(len(weights))])
     fit.censoring = _censoring(r, fit, floor)
     _hold_at_bounds(r, fit)
@@ -185,20 +263,26 @@ def _detail(r: Readings, fit: ModelFit, weights: np.ndarray, floor: float, max_l
 def fit_radio(r: Readings, opt: FitOptions) -> RadioFit:
     """Fit the comparison table and the detailed models of ``opt`` to the readings ``r`` (see the module doc)."""
     if r.n_spots < 2 * opt.folds:
-        from amronet.radiofit.data import RadioFitError
-
         raise RadioFitError(f"--rssi: {r.n_spots} distinct positions are too few for {opt.folds}-fold "
                             "cross-validation; give more positions or fewer --folds")
-    fold_rng, boot_rng = np.random.default_rng(opt.seed).spawn(2)
-    fold = fold_of_spots(fold_rng, r.n_spots, opt.folds)
+    fold_rng, boot_rng, block_rng = np.random.default_rng(opt.seed).spawn(3)
+    spot_fold = fold_of_spots(fold_rng, r.n_spots, opt.folds)
     weights = spot_weights(boot_rng, r.n_spots, opt.n_boot)
     floor = float(np.min(r.rssi)) if opt.floor_dbm is None else float(opt.floor_dbm)
-    table = [_basic(r, LinearModel(m, pa), fold, opt.folds)
-             for pa in (False, True) for m in ("log-distance", "multi-wall")]
+    table = [_basic(r, LinearModel(m, pa)) for pa in (False, True) for m in MODELS]
+    corr = float("nan")
+    if opt.block_m is None:  # the blocks' side from the multi-wall residuals' correlation distance
+        walls = next(t for t in table if t.model == LinearModel("multi-wall"))
+        _variogram(r, walls, opt.max_lag)
+        corr = walls.gudmundson[2]
+    side, block, rule = block_size(r.spot_xy, corr, opt.folds, opt.block_m)
+    block_fold = fold_of_blocks(block_rng, block, opt.folds)
+    for t in table:
+        _validate(r, t, block_fold, spot_fold, opt.folds)
     fits = []
     for name in opt.models:
         fit = next(t for t in table if t.model == LinearModel(name, opt.per_anchor))
         _detail(r, fit, weights, floor, opt.max_lag)
         fits.append(fit)
     best = min(fits, key=lambda f: f.cv_rmse)
-    return RadioFit(r, opt, floor, table, fits, best)
+    return RadioFit(r, opt, floor, table, fits, best, side, int(block.max()) + 1, rule)

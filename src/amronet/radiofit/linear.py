@@ -7,6 +7,9 @@ only). Only ``A`` as a whole is identifiable: ``tx_dbm`` and ``pl0_db`` enter as
 
 A bootstrap resample of spots is a weighted least-squares fit (a reading's weight is how often its spot was
 drawn), so all resamples are solved at once: their normal equations are one matrix product.
+
+Cross-validation deals spots to folds one by one (:func:`fold_of_spots`) or square blocks of spots at once
+(:func:`block_of_spots`, :func:`fold_of_blocks`), so that a held-out spot's neighbours are held out with it.
 """
 
 from __future__ import annotations
@@ -15,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MODELS", "LinearModel", "design", "fit_weighted", "fold_of_spots", "spot_weights"]
+__all__ = ["MODELS", "LinearModel", "block_of_spots", "design", "fit_weighted", "fold_of_blocks", "fold_of_spots",
+           "spot_weights"]
 
 MODELS = ("log-distance", "multi-wall")
 """The radio models a fit can choose (amronet's names, ``radio.model``)."""
@@ -86,3 +90,30 @@ def fold_of_spots(rng: np.random.Generator, n_spots: int, k: int) -> np.ndarray:
     fold = np.empty(n_spots, np.int64)
     fold[rng.permutation(n_spots)] = np.arange(n_spots) % k
     return fold
+
+
+def block_of_spots(spot_xy: np.ndarray, block_m: float) -> np.ndarray:
+    """The square block ``0..B-1`` of side ``block_m`` holding each spot (a grid from the spots' lower-left corner).
+
+    Blocks are numbered in the order of their grid cells (row by row); only blocks that hold a spot get a number.
+    """
+    cell = np.floor((spot_xy - spot_xy.min(axis=0)) / block_m).astype(np.int64)
+    _, block = np.unique(cell, axis=0, return_inverse=True)
+    return block.reshape(-1)
+
+
+def fold_of_blocks(rng: np.random.Generator, block: np.ndarray, k: int) -> np.ndarray:
+    """A fold ``0..k-1`` for each spot such that all spots of a block share one fold, the folds about equal in spots.
+
+    The blocks are taken in a seeded random order, each into the fold that holds the fewest spots so far (ties:
+    the lowest fold), so folds differ in spots by at most the largest block. Needs at least ``k`` blocks.
+    """
+    size = np.bincount(block)
+    order = rng.permutation(len(size))
+    fold_of_block = np.empty(len(size), np.int64)
+    held = np.zeros(k, np.int64)
+    for b in order:
+        f = int(np.argmin(held))
+        fold_of_block[b] = f
+        held[f] += size[b]
+    return fold_of_block[block]

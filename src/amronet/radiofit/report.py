@@ -31,6 +31,12 @@ def _param(value: float, samples: np.ndarray) -> dict:
             "ci95": _interval(samples)}
 
 
+def _cv(f: ModelFit) -> dict:
+    """Cross-validated RMSE and mean error: over blocks of positions (the headline) and over single positions."""
+    return {"cv_rmse_db": f.cv_rmse, "cv_mean_error_db": f.cv_mean_error, "cv_position_rmse_db": f.cv_position_rmse,
+            "cv_position_mean_error_db": f.cv_position_mean_error}
+
+
 def model_dict(f: ModelFit) -> dict:
     """The detailed fit of one model."""
     params = {n: _param(v, f.boot[:, j]) for j, (n, v) in enumerate(zip(f.names, f.coef, strict=True))}
@@ -38,8 +44,7 @@ def model_dict(f: ModelFit) -> dict:
     nug, sill, corr = f.gudmundson
     params["shadowing_corr_m"] = _param(corr, f.boot_gudmundson[:, 2])
     out = {"model": f.model.model, "per_anchor": f.model.per_anchor, "parameters": params,
-           "rmse_db": f.rmse, "cv_rmse_db": f.cv_rmse, "cv_mean_error_db": f.cv_mean_error,
-           "cv_fold_rmse_db": f.cv_fold_rmse.tolist(),
+           "rmse_db": f.rmse, **_cv(f), "cv_fold_rmse_db": f.cv_fold_rmse.tolist(),
            "variogram": {"lag_m": f.variogram.lag.tolist(), "gamma_db2": f.variogram.gamma.tolist(),
                          "pairs": f.variogram.pairs.astype(int).tolist(),
                          "gudmundson": {"nugget_db2": _param(nug, f.boot_gudmundson[:, 0]),
@@ -63,10 +68,14 @@ def fit_dict(rf: RadioFit, data: dict) -> dict:
         "data": {**data, "readings": len(r.rssi), "positions": r.n_spots, "anchors": r.anchor_ids.tolist(),
                  "tag_height_m": r.tag_height, "missing_links": int(len(r.cens_spot))},
         "options": {"models": list(o.models), "per_anchor": o.per_anchor, "bootstrap": o.n_boot,
-                    "folds": o.folds, "seed": o.seed, "floor_dbm": rf.floor_dbm, "max_lag_m": o.max_lag},
+                    "folds": o.folds, "seed": o.seed, "floor_dbm": rf.floor_dbm, "max_lag_m": o.max_lag,
+                    "block_m": o.block_m},
+        "cross_validation": {"folds": o.folds, "block_m": rf.block_m, "blocks": rf.n_blocks,
+                             "block_rule": rf.block_rule,
+                             "headline": "cv_rmse_db: folds of square blocks of positions; cv_position_rmse_db: "
+                                         "folds of single positions"},
         "comparison": [{"model": t.model.label, "coef": dict(zip(t.names, t.coef.tolist(), strict=True)),
-                        "rmse_db": t.rmse, "cv_rmse_db": t.cv_rmse, "cv_mean_error_db": t.cv_mean_error,
-                        "sigma_db": t.sigma} for t in rf.table],
+                        "rmse_db": t.rmse, **_cv(t), "sigma_db": t.sigma} for t in rf.table],
         "fits": [model_dict(f) for f in rf.fits],
         "chosen": rf.best.model.label,
         "radio": block,
@@ -74,17 +83,25 @@ def fit_dict(rf: RadioFit, data: dict) -> dict:
     }
 
 
+def _blocks_text(rf: RadioFit) -> str:
+    if rf.block_m == 0.0:
+        return f"single positions ({rf.block_rule})"
+    return f"{rf.n_blocks} blocks of {rf.block_m:g} x {rf.block_m:g} m ({rf.block_rule})"
+
+
 def fit_text(rf: RadioFit) -> str:
     """What the command prints: the comparison, the chosen fit with intervals, the block as ``--set`` lines."""
     r = rf.readings
     lines = [f"{len(r.rssi)} readings at {r.n_spots} positions from {r.n_anchors} anchors "
-             f"({len(r.cens_spot)} (point, anchor) pairs not heard); {rf.options.folds}-fold CV over positions",
-             f"{'model':<28}{'RMSE':>8}{'CV RMSE':>9}{'CV mean':>9}  A [dBm]  n      wall [dB]"]
+             f"({len(r.cens_spot)} (point, anchor) pairs not heard)",
+             f"{rf.options.folds}-fold cross-validation (CV) over {_blocks_text(rf)}, and over single positions (pos.)",
+             f"{'model':<28}{'RMSE':>8}{'CV RMSE':>9}{'CV mean':>9}{'pos. RMSE':>10}  A [dBm]  n      wall [dB]"]
     for t in rf.table:
         c = dict(zip(t.names, t.coef, strict=True))
         a = np.mean([v for k, v in c.items() if k.startswith("a_dbm")])
         wall = f"{c['wall_db']:.2f}" if "wall_db" in c else "-"
-        lines.append(f"{t.model.label:<28}{t.rmse:8.2f}{t.cv_rmse:9.2f}{t.cv_mean_error:+9.2f}  {a:7.2f}  "
+        lines.append(f"{t.model.label:<28}{t.rmse:8.2f}{t.cv_rmse:9.2f}{t.cv_mean_error:+9.2f}"
+                     f"{t.cv_position_rmse:10.2f}  {a:7.2f}  "
                      f"{c['path_loss_exponent']:.3f}  {wall}")
     for f in rf.fits:
         d = model_dict(f)

@@ -24,7 +24,10 @@ from scipy import sparse
 from scipy.optimize import curve_fit
 from scipy.spatial import cKDTree
 
-__all__ = ["Variogram", "empirical_variogram", "fit_gudmundson", "gudmundson"]
+__all__ = ["CORR_BOUNDS_M", "Variogram", "empirical_variogram", "fit_gudmundson", "gudmundson"]
+
+CORR_BOUNDS_M = (0.01, 1000.0)
+"""The correlation distances (m) Gudmundson's fit may return; a fit at the lower bound found no correlation."""
 
 
 @dataclass(frozen=True)
@@ -109,8 +112,9 @@ def fit_gudmundson(lag: np.ndarray, gamma: np.ndarray, pairs: np.ndarray) -> tup
     top = float(np.max(gamma))
     p0 = (float(gamma[0]) * 0.5, max(top - float(gamma[0]) * 0.5, 1e-3), 1.0)
     try:
+        bounds = ([0.0, 0.0, CORR_BOUNDS_M[0]], [np.inf, np.inf, CORR_BOUNDS_M[1]])
         (nug, sill, corr), _ = curve_fit(gudmundson, lag, gamma, p0=p0, sigma=1.0 / np.sqrt(pairs),
-                                         bounds=([0.0, 0.0, 0.01], [np.inf, np.inf, 1000.0]), max_nfev=2000)
+                                         bounds=bounds, max_nfev=2000)
     except RuntimeError:  # no convergence: a flat variogram, nothing correlated to see
         return float(np.average(gamma, weights=pairs)), 0.0, float("nan")
     return float(nug), float(sill), float(corr)

@@ -46,8 +46,9 @@ _LAZY = {name: "amronet.scenario.schema" for name in (
     "FAULT_KINDS", "MAX_RANGE_M", "AgentsSpec", "AlgorithmSpec", "BaseStationSpec", "FaultSpec", "RadioSpec",
     "RobotRef", "RobotSpec", "RoutersSpec", "Scenario", "SimSpec", "validate_scenario")}
 _LAZY["to_scenario_error"] = "amronet.scenario.messages"
-"""Names loaded on first use: the schema needs the algorithms' and radio models' registries (numba, scipy), which
-a scenario file that does not exist, or a command line's ``--help``, need not import."""
+"""Names loaded on first use: the schema (pydantic, the algorithms' declarations) is not needed to refuse a
+scenario file that does not exist, nor by a command line's ``--help``. It never imports the kernels (numba, SciPy):
+a bad scenario is refused without them."""
 
 __all__ = [
     "FAULT_KINDS",

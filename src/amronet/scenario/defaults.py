@@ -1,6 +1,7 @@
 """Defaults that depend on the rest of the scenario: the algorithm's own, and start regions that hold their robots.
 
-* **The algorithm's defaults** (:attr:`~amronet.algorithms.base.Controller.scenario_defaults`): a scenario that
+* **The algorithm's defaults** (its declaration's
+  :attr:`~amronet.algorithms.declaration.Declaration.scenario_defaults`): a scenario that
   leaves a field out gets its algorithm's value instead of the schema's. Agent-assisted deployment, whose agents
   release the routers, starts with no free routers (``routers.count: 0``), three agents per base station and the
   range of the paper's agent-assisted setups (``radio.r_c: 6``; a radio given by ``threshold_dbm`` keeps the
@@ -21,8 +22,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from amronet.algorithms import ALGORITHMS
-from amronet.engine.robots import ROBOT_MODELS
+from amronet.algorithms.declaration import ALGORITHMS, declaration_of
+from amronet.engine.robot_models import ROBOT_MODELS
 
 if TYPE_CHECKING:
     from amronet.scenario.schema import RobotRef, Scenario
@@ -60,10 +61,9 @@ def with_algorithm_defaults(data: Any) -> tuple[Any, list[str]]:
         return data, []
     algorithm = data.get("algorithm", {})
     name = algorithm.get("name", "self-spreading") if isinstance(algorithm, dict) else None
-    controller = ALGORITHMS.get(name) if isinstance(name, str) else None
-    own = controller.scenario_defaults if controller is not None else {}
+    own = declaration_of(name).scenario_defaults if isinstance(name, str) and name in ALGORITHMS else {}
     out, unset = dict(data), []
-    for path in sorted({p for cls in ALGORITHMS.values() for p in cls.scenario_defaults}):
+    for path in sorted({p for n in ALGORITHMS for p in declaration_of(n).scenario_defaults}):
         section = out.get(path.split(".")[0], {})
         if not isinstance(section, dict) or _given(section, path):
             continue  # given, or a section the schema refuses

@@ -1,8 +1,9 @@
 """Loading a scenario: from a YAML file, a mapping, a :class:`~amronet.scenario.schema.Scenario` or a preset.
 
 The built-in presets are the YAML files of ``amronet/data/presets``. The schema is imported only when a scenario is
-validated (it needs the algorithms' and radio models' registries: numba, scipy), so a file that does not exist is
-refused at once.
+validated, so a file that does not exist is refused at once; the schema itself needs the algorithms' declarations
+and the radio models' traits, not their kernels (:mod:`amronet.algorithms.declaration`,
+:mod:`amronet.engine.radio_traits`), so a bad scenario is refused quickly too.
 """
 
 from __future__ import annotations
@@ -11,8 +12,9 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from amronet.errors import ScenarioError
+from amronet.errors import MapError, ScenarioError
 from amronet.scenario.overrides import apply_overrides
+from amronet.world.names import unknown_map_message
 from amronet.yaml_loading import load_yaml
 
 if TYPE_CHECKING:
@@ -47,7 +49,8 @@ def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dic
         The validated scenario.
 
     Raises:
-        ScenarioError: The source cannot be read or is invalid; the message names the field.
+        ScenarioError: The source cannot be read or is invalid; the message names the field (a file naming a map
+            that is neither a built-in name nor a path: a MapError).
     """
     base_dir: str | None = None
     if isinstance(source, dict):
@@ -78,6 +81,12 @@ def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dic
         data = load_yaml(text, "scenario", shown)
     if overrides:
         data = apply_overrides(data if isinstance(data, dict) else {}, overrides)
+    if isinstance(source, str | Path) and isinstance(data, dict) and isinstance(data.get("map"), str):
+        # a file names a map that exists: a built-in name or a path (refused now, before any map code is imported;
+        # a mapping may name a map its caller hands over as an object)
+        unknown = unknown_map_message(data["map"])
+        if unknown is not None:
+            raise MapError("map", unknown)
     from amronet.scenario.schema import validate_scenario  # here, not at the top: see the module
 
     return validate_scenario(data, base_dir)

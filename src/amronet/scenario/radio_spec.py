@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationInfo, field_validator, model_validator
 
-from amronet.engine.propagation import RADIO_BOUNDS, LinkBudget, median_range
-from amronet.engine.radio import DEFAULT_WALL_DB, MEDIA
+from amronet.engine.radio_traits import DEFAULT_WALL_DB, RADIO_BOUNDS, median_range, traits_of
 from amronet.scenario.fields import MAX_RANGE_M, FiniteFloat, NonNegativeFloat, PositiveFloat, Strict
 from amronet.yaml_fields import YamlBool
+
+if TYPE_CHECKING:
+    from amronet.engine.propagation import LinkBudget
 
 __all__ = ["RadioSpec"]
 
@@ -47,7 +49,7 @@ class RadioSpec(Strict):
     @field_validator(*RADIO_BOUNDS, mode="before")
     @classmethod
     def _in_bounds(cls, value: Any, info: ValidationInfo) -> Any:
-        """Refuse a number outside the field's physical range (:data:`~amronet.engine.propagation.RADIO_BOUNDS`)."""
+        """Refuse a number outside the field's physical range (:data:`~amronet.engine.radio_traits.RADIO_BOUNDS`)."""
         problem = RADIO_BOUNDS[str(info.field_name)].problem(value)
         if problem is not None:
             raise ValueError(f"@radio.{info.field_name}@{problem}")
@@ -58,7 +60,7 @@ class RadioSpec(Strict):
         if self.r_c > MAX_RANGE_M:
             raise ValueError(f"@radio.r_c@{self.r_c:g} m is beyond the longest range amronet models, "
                              f"{MAX_RANGE_M:g} m; give a range in metres, e.g. 1.5")
-        cls = MEDIA.get(self.model)
+        cls = traits_of(self.model)  # the traits alone: no engine to refuse a scenario
         if cls is None:
             return self  # the scenario names the unknown model
         given = self.model_fields_set
@@ -86,6 +88,9 @@ class RadioSpec(Strict):
 
     def link_budget(self) -> LinkBudget:
         """The link budget of this radio, the model's defaults filled in."""
+        from amronet.engine.propagation import LinkBudget  # (SciPy) here: a scenario is checked without it
+        from amronet.engine.radio import MEDIA
+
         cls = MEDIA.lookup(self.model, "radio.model")
         shadowing = self.shadowing_db if self.shadowing_db is not None else cls.default_shadowing_db
         wall = self.wall_db if self.wall_db is not None else DEFAULT_WALL_DB

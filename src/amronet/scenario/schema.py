@@ -23,8 +23,8 @@ from pydantic import (
     model_validator,
 )
 
-from amronet.algorithms import ALGORITHMS
-from amronet.engine.radio import MEDIA
+from amronet.algorithms.declaration import ALGORITHMS, declaration_of
+from amronet.engine.radio_traits import model_names, traits_of
 from amronet.errors import ScenarioError
 from amronet.limits import MAX_COUNT
 from amronet.scenario.defaults import fill_start_regions, with_algorithm_defaults, without
@@ -244,9 +244,9 @@ class Scenario(Strict):
                 f"@algorithm.name@unknown algorithm {self.algorithm.name!r}; choose one of: "
                 + ", ".join(sorted(ALGORITHMS))
             )
-        if self.radio.model not in MEDIA:
+        if traits_of(self.radio.model) is None:
             raise ValueError(f"@radio.model@unknown radio model {self.radio.model!r}; choose one of: "
-                             + ", ".join(sorted(MEDIA)))
+                             + ", ".join(model_names()))
         for k, fault in enumerate(self.faults):
             kinds = [name for name in FAULT_KINDS if getattr(fault, name) is not None]
             if len(kinds) != 1:
@@ -268,8 +268,8 @@ class Scenario(Strict):
         if path is None:
             return
         given = self.agents.trajectories
-        if not ALGORITHMS[self.algorithm.name].follows_paths:
-            takers = ", ".join(sorted(name for name, cls in ALGORITHMS.items() if cls.follows_paths))
+        if not declaration_of(self.algorithm.name).follows_paths:
+            takers = ", ".join(sorted(name for name in ALGORITHMS if declaration_of(name).follows_paths))
             raise ValueError(f"@agents.trajectories@{self.algorithm.name} does not move agents along paths; use "
                              f"algorithm.name {takers} or leave agents.trajectories out")
         if self.agents.per_base < 1:
@@ -292,7 +292,7 @@ class Scenario(Strict):
 
     def algorithm_params(self) -> BaseModel:
         """The algorithm's parameters, validated by the algorithm's own parameter model."""
-        model = ALGORITHMS[self.algorithm.name].Params
+        model = declaration_of(self.algorithm.name).params
         try:
             return model.model_validate(self.algorithm.params)
         except ValidationError as exc:

@@ -170,11 +170,15 @@ class FaultBook:
 
     @staticmethod
     def _all_linked(run: FaultedRun) -> bool:
-        """Whether every surviving agent and deployed router has a path to a base station that has not failed."""
+        """Whether every surviving agent and deployed router has a path to a base station that has not failed.
+
+        A router that a repair moves (state ``relocating``) counts: it was deployed, and its move is over only when
+        it has a path again or has given up.
+        """
         sw, table = run.swarm, run.table
         live_bases = run.live_bases
         relays = sw.relaying
-        routers = sw.deployed & (sw.role == Role.ROUTER)
+        routers = (sw.deployed | (sw.state == State.RELOCATING)) & (sw.role == Role.ROUTER)  # moving ones too
         if len(live_bases) == 0:
             return not routers.any() and not len(run.agents)
         if not connected_to(table, live_bases, relays)[routers].all():

@@ -200,6 +200,8 @@ class Loop:
         sw = self.swarm
         clock = time.perf_counter
         if self.compiled is not None:
+            if self._faulty is not None:
+                self._fail_nodes(self._faulty)
             t0 = clock()
             self.compiled.step(self._now())
             self.phase_seconds["sense+decide+move"] += clock() - t0
@@ -267,11 +269,14 @@ class Loop:
     def after_compiled_step(self) -> None:
         """The end of a compiled step, once the robots have moved: the radio's table, then the agents' connection."""
         t3 = time.perf_counter()
-        self.table = self.medium.update(self.swarm.xy, self.groups)
+        self.table = self.medium.update(self.swarm.xy, self.groups, self._silent())
         self.steps += 1
         self.phase_seconds["radio"] += time.perf_counter() - t3
         for run in self._with_agents:
             run.observe_agents()
+        if self._faulty is not None:
+            assert self._faulty.fault_book is not None
+            self._faulty.fault_book.observe(self._faulty)
 
     def _silent(self) -> np.ndarray | None:
         """Nodes that send nothing (failed ones), or ``None`` when none can have failed."""
@@ -334,7 +339,8 @@ class Loop:
                 active.append(run)
         max_steps = round(sim.time_limit / self.dt)
         unrecorded = all(r is None for r in recorders)
-        fast = self.compiled if unrecorded and self.compiled is not None and self.compiled.stretches else None
+        fast = (self.compiled if unrecorded and self._faulty is None and self.compiled is not None
+                and self.compiled.stretches else None)  # (a stretch neither fails nodes nor silences them)
         ids = np.array([run.index for run in active], dtype=np.int64)  # of the active runs
         unsettled = False  # every active run's books say "not settled" (the last step left them so)
         now_settled = self._settled_runs()

@@ -161,7 +161,7 @@ def _routers_connected(sim: Run) -> float:
 
 
 def _mission(sim: Run, final: Metrics, report: dict[str, Any], deployed_routers: int) -> dict[str, Any] | None:
-    """The summary's ``mission`` section: how well the agents stayed connected and what it cost (issue #19).
+    """The summary's ``mission`` section: how well the agents stayed connected and what it cost.
 
     Args:
         sim: The finished run.

@@ -2,8 +2,8 @@
 
 :class:`ResultStore` is the store; its parts live beside it: the tables and opening the file
 (:mod:`~amronet.sweeps.store_schema`), the claims of runs being computed (:mod:`~amronet.sweeps.store_claims`),
-the queries (:mod:`~amronet.sweeps.store_reading`). This module writes: a sweep and its runs' links, and every
-finished run.
+the queries (:mod:`~amronet.sweeps.store_reading`), the solved optimum problems
+(:mod:`~amronet.sweeps.store_optima`). This module writes: a sweep and its runs' links, and every finished run.
 
 Every finished run is written in one transaction with ``synchronous = FULL``: after a crash (``SIGKILL``, power
 loss) the file holds every run whose transaction committed and nothing of the others, so running the sweep
@@ -21,6 +21,7 @@ from typing import Any
 
 from amronet.sweeps.identity import canonical_json
 from amronet.sweeps.store_claims import CLAIM_HEARTBEAT_S, CLAIM_LEASE_S, ClaimOwner, Claims, StoreClaims
+from amronet.sweeps.store_optima import StoreOptima
 from amronet.sweeps.store_reading import StoreReading
 from amronet.sweeps.store_schema import (
     APPLICATION_ID,
@@ -38,7 +39,7 @@ __all__ = ["APPLICATION_ID", "CLAIM_HEARTBEAT_S", "CLAIM_LEASE_S", "METRIC_COLUM
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
-class ResultStore(StoreClaims, StoreReading):
+class ResultStore(StoreClaims, StoreReading, StoreOptima):
     """An open result store (see the module docstring).
 
     Args:

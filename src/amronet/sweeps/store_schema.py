@@ -14,6 +14,10 @@ Tables:
   swept keys' values, or a figure's labels). A run belongs to every sweep that contains it.
 * ``claims`` — the runs some process is computing right now (:mod:`amronet.sweeps.store_claims`). Stores written
   before claims existed gain the (empty) table when a sweep opens them.
+* ``optima`` — one row per solved optimum problem (:mod:`amronet.sweeps.store_optima`): its ``key`` (a hash of the
+  problem, as a run's scenario hash), the problem (``instance``, canonical JSON), the answer (``result``, what
+  ``optimum.json`` holds), ``amronet_version``, ``wall_time_s`` and ``finished_at``. Stores written before optima
+  existed gain the (empty) table when they are opened for writing.
 
 Creating the store tolerates other processes creating it at the same instant: the schema is created with
 ``IF NOT EXISTS`` in one ``BEGIN IMMEDIATE`` transaction, behind SQLite's busy timeout. A path that exists but is
@@ -34,8 +38,8 @@ from typing import Self
 
 from amronet.sweeps.store_errors import GuardedConnection, StoreError, store_error
 
-__all__ = ["APPLICATION_ID", "METRIC_COLUMNS", "SCHEMA_VERSION", "RunKey", "RunVersion", "StoreError", "StoreFile",
-           "check_store_path"]
+__all__ = ["APPLICATION_ID", "METRIC_COLUMNS", "OPTIMA_TABLE", "SCHEMA_VERSION", "RunKey", "RunVersion", "StoreError",
+           "StoreFile", "check_store_path"]
 
 APPLICATION_ID = 0x414D524E
 """SQLite ``application_id`` of an amronet result store ("AMRN")."""
@@ -55,6 +59,17 @@ CREATE TABLE IF NOT EXISTS claims (
     claimed_at TEXT NOT NULL,
     heartbeat REAL NOT NULL,
     PRIMARY KEY (scenario_hash, seed)
+) WITHOUT ROWID;
+"""
+
+OPTIMA_TABLE = """
+CREATE TABLE IF NOT EXISTS optima (
+    key TEXT NOT NULL PRIMARY KEY,
+    instance TEXT NOT NULL,
+    result TEXT NOT NULL,
+    amronet_version TEXT NOT NULL,
+    wall_time_s REAL,
+    finished_at TEXT NOT NULL
 ) WITHOUT ROWID;
 """
 
@@ -107,6 +122,7 @@ CREATE TABLE IF NOT EXISTS timeseries (
     PRIMARY KEY (scenario_hash, seed, k)
 ) WITHOUT ROWID;
 {CLAIMS_TABLE}
+{OPTIMA_TABLE}
 PRAGMA application_id = {APPLICATION_ID};
 PRAGMA user_version = {SCHEMA_VERSION};
 """
@@ -204,6 +220,10 @@ class StoreFile:
             if not must_exist and not self._claims_table:
                 self.conn.execute(CLAIMS_TABLE)  # a store from before claims: add the table (nothing else changes)
                 self._claims_table = True
+            self._optima_table = self._has_table("optima")
+            if not must_exist and not self._optima_table:
+                self.conn.execute(OPTIMA_TABLE)  # a store from before optima: likewise
+                self._optima_table = True
         except StoreError:
             conn.close()
             raise
@@ -240,7 +260,10 @@ class StoreFile:
                 time.sleep(0.01)
 
     def _has_claims(self) -> bool:
-        return self.conn.execute("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'claims'").fetchone() \
+        return self._has_table("claims")
+
+    def _has_table(self, name: str) -> bool:
+        return self.conn.execute("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", (name,)).fetchone() \
             is not None
 
     def close(self) -> None:

@@ -20,30 +20,16 @@ from dataclasses import dataclass
 from importlib import resources
 from importlib.resources.abc import Traversable
 from pathlib import Path
-from types import MappingProxyType
 
 from PIL import Image
 
 from amronet.errors import MapError
 from amronet.world.loading import load_map_yaml
+from amronet.world.names import BUILTIN_MAPS, looks_like_path, unknown_map_message
 from amronet.world.occupancy import OccupancyMap
 from amronet.yaml_loading import load_yaml
 
 __all__ = ["BUILTIN_MAPS", "FLOOR_CORNERS", "MapInfo", "list_builtin_maps", "load_builtin_map", "resolve_map"]
-
-BUILTIN_MAPS: MappingProxyType[str, str] = MappingProxyType(
-    {
-        "open-6x6": "empty 6 m x 6 m arena centred on (0, 0), walls only at the edge",
-        "obstacles-6x6": "6 m x 6 m arena, block and wall obstacles around a free centre (self-spreading)",
-        "open-32x32": "empty 32 m x 32 m field, walls only at the edge",
-        "office-32x32": "32 m x 32 m office floor: 2 m corridors, rooms behind 1-1.2 m doors, free corners",
-        "autolab": "Stage autolab: rooms with doorways (real building, 1-bit image)",
-        "cave": "Stage cave: open cave with thin outlines, the classic Stage demo world",
-        "depot": "navigation2 depot: SLAM-style trinary map with shelves and pillars",
-        "hospital_section": "Stage hospital section: many rooms and corridors, 1 px walls",
-    }
-)
-"""Name → one-line description of every built-in map (the registry; its order is the listing order)."""
 
 FLOOR_CORNERS: tuple[tuple[float, float], ...] = ((1.0, 1.0), (31.0, 1.0), (1.0, 31.0), (31.0, 31.0))
 """Base-station spots in the free corners of the 32 m x 32 m floors (``open-32x32``, ``office-32x32``), 1 m from
@@ -77,11 +63,7 @@ def _maps_dir() -> Traversable:
 def _check_name(name: str) -> None:
     """Raise ``MapError`` unless ``name`` is a built-in map."""
     if name not in BUILTIN_MAPS:
-        raise MapError(
-            "map",
-            f"unknown map '{name}'; use a built-in name (amronet maps list: {', '.join(BUILTIN_MAPS)}) "
-            "or a path to a ROS map_server YAML",
-        )
+        raise MapError("map", unknown_map_message(name) or f"unknown map '{name}'")
 
 
 def list_builtin_maps() -> list[MapInfo]:
@@ -152,12 +134,6 @@ def resolve_map(name_or_path: str | os.PathLike[str]) -> OccupancyMap:
     if isinstance(name_or_path, str):
         if name_or_path in BUILTIN_MAPS:
             return load_builtin_map(name_or_path)
-        looks_like_path = (
-            name_or_path.lower().endswith((".yaml", ".yml"))
-            or "/" in name_or_path
-            or os.sep in name_or_path
-            or Path(name_or_path).is_file()
-        )
-        if not looks_like_path:
+        if not looks_like_path(name_or_path):
             _check_name(name_or_path)
     return load_map_yaml(name_or_path)

@@ -41,8 +41,6 @@ the drop rule's view and the realism switches (:mod:`.drop_switches`) and the re
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
-
 import numpy as np
 
 from amronet.algorithms.agent_assisted.drop_switches import DropSwitches
@@ -54,6 +52,7 @@ from amronet.algorithms.agent_assisted.movers import Movers
 from amronet.algorithms.agent_assisted.params import DEFAULT_COVERAGE_TARGET, AgentAssistedParams
 from amronet.algorithms.agent_assisted.releases import Releasing, _pair_key, _segments_clear
 from amronet.algorithms.agent_assisted.relocate import Relocator
+from amronet.algorithms.agent_assisted.retrace import Retracer
 from amronet.algorithms.agent_assisted.strip_driving import StripDrivers
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
 from amronet.algorithms.common.goto import GoalSteering
@@ -73,11 +72,6 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
     Params = AgentAssistedParams
     params: AgentAssistedParams
     default_coverage_target = DEFAULT_COVERAGE_TARGET
-    follows_paths = True
-    scenario_defaults: ClassVar[dict[str, Any]] = {"routers.count": 0, "agents.per_base": 3, "radio.r_c": 6.0}
-    """Agents release the routers (no free ones), three of them per base station, and the range of the paper's
-    agent-assisted setups (5.1): with the schema's 1 m an agent's step at the default ``sim.dt`` spans the whole
-    'about to lose' band."""
 
     def __init__(self, params: AgentAssistedParams, setup: Setup) -> None:
         super().__init__(params, setup)
@@ -148,8 +142,13 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
         self.general_path = (self.params.drop_rule != "last-reference" or self.settle_s > 0 or not self.tether
                              or self.reverse_after_s is not None)
         """Whether every step takes the general drop path (the paper's rule alone acts only on "about to lose")."""
-        self.relocator = (Relocator(n, self.params.repair_confirm_s, self.params.give_up_steps)
-                          if self.params.repair == "relocate" else None)
+        self.relocator: Relocator | None = None
+        if self.params.repair == "relocate":
+            self.relocator = Relocator(n, self.params.repair_confirm_s, self.params.give_up_steps)
+        elif self.params.repair == "retrace":
+            on_path = None if setup.paths is None else np.diff(setup.paths.start)[:len(self.agents)] > 0
+            self.relocator = Retracer(n, self.params.repair_confirm_s, self.params.give_up_steps, self.agents, sw,
+                                      self.router_model.radius, step, on_path)
         self.strips = (StripDrivers(self.drop_rule, sw, self.steering, self.bases, self._nodes_changed)
                        if self.drop_rule.drives_to_goal else None)
         """strip-goals: the routers that drive on to a goal point after they are put down."""
@@ -333,6 +332,8 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
             out["reverse_drops"] = self.reverse_drops
         if self.relocator is not None:
             out["relocations"] = self.relocator.moves
+        if isinstance(self.relocator, Retracer):
+            out["retrace_points_skipped"] = self.relocator.skipped
         if self.strips is not None:
             out["strip_goals"] = dict(self.strips.counts)
         out.update(self.drop_rule.report())

@@ -13,12 +13,16 @@ their reference
 collision
    checks, their distances and the refused moves.
 
-In a step where an agent has to act, the controller's own Python takes over after the tracking
+Under a drop rule other than the paper's alone (or with ``when_empty: continue``, ``drop_settle_s``,
+``reverse_drop``), whether an agent acts is the rule's: after the tracking, one more compiled call asks it
+(:class:`~amronet.algorithms.agent_assisted.rule_check.RuleCheck`) and, in a quiet step, keeps its books. In a step
+where an agent has to act, the controller's own Python takes over after the tracking
 (:meth:`~amronet.algorithms.agent_assisted.controller.AgentAssisted.decide_tracked`) and the move phase follows as the
-loop runs
-it; while a router put down settles or a triangle router drives to its goal (other robots move), the whole step is
-the loop's phases. Every computation is the one the phases do, in the same order, so the result is the same bit for
-bit (``tests/test_compiled_step.py`` compares both paths).
+loop runs it. Triangle and strip routers on their way are sensed with the agents (their rings as the sense phase
+casts them) and steered by the controller's Python (:meth:`CompiledAgents.finish`); only where such routers are of
+the agents' own model is the whole step the loop's phases. Every computation is the one the phases do, in the same
+order, so the result is the same bit for bit (``tests/test_compiled_step.py`` and
+``tests/test_compiled_drop_rules.py`` compare both paths).
 """
 
 from __future__ import annotations
@@ -36,14 +40,22 @@ from amronet.algorithms.agent_assisted.kernels import (
     Robots,
     Tracking,
     drive_movers,
+    integrate_agents,
     sense_track_agents,
 )
+from amronet.algorithms.agent_assisted.rule_check import RuleCheck
+from amronet.algorithms.agent_assisted.stretch_kernels import TRIANGLE_RULES, TRIANGLES_ACT, triangle_goes
 from amronet.algorithms.base import Command, Readings, StepInput
 from amronet.algorithms.phases import move, sense
 from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surroundings, Watch
+from amronet.engine.robots import State
 from amronet.engine.sensing import range_scan
 
 __all__ = ["AgentControls", "CompiledAgents"]
+
+_NO_ROBOTS = np.zeros(0, dtype=np.int64)
+_OTHER_MOVERS = (State.TRIANGLE, State.STRIP)
+"""The states of the released routers that move (no relocation: :meth:`CompiledAgents.applies`)."""
 
 
 class AgentControls(Protocol):
@@ -68,6 +80,13 @@ class AgentControls(Protocol):
     strips: Any
     trails: Any
     settle_at: Any
+    swarm: Any
+    bases: np.ndarray
+    drop_rule: Any
+    tether: bool
+    reverse_after_s: float | None
+    pending_until: np.ndarray
+    reversing: np.ndarray
     moving_triangles: Any
     steering: Any
     current: np.ndarray
@@ -82,6 +101,10 @@ class AgentControls(Protocol):
     movers_command: Callable[..., Command]
     deployed_nodes: Callable[[], tuple[np.ndarray, np.ndarray]]
     served_pairs: Callable[[], Any]
+    triangles_released: list
+    _settle_dropped: Callable[[float], None]
+    _view: Callable[..., Any]
+    _back_up: Callable[..., None]
 
 
 class CompiledAgents(FastStep):
@@ -112,37 +135,85 @@ class CompiledAgents(FastStep):
         self._tracking_plain: tuple = ()
         self._knowledge: Knowledge | None = None
         self._knowledge_plain: tuple = ()
+        self.rules = RuleCheck(c) if c.general_path else None
+        """The drop rule's compiled check (:class:`~.rule_check.RuleCheck`), or ``None`` under the paper's rule alone
+        (an agent acts when it is about to lose its last reference)."""
+        self.triangle_rule = TRIANGLE_RULES.get(c.params.triangular, TRIANGLES_ACT)
+        self._served: tuple[int, np.ndarray] = (0, c.served_pairs())
+        """The triangles served so far, as the compiled check reads them, and how many were."""
         self.quiet: Any = None
         """Quiet steps in one compiled call (:class:`.stretch.QuietStretch`, set by the controller where it applies),
         or ``None``."""
 
     @staticmethod
     def applies(controller: AgentControls, context: StepContext) -> bool:
-        """Whether the loop is one agent-assisted run whose agents act by the paper's rule.
+        """Whether the loop is one agent-assisted run whose agents act by a drop rule the compiled check knows.
 
-        No faults, no batch, the paper's drop rule with its routers relaying at once and tethered agents, no
-        repair, no reverse drops, no routers driving to goals: the steps where nothing but the agents move.
+        One run (no batch), agents that read range rings, no repair (``repair: relocate``), and the paper's drop rule
+        or one :class:`~.rule_check.RuleCheck` knows; faults, ``agents.when_empty``, ``drop_settle_s`` and
+        ``reverse_drop`` are all taken in. The steps where other robots than the agents move go phase by phase.
         """
         c = controller
-        return (context.groups is None and not context.faults
-                and not c.general_path and c.relocator is None and c.strips is None and c.trails is None
-                and c.needs_range_readings and len(c.agents) > 0)
+        return (context.groups is None and c.relocator is None and c.needs_range_readings and len(c.agents) > 0
+                and (not c.general_path or RuleCheck.knows(c)))
 
     def step(self, now: StepInput) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
         c = self.controller
-        if c.settle_at or c.moving_triangles:  # another robot moves or settles: the phases one by one
+        others = self.other_movers()
+        if others is None:  # other robots move that the compiled step does not sense: the phases one by one
             self._phases(now)
             return
+        if c.settle_at:  # (what decide does first, once the movers are known: the rings do not read states)
+            c._settle_dropped(now.t)
         n_before = len(self.swarm)
-        scans, n_cand, n_losing = self._sense_track(now)
-        if n_cand or n_losing:  # an agent acts: the controller's own rules, then the move phase
-            self.act(now, n_before, n_cand, n_losing, scans)
+        rules = self.rules
+        scans, n_cand, n_losing = self._sense_track(now, rules is None)
+        readings = self.readings(now, scans, others) if len(others) else None
+        if ((n_cand and self.triangle_goes()) or (n_losing if rules is None else not rules.quiet(now, scans))):
+            self.act(now, n_before, n_cand, n_losing, scans, readings)  # an agent acts: the controller's own rules
             return
-        if self.frontier:  # the readings are in its grid already
+        if self.frontier:
+            if rules is not None or n_cand:  # the readings into its grid, as the sense pass puts them in a quiet step
+                integrate_agents(self.robots(), c.agents, self.ring, scans, self._knowledge_plain,
+                                 self.knowledge.stamp + 1)
             self.knowledge.stamp += 1
         self._steer(scans)
-        self.drive(now)
+        if c.trails is not None:  # the reverse drop's books and the agents that back up
+            c._back_up(c._view(replace(now, readings=Readings({c.agent_model: (c.agents, scans)})),
+                               c.current[c.agents]))
+        if readings is None:
+            self.drive(now)
+        else:  # the triangle and strip routers steer in the controller's Python, then everybody moves
+            self.finish(now, n_before, readings)
+
+    def triangle_goes(self) -> bool:
+        """Whether a triangle router goes out this step (:func:`~.stretch_kernels.triangle_goes`).
+
+        Under the global rule the controller decides (always ``True``); otherwise agents that hear another network's
+        reference and release none only look.
+        """
+        c = self.controller
+        if self.triangle_rule == TRIANGLES_ACT:
+            return True
+        if len(c.triangles_released) != self._served[0]:
+            self._served = (len(c.triangles_released), c.served_pairs())
+        return bool(triangle_goes((self.triangle_rule, float(c.r_c), c.disabled, self._served[1]), c.agents,
+                                  c.current, c.other_ref, c.left, self.swarm.xy))
+
+    def other_movers(self) -> np.ndarray | None:
+        """The robots other than the agents that the sense phase would sense this step (triangle and strip routers).
+
+        ``None`` where the compiled step cannot sense them as it does: several models, or the agents'.
+        """
+        c, sw = self.controller, self.swarm
+        if not c.moving_triangles and (c.strips is None or not c.strips.moving):
+            return _NO_ROBOTS
+        others = np.flatnonzero(sw.in_states(_OTHER_MOVERS))
+        if len(others) == 0:
+            return others
+        model = sw.model[others]
+        return None if model[0] == c.agent_model or (model != model[0]).any() else others
 
     @property
     def stretches(self) -> bool:  # noqa: D102
@@ -189,8 +260,8 @@ class CompiledAgents(FastStep):
             self._knowledge_plain = tuple(self._knowledge)
         return self._knowledge_plain
 
-    def _sense_track(self, now: StepInput) -> tuple[np.ndarray, int, int]:
-        """The agents' rings and reference tracking (and, in a quiet step, their readings in the frontier grid)."""
+    def _sense_track(self, now: StepInput, integrate: bool = True) -> tuple[np.ndarray, int, int]:
+        """The agents' rings and reference tracking (``integrate``: in a quiet step, readings in the grid)."""
         c, sw, a = self.controller, self.swarm, self.around
         table = now.table
         is_ref, deployed_xy = c.deployed_nodes()
@@ -198,7 +269,8 @@ class CompiledAgents(FastStep):
         scans = np.empty((len(c.agents), len(a.angles)))  # fresh, as the sense phase's: an explorer may keep it
         n_cand, n_losing = sense_track_agents(
             self.grid, self.robots(), c.agents, self.ring, near, scans, self.tracking(is_ref),
-            (table.indptr, table.indices, table.dist), self.frontier, self.knowledge_for(deployed_xy, a.sensor_range),
+            (table.indptr, table.indices, table.dist), self.frontier and integrate,
+            self.knowledge_for(deployed_xy, a.sensor_range),
             self.knowledge.stamp + 1)
         return scans, n_cand, n_losing
 

@@ -1,4 +1,7 @@
-"""The parameters of agent-assisted router deployment (:class:`AgentAssistedParams`), validated when a run starts."""
+"""The parameters of agent-assisted router deployment (:class:`AgentAssistedParams`) and its scenarios' defaults.
+
+Light (no kernels): a scenario is checked before its run is set up (:mod:`amronet.algorithms.declaration`).
+"""
 
 from __future__ import annotations
 
@@ -6,13 +9,17 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 
-from amronet.algorithms.agent_assisted.drops import DROP_RULES, validate_drop_params
-from amronet.algorithms.common.triangular import TriangularMode
+from amronet.algorithms.common.param_types import TriangularMode
 from amronet.limits import MAX_COUNT
 
-__all__ = ["DEFAULT_COVERAGE_TARGET", "DEFAULT_EXPLORER", "AgentAssistedParams"]
+__all__ = ["DEFAULT_COVERAGE_TARGET", "DEFAULT_EXPLORER", "SCENARIO_DEFAULTS", "AgentAssistedParams"]
 
 DEFAULT_COVERAGE_TARGET = 0.99
+
+SCENARIO_DEFAULTS = {"routers.count": 0, "agents.per_base": 3, "radio.r_c": 6.0}
+"""What a scenario of agent-assisted deployment leaves out defaults to: agents release the routers (no free ones),
+three of them per base station, and the range of the paper's agent-assisted setups (5.1): with the schema's 1 m an
+agent's step at the default ``sim.dt`` spans the whole 'about to lose' band."""
 
 DEFAULT_EXPLORER = "frontier"
 """The agents' explorer unless a scenario names one: the one that finishes on real floor plans.
@@ -42,8 +49,10 @@ class AgentAssistedParams(BaseModel):
         paper's
             ``last-reference`` by default.
         drop: The drop rule's own parameters (e.g. ``{drop_margin_db: 3}`` for ``link-quality``).
-        repair: ``none``, or ``relocate``: deployed routers that a failure cut off move to bridge the cut
-            (:mod:`amronet.algorithms.agent_assisted.relocate`).
+        repair: ``none``; ``relocate``: deployed routers that a failure cut off move toward where the lost
+            neighbour stood (:mod:`amronet.algorithms.agent_assisted.relocate`); ``retrace``: they back up the way
+            they were carried in until their routing finds a base station again, which works behind walls
+            (:mod:`amronet.algorithms.agent_assisted.retrace`).
         repair_confirm_s: How long a neighbour must be missing before a router counts it as lost, seconds.
     """
 
@@ -58,11 +67,13 @@ class AgentAssistedParams(BaseModel):
     release_gap: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 0.02
     drop_rule: str = "last-reference"
     drop: dict[str, Any] = Field(default_factory=dict)
-    repair: Literal["none", "relocate"] = "none"
+    repair: Literal["none", "relocate", "retrace"] = "none"
     repair_confirm_s: Annotated[float, Field(strict=True, ge=0, le=600, allow_inf_nan=False)] = 1.0
 
     @model_validator(mode="after")
     def _check_drop_rule(self) -> AgentAssistedParams:
+        from amronet.algorithms.agent_assisted.drops import DROP_RULES, validate_drop_params  # (kernels)
+
         rule = DROP_RULES.get(self.drop_rule)
         if rule is None:
             raise ValueError(f"@algorithm.params.drop_rule@unknown drop rule {self.drop_rule!r}; choose one of: "

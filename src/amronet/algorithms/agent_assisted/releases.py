@@ -18,6 +18,7 @@ if TYPE_CHECKING:
 
     from amronet.algorithms.agent_assisted.drops import DropRule
     from amronet.algorithms.agent_assisted.params import AgentAssistedParams
+    from amronet.algorithms.agent_assisted.relocate import Relocator
     from amronet.algorithms.agent_assisted.strip_driving import StripDrivers
     from amronet.algorithms.common.goto import GoalSteering
     from amronet.engine.robots import RobotModel, Swarm
@@ -58,6 +59,7 @@ class Releasing:
     settle_s: float
     settle_at: dict[int, float]
     strips: StripDrivers | None
+    relocator: Relocator | None
     steering: GoalSteering
     disabled: np.ndarray
     moving_triangles: int
@@ -113,6 +115,8 @@ class Releasing:
         new = sw.extend(self.router_model, Role.ROUTER, state, spot[None], np.array([sw.status[agent]]),
                         heading=np.array([sw.heading[agent]]))
         self._grow(len(new))
+        if self.relocator is not None:  # the repair may keep how the router got here (repair: retrace)
+            self.relocator.carried(int(new[0]), agent, sw)
         self._nodes_changed()
         self.left[agent] -= 1
         self.released += 1

@@ -114,14 +114,30 @@ class Relocator:
         cut = self._cut_off(table, sw)
         started = []
         for i, loss in due:
-            if sw.role[i] == Role.ROUTER and sw.state[i] == State.REFERENCE and cut[i] and i not in started:
-                self.steering.start(np.array([i]), loss.where[None], np.array([[-1]]))
+            if cut[i] and i not in started and self._movable(i, sw):
+                self._begin(i, loss, sw)
                 started.append(i)
         for i in started:
             for key in [k for k in self._lost if k[0] == i]:
                 del self._lost[key]
         self.moves += len(started)
         return np.array(started, dtype=np.int64)
+
+    def _movable(self, i: int, sw: Swarm) -> bool:
+        """Whether router ``i``, cut off and having lost a neighbour, starts to move: a deployed reference router."""
+        return bool(sw.role[i] == Role.ROUTER and sw.state[i] == State.REFERENCE)
+
+    def _begin(self, i: int, loss: _Loss, sw: Swarm) -> None:
+        """Start router ``i``'s move: toward where its lost neighbour was (or the goal it announced)."""
+        self.steering.start(np.array([i]), loss.where[None], np.array([[-1]]))
+
+    def carried(self, router: int, agent: int, sw: Swarm) -> None:
+        """An agent has just put ``router`` down (relocation keeps nothing of how it got there)."""
+
+    def steer(self, moving: np.ndarray, sw: Swarm, scans: np.ndarray, sensor_range: float,
+              max_step: np.ndarray, r_keep: float) -> tuple[np.ndarray, np.ndarray]:
+        """One step of the routers ``moving`` (headings set in place): ``(step_length, done)``; done ones stay."""
+        return self.steering.steer(moving, sw.xy, sw.heading, scans, sensor_range, max_step, r_keep)
 
     def _stop(self, table: NeighbourTable, sw: Swarm) -> np.ndarray:
         moving = np.flatnonzero(sw.state == State.RELOCATING)

@@ -19,14 +19,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amronet.algorithms.agent_assisted.rule_check import paper_rule_step
 from amronet.algorithms.agent_assisted.stretch_kernels import (
     ACTS,
     IDLE,
     NON_FINITE,
-    TRIANGLES_ACT,
     TRIANGLES_END,
-    TRIANGLES_LOCAL,
-    TRIANGLES_NONE,
     Frontier,
     Moves,
     Moving,
@@ -48,8 +46,6 @@ __all__ = ["QuietStretch"]
 _NO_ROBOTS = np.zeros(0, dtype=np.int64)
 _NO_STEPS = np.zeros(0)
 
-_RULES = {"none": TRIANGLES_NONE, "local": TRIANGLES_LOCAL}
-"""The triangle rules the kernel decides itself; under the others a triangle candidate ends a stretch."""
 
 
 class QuietStretch:
@@ -69,6 +65,8 @@ class QuietStretch:
         """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
         self.triangle_steps = 0
         """Steps taken in stretches with triangle routers driving to their goals."""
+        self.paper = paper_rule_step(context.dt)
+        """The drop rule's check under the paper's rule alone (none)."""
 
     def _moving(self, length: np.ndarray, r: float) -> Moving | None:
         """The kernel's :class:`~.stretch_kernels.Moving`: the triangle routers driving to their goals, how they steer.
@@ -98,23 +96,29 @@ class QuietStretch:
 
     @staticmethod
     def applies(compiled: CompiledAgents, context: StepContext) -> bool:
-        """Whether the loop's steps can be taken in stretches: the frontier explorer, a radio that keeps every pair."""
-        return compiled.frontier and context.keeps_every_pair
+        """Whether the loop's steps can be taken in stretches.
+
+        The frontier explorer, a radio that keeps every pair, a drop rule the kernel checks (the paper's, or one
+        where :attr:`.rule_check.RuleCheck.stretches`).
+        """
+        rules = compiled.rules
+        return compiled.frontier and context.keeps_every_pair and (rules is None or rules.stretches)
 
     def take(self, limit: int, now: StepInput, agent_books: AgentBooks) -> Stretched | None:
         """Take up to ``limit`` steps (at least one), none of them recorded; ``None`` where none can be taken.
 
-        A stretch starts only where a quiet step may: no router settling, the agents' and the triangle routers'
-        readings and moves within the radio's table, the explorer's deployed nodes painted. The step at which the
-        kernel stops (an agent acts or has no plan, a triangle router arrives or gives up) is left for the loop to
-        finish (:attr:`~amronet.algorithms.stepping.Stretched.finish`). The agents' connection books are kept in
-        ``agent_books``'s arrays, step by step; the loop closes them.
+        A stretch starts only where a quiet step may: no router settling and no strip router driving, the agents' and
+        the triangle routers' readings and moves within the radio's table, the explorer's deployed nodes painted,
+        every agent on a plan. The step at which the kernel stops (an agent acts or has no plan, a triangle router
+        arrives or gives up) is left for the loop to finish (:attr:`~amronet.algorithms.stepping.Stretched.finish`).
+        The agents' connection books are kept in ``agent_books``'s arrays, step by step; the loop closes them.
         """
         comp = self.compiled
         c, explorer, a = comp.controller, comp.explorer, comp.around
         sw, table = comp.swarm, now.table
         n = len(sw)
-        if c.settle_at or n < 2 or use_threads(n) or table.candidates is not None:
+        if (c.settle_at or n < 2 or use_threads(n) or table.candidates is not None
+                or (c.strips is not None and c.strips.moving)):
             return None
         length, reach = comp.moves()
         if a.sensor_range + a.largest_radius() > table.r or (a.collisions and reach > table.r):
@@ -124,6 +128,8 @@ class QuietStretch:
             return None
         tri = moving.tri
         m = len(c.agents)
+        if np.count_nonzero(explorer.plans.active) < m:  # an agent without a plan: the stretch would stop in its
+            return None  # first step (the frontier spent), at more cost than the step alone
         is_ref, deployed_xy = c.deployed_nodes()
         inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)
         if inputs is None:
@@ -137,12 +143,12 @@ class QuietStretch:
         # every structure as a plain tuple (see .kernels)
         frontier = Frontier(explorer.steps, grid.stamp, avoid, uniform, *layers, settings, plans, buffers,
                             explorer.plans.active)
-        triangles = Triangles(_RULES.get(c.params.triangular, TRIANGLES_ACT), float(c.r_c), c.disabled,
-                              c.served_pairs())
+        triangles = Triangles(comp.triangle_rule, float(c.r_c), c.disabled, c.served_pairs())
+        rules = self.paper if comp.rules is None else comp.rules.in_stretch(now.index, now.dt)
         done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps, looked = quiet_stretch(
             comp.grid, comp.robots(), comp.ring, tuple(Moves(c.agents, length, reach, a.collisions)),
             tuple(Radio(self.radio_reach, table.indptr, table.indices, table.dist)), comp.tracking(is_ref),
-            tuple(triangles), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
+            (tuple(triangles), tuple(rules)), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
         if how == NON_FINITE:
             return Stretched(done, csr if done else None, non_finite=True)
         self.ends[{ACTS: "acts", IDLE: "idle", TRIANGLES_END: "triangle"}.get(how, "quiet")] += 1

@@ -29,13 +29,15 @@ from numba import njit
 
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
+from amronet.algorithms.agent_assisted.rule_kernels import PAPER, rule_acts, rule_commit
 from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
 from amronet.engine.neighbours import search_kernel
 from amronet.engine.network import agents_linked_kernel
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
 __all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL", "TRIANGLES_NONE",
-           "Frontier", "Links", "Moves", "Moving", "Radio", "StretchEnd", "Triangles", "quiet_stretch"]
+           "TRIANGLE_RULES", "Frontier", "Links", "Moves", "Moving", "Radio", "StretchEnd", "Triangles",
+           "quiet_stretch", "triangle_goes"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -57,6 +59,8 @@ TRIANGLES_LOCAL = 1
 """Triangle rule ``local``: and its references are not both disabled."""
 TRIANGLES_ACT = 2
 """Any other rule: a triangle candidate ends the stretch (the controller decides)."""
+TRIANGLE_RULES = {"none": TRIANGLES_NONE, "local": TRIANGLES_LOCAL}
+"""The triangle rules the kernel decides itself (``algorithm.params.triangular``), by name."""
 
 
 class Moves(NamedTuple):
@@ -192,7 +196,7 @@ class StretchEnd(NamedTuple):
 
 
 @njit(cache=True)
-def quiet_stretch(grid, robots, ring, moves, radio, tracking, triangles, moving, knowledge, frontier, books,
+def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, knowledge, frontier, books,
                   limit):  # pragma: no cover - numba
     """Up to ``limit`` quiet steps; see the module docstring.
 
@@ -200,7 +204,9 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, triangles, moving,
     :class:`~amronet.engine.kernel_data.Grid`; the robots (:class:`~amronet.algorithms.agent_assisted.kernels.Robots`,
     updated in place) and the agents' :class:`~amronet.algorithms.agent_assisted.kernels.Ring`; the agents' moves
     (:class:`Moves`); the :class:`Radio`; the controller's
-    :class:`~amronet.algorithms.agent_assisted.kernels.Tracking` and :class:`Triangles`; the triangle routers driving to
+    :class:`~amronet.algorithms.agent_assisted.kernels.Tracking`; who acts, ``(triangles, rules)``: the
+    :class:`Triangles` and the drop rule's :class:`~amronet.algorithms.agent_assisted.rule_kernels.RuleStep`; the
+    triangle routers driving to
     their goals (:class:`Moving`); the frontier explorer's shared grid
     (:class:`~amronet.algorithms.agent_assisted.kernels.Knowledge`; the deployed nodes are fixed in a quiet stretch) and
     its state (:class:`Frontier`); the agents' connection books
@@ -214,7 +220,8 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, triangles, moving,
     angles, _ = ring
     agents, length, reach, collisions = moves
     r, indptr, indices, dist = radio
-    current, _, _, left, _, _, other_ref, refused = tracking
+    current, _, _, left, _, nearest_d, other_ref, refused = tracking
+    triangles, rules = who_acts
     (tri, t_angles, t_sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress,
      r_keep, dt, largest) = moving
     cells, _, _, _, _ = knowledge
@@ -237,14 +244,22 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, triangles, moving,
     refused_m = np.empty(m, np.bool_)
     fresh = np.empty(m)
     no_bodies = (np.zeros(n + 1, np.int64), np.zeros(0, np.int32), np.zeros(0))
+    paper = rules[0][0] == PAPER
     done = 0
     looked = 0
     while done < limit:
         scans = np.empty((m, angles.shape[0]))
         table = (indptr, indices, dist)
-        n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, table, scans, tracking, table,
-                                              np.bool_(True), knowledge, stamp + 1)
-        if n_cand and not n_losing and not _triangle_goes(triangles, agents, current, other_ref, left, xy):
+        n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, table, scans, tracking, table, paper,
+                                              knowledge, stamp + 1)
+        if not paper:  # the drop rule decides who acts
+            if ((n_cand and triangle_goes(triangles, agents, current, other_ref, left, xy))
+                    or rule_acts(rules, done, agents, xy, current, nearest_d, left, scans, indptr, indices)):
+                return StretchEnd(done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now, looked)
+            rule_commit(rules[0])
+            looked += 1 if n_cand else 0
+            integrate_agents(robots, agents, ring, scans, knowledge, stamp + 1)
+        elif n_cand and not n_losing and not triangle_goes(triangles, agents, current, other_ref, left, xy):
             # the controller would only look: the rest of sense_track_agents, as in a quiet step
             looked += 1
             integrate_agents(robots, agents, ring, scans, knowledge, stamp + 1)
@@ -301,7 +316,7 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, triangles, moving,
 
 
 @njit(cache=True)
-def _triangle_goes(triangles, agents, current, other, left, xy):  # pragma: no cover - numba
+def triangle_goes(triangles, agents, current, other, left, xy):  # pragma: no cover - numba
     """Would a triangle go ahead this step? What ``AgentAssisted.decide_tracked`` asks ``select_triangles``.
 
     The candidates are the agents that hear a reference of another status (``other[m]``) and carry a router, less

@@ -20,16 +20,13 @@ linked directly.
 
 from __future__ import annotations
 
-from typing import Literal
-
 import numpy as np
 
+from amronet.algorithms.common.param_types import TriangularMode
 from amronet.engine.network import components
 from amronet.engine.radio import NeighbourTable
 
 __all__ = ["TriangularMode", "select_triangles", "triangle_goal"]
-
-TriangularMode = Literal["off", "none", "global", "local"]
 
 
 def triangle_goal(p_i: np.ndarray, p_j: np.ndarray, side: np.ndarray, r: float) -> np.ndarray:

@@ -1,8 +1,12 @@
 """DSSA, the distributed self-spreading algorithm of Heo and Varshney (a baseline).
 
-The controller: :mod:`.controller`.
+Its parameters (:mod:`.params`) and controller (:mod:`.controller`). Importing the package only declares the
+algorithm (:mod:`amronet.algorithms.declaration`, no kernels).
 """
 
-from amronet.algorithms.dssa.controller import DSSA, DSSAParams
+from amronet.algorithms.declaration import declare
+from amronet.algorithms.dssa.params import DSSAParams
 
-__all__ = ["DSSA", "DSSAParams"]
+__all__ = ["DSSAParams"]
+
+declare("dssa", controller="amronet.algorithms.dssa.controller", params=DSSAParams)

@@ -76,80 +76,21 @@ stops within a few steps (at once below the loss threshold), linked to the base.
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
-
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, StrictInt, model_validator
 
 from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
 from amronet.algorithms.common.goto import GoalSteering
 from amronet.algorithms.common.link_quality import MarginSearch, MarginSmoother, anchor_margins, strongest_references
 from amronet.algorithms.common.references import check_loss_band, track_references
-from amronet.algorithms.common.triangular import TriangularMode, select_triangles, triangle_goal
+from amronet.algorithms.common.triangular import select_triangles, triangle_goal
+from amronet.algorithms.self_spreading.external import EXTERNAL, ExternalCommands
+from amronet.algorithms.self_spreading.params import SelfSpreadingParams
 from amronet.algorithms.self_spreading.walks import Walker
 from amronet.algorithms.stepping import FastStep, StepContext
 from amronet.engine.motion import random_walk
 from amronet.engine.robots import SETTLING_STATES, Role, State, state_lookup
-from amronet.limits import MAX_COUNT
 
 __all__ = ["SelfSpreading", "SelfSpreadingParams"]
-
-Decibels = Annotated[float, Field(strict=True, ge=0, le=60, allow_inf_nan=False)]
-
-
-class SelfSpreadingParams(BaseModel):
-    """Parameters of self-spreading.
-
-    Attributes:
-        triangular: Triangular deployment: ``off`` (greedy only, an ablation), ``none`` (triangular deployment
-            without optimization), ``global`` or ``local`` (the optimizations of paper 4.3).
-        loss_margin: Width of the "about to lose" band as a fraction of ``r_c`` (``distance`` stop rule, geometric
-            triangles).
-        turn_noise: Heading noise of the random walk, radians per square-root second.
-        give_up_steps: Consecutive blocked steps after which a triangle router stops short of its goal.
-        stop_rule: When an exploring router stops: ``distance`` (the paper's) or ``link-quality`` (location-free;
-            see the module docstring).
-        stop_margin_db: ``link-quality``: stop when the smoothed best margin to a reference is below this (dB over
-            the usable threshold); also the margin a ``link-quality`` triangle router seeks on both links.
-        loss_margin_db: ``link-quality``: stop at once when the raw best margin is below this (dB); below
-            ``stop_margin_db``.
-        smoothing_s: ``link-quality``: time constant of the margin's moving average, seconds (0: no smoothing).
-        triangle_rule: How a triangle router moves: ``geometric`` (to the paper's goal point) or ``link-quality``
-            (run-and-tumble on its two link margins; see the module docstring).
-        triangle_tolerance_db: ``link-quality`` triangles: settle when both margins are within this of
-            ``stop_margin_db`` (dB).
-        triangle_max_s: ``link-quality`` triangles: settle after searching this long, seconds.
-        walk: How exploring routers walk (:mod:`amronet.algorithms.self_spreading.walks`): ``random`` (the paper's),
-        ``straight``,
-            ``growth`` or ``guided``.
-        growth_s: ``growth`` and ``guided`` walks: how long a deployed node counts as new (where the network
-            grows), seconds.
-        follow_steps: ``growth`` and ``guided`` walks: at most this many steps following an obstacle's edge.
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    triangular: TriangularMode = "local"
-    loss_margin: Annotated[float, Field(strict=True, gt=0, lt=0.5, allow_inf_nan=False)] = 0.05
-    turn_noise: Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)] = 1.0
-    give_up_steps: Annotated[StrictInt, Field(ge=1, le=MAX_COUNT)] = 20
-    stop_rule: Literal["distance", "link-quality"] = "distance"
-    stop_margin_db: Decibels = 3.0
-    loss_margin_db: Decibels = 1.0
-    smoothing_s: Annotated[float, Field(strict=True, ge=0, le=60, allow_inf_nan=False)] = 0.5
-    triangle_rule: Literal["geometric", "link-quality"] = "geometric"
-    triangle_tolerance_db: Annotated[float, Field(strict=True, gt=0, le=60, allow_inf_nan=False)] = 1.0
-    triangle_max_s: Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)] = 60.0
-    walk: Literal["random", "straight", "growth", "guided"] = "random"
-    growth_s: Annotated[float, Field(strict=True, gt=0, le=3600, allow_inf_nan=False)] = 10.0
-    follow_steps: Annotated[StrictInt, Field(ge=1, le=100_000)] = 200
-
-    @model_validator(mode="after")
-    def _hysteresis(self) -> SelfSpreadingParams:
-        if self.stop_margin_db <= self.loss_margin_db:
-            raise ValueError(f"@algorithm.params.stop_margin_db@{self.stop_margin_db:g} dB must be above "
-                             f"loss_margin_db ({self.loss_margin_db:g} dB): routers stop above the loss threshold")
-        return self
 
 
 @ALGORITHMS.register("self-spreading")
@@ -172,7 +113,12 @@ class SelfSpreading(Controller):
         self.steering = GoalSteering(n, n_anchors=2, give_up_steps=p.give_up_steps)
         self.disabled = np.zeros(n, dtype=bool)
         self.refused = np.zeros(n, dtype=bool)
-        self.walker = Walker(p.walk, n, self.r_c, p.turn_noise * np.sqrt(self.dt), p.growth_s, p.follow_steps)
+        walk = "random" if p.walk == EXTERNAL else p.walk  # (an external walk never asks its walker)
+        self.walker = Walker(walk, n, self.r_c, p.turn_noise * np.sqrt(self.dt), p.growth_s, p.follow_steps)
+        self.external = (ExternalCommands(n, "algorithm.params.walk" if p.walk == EXTERNAL
+                                          else "algorithm.params.stop_rule")
+                         if EXTERNAL in (p.walk, p.stop_rule) else None)
+        """The commands of a policy outside (:mod:`.external`), or ``None``."""
         self.router_model = int(sw.model[routers][0]) if routers.any() else 0
         self.several_statuses = len(np.unique(sw.status[sw.role == Role.BASE])) > 1
         self.by_signal = p.stop_rule == "link-quality"
@@ -207,6 +153,8 @@ class SelfSpreading(Controller):
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm
+        if self.external is not None:
+            self.external.check()
         explorers = np.flatnonzero(sw.state == State.EXPLORE)
         if len(explorers):
             self._decide_explorers(step, explorers)
@@ -220,8 +168,11 @@ class SelfSpreading(Controller):
         walking = sw.state[movers] == State.EXPLORE
         w = movers[walking]
         everyone = len(w) == len(movers)
-        self.walker.steer(sw.heading, w, scans if everyone else scans[walking], sensor_range, self.refused[w],
-                          self.rng, step.table, sw.xy, sw.deployed if self.walker.reads_network else None, step.t)
+        if self.external is not None and self.params.walk == EXTERNAL:
+            speed[walking] = self.external.steer(sw.heading, w, speed[walking])
+        else:
+            self.walker.steer(sw.heading, w, scans if everyone else scans[walking], sensor_range, self.refused[w],
+                              self.rng, step.table, sw.xy, sw.deployed if self.walker.reads_network else None, step.t)
         tri = movers[~walking]
         if len(tri):
             if self.searching:
@@ -243,7 +194,10 @@ class SelfSpreading(Controller):
             view = track_references(step.table, explorers, self.current[explorers], is_ref, sw.status,
                                     want_other=want_other)
             current, other, has_reference = view.current, view.other, view.has_reference
-            about_to_lose = view.nearest_distance >= self.r_eff
+            if self.external is not None and self.params.stop_rule == EXTERNAL:
+                about_to_lose = self.external.wishes(explorers)
+            else:
+                about_to_lose = view.nearest_distance >= self.r_eff
         self.settle_explorers(step, explorers, current, other, has_reference, about_to_lose)
 
     def settle_explorers(self, step: StepInput, explorers: np.ndarray, current: np.ndarray, other: np.ndarray,

@@ -3,18 +3,23 @@
 The loop's step (:meth:`amronet.sim.loop.Loop.step`) calls the sense phase, the controller's ``decide`` and the move
 phase one after another, each a handful of NumPy calls and compiled kernels. For a few dozen robots that glue, not
 the work, is most of a step. :class:`CompiledSpreading` does the same three phases in compiled passes over the arrays
-(the kernels are in :mod:`amronet.algorithms.self_spreading.kernels`), for self-spreading with its paper rules
-(``walk: random``, ``stop_rule: distance``, ``triangle_rule: geometric``, every ``triangular`` mode).
+(the kernels are in :mod:`amronet.algorithms.self_spreading.kernels`), for self-spreading with every walk rule
+(:mod:`~amronet.algorithms.self_spreading.walks`), both stop rules (``distance``, ``link-quality``), both triangle
+rules and every ``triangular`` mode; not with faults, agents or the rules a policy outside commands.
 
 First every exploring router reads its row of the neighbour table (the reference tracking of
 :func:`~amronet.algorithms.common.references.track_row`) and, unless a triangular deployment may start this step (a
 router met a reference of another status, the two references are more than ``r_c`` apart and the local rule does not
 rule it out: then the controller's own Python code settles the explorers,
 :meth:`~amronet.algorithms.self_spreading.controller.SelfSpreading.settle_explorers`), the routers about to lose their
-last reference stop. A kernel then draws the walkers' random numbers from the run's generator (or each from its run's
+last reference stop (under ``link-quality`` the rows' distances are the negated link margins, and the stop is the
+smoothed margin's, :class:`~amronet.algorithms.common.link_quality.MarginSmoother`, as the controller's). A kernel
+then draws the walkers' random numbers from the run's generator (or each from its run's
 generator in a batch) through the generators' C interface (:mod:`amronet.engine.bitgen`), in the order and number the
-controller draws them. Second, the routers still moving read their range rings (grid and bodies), steer (the random
-walk, :func:`~amronet.engine.motion.walk_one`, or the triangle router's go-to-goal,
+controller draws them (every walk rule draws the random walk's two numbers per walker). Second, the routers still
+moving read their range rings (grid and bodies), steer (the walk rule,
+:func:`~amronet.algorithms.self_spreading.walk_kernels.walk_heading`, after the growth walks' field,
+:func:`~amronet.algorithms.self_spreading.walk_kernels.growth_field_kernel`; or the triangle router's go-to-goal,
 :func:`~amronet.algorithms.common.goto.steer_one`) and drive one after another with the collision checks
 (:func:`~amronet.engine.motion.drive_one`). With tens of thousands of movers (:func:`amronet.threads.use_threads`) the
 second pass is split in two: every mover's ring, decision and path against the map on several threads
@@ -24,13 +29,18 @@ numbers.
 
 Between two records the steps may be taken in a stretch (:class:`~amronet.algorithms.common.swarm_stretch.SwarmStretch`,
 :func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`), which stops before a step in which a triangular
-deployment may start. Every per-robot computation is the same compiled function the phase-by-phase path calls, in the
-same order, so a run gives the same result bit for bit with either step (``tests/test_compiled_step.py``).
+deployment may start (the ``link-quality`` stop rule takes no stretch: it reads the margins of the radio's table,
+which the stretch's neighbour search does not give). Every per-robot computation is the same compiled function the
+phase-by-phase path calls, in the same order, so a run gives the same result bit for bit with either step
+(``tests/test_compiled_step.py``).
 
 Under a radio whose links are not decided by distance alone (walls, shadowing, packet loss), a triangle router settles
-by the controller's link test (:meth:`~amronet.algorithms.common.goto.GoalSteering.check_links`), which the kernels do
-not do: while a triangle router drives, and in a step in which a triangular deployment may start, the whole step is
-the loop's phases (the range rings, the controller's ``decide``, the move), as the agent-assisted fast step does.
+by the controller's link test (:meth:`~amronet.algorithms.common.goto.GoalSteering.check_links`), and under
+``triangle_rule: link-quality`` it searches by its links' margins
+(:class:`~amronet.algorithms.common.link_quality.MarginSearch`), neither of which the kernels do: while a triangle
+router drives, and in a step in which a triangular deployment may start, the whole step is the loop's phases (the
+range rings, the controller's ``decide``, the move), as the agent-assisted fast step does; so is a step in which one
+may start under the ``link-quality`` stop rule.
 """
 
 from __future__ import annotations
@@ -54,16 +64,19 @@ from amronet.algorithms.self_spreading.kernel_data import (
     Streams,
     Tracked,
     Tracking,
-    Walk,
+    walk_of,
 )
 from amronet.algorithms.self_spreading.kernels import (
     commit_moves,
     list_movers,
     sense_steer_drive,
+    sense_steer_drive_rules,
     sense_steer_plan_threaded,
     spreading_stretch,
     track_explorers,
 )
+from amronet.algorithms.self_spreading.walk_kernels import RANDOM
+from amronet.algorithms.self_spreading.walks import WALKS
 from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surroundings, Watch
 from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
@@ -71,7 +84,10 @@ from amronet.engine.robots import DEPLOYED_STATES, Role, State, state_lookup
 from amronet.engine.streams import compiled_streams, normal_then_uniform
 from amronet.threads import LOCK, use_threads
 
-__all__ = ["CompiledSpreading", "SpreadingControls"]
+__all__ = ["STOP_RULES", "CompiledSpreading", "SpreadingControls"]
+
+STOP_RULES = ("distance", "link-quality")
+"""The stop rules the kernels know (:func:`~amronet.algorithms.self_spreading.kernels.track_explorers`)."""
 
 
 class SpreadingControls(Protocol):
@@ -89,6 +105,9 @@ class SpreadingControls(Protocol):
     router_model: int
     several_statuses: bool
     needs_range_readings: bool
+    by_signal: bool
+    searching: bool
+    smoother: Any
     walker: Any
     current: np.ndarray
     disabled: np.ndarray
@@ -112,8 +131,11 @@ class CompiledSpreading(FastStep):
         c = controller
         sw = context.swarm
         self.swarm, self.controller, self.dt, self.omap = sw, c, context.dt, context.omap
-        self.checks_links = not c.links_by_distance
-        """Whether triangle routers settle by the controller's link test (then their steps are the phases)."""
+        self.checks_links = not c.links_by_distance or c.searching
+        """Whether triangle routers settle by the controller's link test or search by their links' margins (then
+        their steps are the phases)."""
+        self.by_signal = bool(c.by_signal)
+        """The ``link-quality`` stop rule: the explorers track their references by link margin."""
         n = len(sw)
         model = sw.models[c.router_model]
         self.around = Surroundings(context, model, sw.role == Role.ROUTER)
@@ -122,6 +144,9 @@ class CompiledSpreading(FastStep):
         self.local = c.params.triangular == "local"
         self.r_c = float(c.r_c)
         self.turn_sigma = float(c.walker.turn_sigma)
+        self.random_walk = c.walker.rule == WALKS[RANDOM]
+        """The paper's random walk: :func:`~amronet.algorithms.self_spreading.kernels.sense_steer_drive` (the other
+        rules take :func:`~amronet.algorithms.self_spreading.kernels.sense_steer_drive_rules`)."""
         self.is_ref = np.zeros(n, dtype=np.bool_)
         self.explorers = np.zeros(n, dtype=np.int64)
         self.new_current = np.zeros(n, dtype=np.int64)
@@ -141,28 +166,39 @@ class CompiledSpreading(FastStep):
         self.uniform = np.zeros(n)
         a = self.around
         self.data = SpreadingData(
-            a.grid, robots_of(sw),
-            Tracking(c.current, self.deployed_lookup, self.is_ref, bool(self.want_other), float(c.r_eff), self.r_c,
-                     bool(self.local), c.disabled),
+            a.grid, robots_of(sw), self._tracking(c),
             Tracked(self.explorers, self.new_current, self.nearest, self.other, self.movers, self.walkers),
-            Walk(c.refused, self.turn_sigma), Draws(self.normal, self.uniform), steering_of(c.steering),
+            walk_of(c.walker, c.refused), Draws(self.normal, self.uniform), steering_of(c.steering),
             Ring(a.angles, a.sensor_range), Moves(self.scans, self.length, self.slot, self.free, self.planned),
             Csr(*a.no_bodies(n)), bool(a.collisions), float(self.dt))
         """What the kernels read and keep, built once: the arrays are the swarm's, the controller's and those above."""
-        self.stretcher = (SwarmStretch(context, c.settling_rule(), self.around)
-                          if self.streams is not None and SwarmStretch.applies(context) else None)
+        stretch = self.streams is not None and not self.by_signal and SwarmStretch.applies(context)
+        self.stretcher = SwarmStretch(context, c.settling_rule(), self.around) if stretch else None
         """The steps between records in one compiled call (:mod:`amronet.algorithms.common.swarm_stretch`), or
-        ``None`` (the walkers' draws go through numpy, or the stretch does not apply)."""
+        ``None`` (the walkers' draws go through numpy, the stop rule reads link margins the stretch's radio search
+        does not give, or the stretch does not apply)."""
         self.stretches = self.stretcher is not None
+
+    def _tracking(self, c: SpreadingControls) -> Tracking:
+        """The kernels' reference tracking: the controller's arrays (and its link-quality stop rule's smoother)."""
+        p, smoother = c.params, c.smoother
+        smoothed, alpha = (np.zeros(0), 1.0) if smoother is None else (smoother.value, float(smoother.alpha))
+        return Tracking(c.current, self.deployed_lookup, self.is_ref, bool(self.want_other), float(c.r_eff), self.r_c,
+                        bool(self.local), c.disabled, self.by_signal, smoothed, alpha, float(p.stop_margin_db),
+                        float(p.loss_margin_db))
 
     @staticmethod
     def applies(controller: SpreadingControls, context: StepContext) -> bool:
-        """Whether the loop's phases are those this step compiles: self-spreading with its paper rules."""
+        """Whether the loop's phases are those this step compiles: no faults, no agents, one router model.
+
+        Every walk rule of :data:`~amronet.algorithms.self_spreading.walks.WALKS` and the stop rules of
+        :data:`STOP_RULES` are compiled, with either triangle rule (the steps the kernels leave to the controller go
+        through it); a rule commanded from outside is not.
+        """
         c, p, sw = controller, controller.params, context.swarm
-        if context.faults or context.agents:
+        if context.faults or context.agents or p.walk not in WALKS or p.stop_rule not in STOP_RULES:
             return False
-        return (p.walk == "random" and p.stop_rule == "distance" and p.triangle_rule == "geometric"
-                and c.needs_range_readings and bool(np.all(sw.model[sw.role == Role.ROUTER] == c.router_model)))
+        return c.needs_range_readings and bool(np.all(sw.model[sw.role == Role.ROUTER] == c.router_model))
 
     def step(self, now: StepInput) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
@@ -171,8 +207,11 @@ class CompiledSpreading(FastStep):
         if self.checks_links and (sw.state == State.TRIANGLE).any():
             self._phases(now)
             return
-        k, candidates, n_movers, n_walkers = track_explorers(self.data, table.indptr, table.indices, table.dist)
-        if candidates and self.checks_links:  # (nothing changed yet) and its router settles by the link test
+        # the link-quality stop rule tracks by signal: the rows' distances are the negated margins, as the
+        # controller's (amronet.algorithms.common.link_quality.strongest_references)
+        lengths = -np.asarray(table.margin, dtype=np.float64) if self.by_signal else table.dist
+        k, candidates, n_movers, n_walkers = track_explorers(self.data, table.indptr, table.indices, lengths)
+        if candidates and (self.checks_links or self.by_signal):  # (nothing changed yet) the controller's rules
             self._phases(now)
             return
         if candidates:  # a triangular deployment may start: the controller's own rules decide
@@ -186,13 +225,18 @@ class CompiledSpreading(FastStep):
         normal, uniform = self.normal[:n_walkers], self.uniform[:n_walkers]
         if self.streams is None or not draw_normal_uniform(*self.streams, self.walkers[:n_walkers], normal, uniform):
             normal, uniform = normal_then_uniform(c.rng, self.walkers[:n_walkers])
-        several, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
+        _, s_csr, drive_bodies, d_csr = a.bodies(sw.xy, table)
         if use_threads(n_movers):
             with LOCK:
-                sense_steer_plan_threaded(self.data, n_movers, normal, uniform, *s_csr, several)
+                sense_steer_plan_threaded(self.data, n_movers, normal, uniform, *s_csr,
+                                          (table.indptr, table.indices, table.dist), now.t)
             commit_moves(self.data, n_movers, *d_csr, drive_bodies)
             return
-        sense_steer_drive(self.data, n_movers, normal, uniform, *s_csr, several, *d_csr, drive_bodies)
+        if self.random_walk:  # the paper's walk: its own kernel, without the other rules' arguments
+            sense_steer_drive(self.data, n_movers, normal, uniform, *s_csr, *d_csr)
+            return
+        sense_steer_drive_rules(self.data, n_movers, normal, uniform, *s_csr, *d_csr,
+                                (table.indptr, table.indices, table.dist), now.t)
 
     def _phases(self, now: StepInput) -> None:
         """The loop's sense, decide and move phases for this step (as :meth:`~amronet.sim.loop.Loop.step` runs them)."""
@@ -204,8 +248,12 @@ class CompiledSpreading(FastStep):
         """Up to ``limit`` steps in one call (:func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`)."""
         if self.stretcher is None:
             return None
-        return self.stretcher.take(limit, now.table, watch, self._kernel)
+        if self.checks_links and (self.swarm.state == State.TRIANGLE).any():  # their steps are the phases
+            return None
+        index = now.index
 
-    def _kernel(self, limit: int, csr: Csr, radio: Radio, books: Books) -> tuple[int, int, Csr]:
-        assert self.streams is not None
-        return spreading_stretch(limit, self.data, self.streams, radio, csr, books)
+        def kernel(limit: int, csr: Csr, radio: Radio, books: Books) -> tuple[int, int, Csr]:
+            assert self.streams is not None
+            return spreading_stretch(limit, self.data, self.streams, radio, csr, books, index)
+
+        return self.stretcher.take(limit, now.table, watch, kernel)

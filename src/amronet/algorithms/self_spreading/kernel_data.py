@@ -26,9 +26,10 @@ from numba.experimental import structref
 
 from amronet.algorithms.common.goto import Steering
 from amronet.algorithms.common.swarm_data import KernelData, Ring, Robots, unliteral_fields
+from amronet.algorithms.self_spreading.walks import WALKS, Walker
 from amronet.engine.kernel_data import Csr, Grid
 
-__all__ = ["Draws", "Moves", "SpreadingData", "Streams", "Tracked", "Tracking", "Walk"]
+__all__ = ["Draws", "Moves", "SpreadingData", "Streams", "Tracked", "Tracking", "Walk", "walk_of"]
 
 
 class Tracking(NamedTuple):
@@ -50,6 +51,17 @@ class Tracking(NamedTuple):
     """The local triangular rule: two disabled references make no triangle."""
     disabled: np.ndarray
     """``bool (N,)``: the controller's disabled nodes (the local rule)."""
+    by_signal: bool
+    """The ``link-quality`` stop rule: the rows' distances are negated link margins, the stop is the smoothed
+    margin's (:class:`~amronet.algorithms.common.link_quality.MarginSmoother`)."""
+    smoothed: np.ndarray
+    """``(N,)``: ``link-quality``: the smoother's values, the controller's (a dummy otherwise)."""
+    alpha: float
+    """``link-quality``: the smoother's weight of a new sample."""
+    stop_margin_db: float
+    """``link-quality``: stop where the smoothed best margin is below this."""
+    loss_margin_db: float
+    """``link-quality``: stop at once where the raw best margin is below this."""
 
 
 class Tracked(NamedTuple):
@@ -70,12 +82,45 @@ class Tracked(NamedTuple):
 
 
 class Walk(NamedTuple):
-    """The exploring routers' random walk."""
+    """The exploring routers' walk (:mod:`~amronet.algorithms.self_spreading.walk_kernels`), flat for ``prange``.
+
+    The arrays are the controller's :class:`~amronet.algorithms.self_spreading.walks.Walker`'s, and scratch.
+    """
 
     refused: np.ndarray
     """``bool (N,)``: whose last move was refused, the controller's."""
     turn_sigma: float
     """The heading noise per step, radians."""
+    rule: int
+    """The walk rule's code (:data:`~amronet.algorithms.self_spreading.walk_kernels.RANDOM` and the others)."""
+    r_c: float
+    """The communication radius (``growth``'s push outward)."""
+    follow: np.ndarray
+    """``int64 (N,)``: steps left following an obstacle's edge."""
+    side: np.ndarray
+    """``int64 (N,)``: the side each router keeps the obstacle it follows on."""
+    follow_steps: int
+    """At most this many steps following an obstacle's edge."""
+    growth_s: float
+    """How long a deployed node counts as new, seconds."""
+    deployed_at: np.ndarray
+    """``(N,)``: when each node was first seen deployed."""
+    field: np.ndarray
+    """``(N,)``: scratch, the step's growth field."""
+    deployed: np.ndarray
+    """``bool (N,)``: scratch, which nodes are deployed."""
+    queue: np.ndarray
+    """``int64 (N,)``: scratch, the field's search queue."""
+    hops: np.ndarray
+    """``int64 (N,)``: scratch, the field's hop counts."""
+
+
+def walk_of(walker: Walker, refused: np.ndarray) -> Walk:
+    """The kernels' :class:`Walk` of the controller's ``walker`` and its ``refused`` flags (their arrays, in place)."""
+    n = len(refused)
+    return Walk(refused, float(walker.turn_sigma), WALKS.index(walker.rule), float(walker.r_c), walker.follow,
+                walker.side, int(walker.follow_steps), float(walker.growth_s), walker.deployed_at, np.full(n, np.inf),
+                np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64))
 
 
 class Draws(NamedTuple):

@@ -17,9 +17,16 @@ from amronet.algorithms.common.goto import steer_one
 from amronet.algorithms.common.references import track_row
 from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, QUIET, after_step
 from amronet.algorithms.self_spreading.kernel_data import Draws
+from amronet.algorithms.self_spreading.walk_kernels import (
+    GROWTH,
+    RANDOM,
+    growth_field_kernel,
+    random_heading,
+    walk_heading,
+)
 from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
-from amronet.engine.motion import commit_one, drive_one, plan_one, walk_one
+from amronet.engine.motion import commit_one, drive_one, plan_one
 from amronet.engine.robots import State
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
@@ -27,6 +34,7 @@ __all__ = [
     "commit_moves",
     "list_movers",
     "sense_steer_drive",
+    "sense_steer_drive_rules",
     "sense_steer_plan_threaded",
     "spreading_stretch",
     "track_explorers",
@@ -98,11 +106,31 @@ def track_explorers(data, indptr, indices, dist):  # pragma: no cover - numba
         i = explorers[m]
         c = new_current[m]
         current[i] = c
-        if c >= 0 and nearest[m] >= tracking.r_eff:
+        if tracking.by_signal:
+            losing = _weak_link(i, -nearest[m], tracking)
+        else:
+            losing = nearest[m] >= tracking.r_eff
+        if c >= 0 and losing:
             state[i] = _REFERENCE
             status[i] = status[c]
     n_movers, n_walkers = list_movers(state, tracked.movers, tracked.walkers)
     return k, 0, n_movers, n_walkers
+
+
+@njit(cache=True, inline="always")
+def _weak_link(i, best, tracking):  # pragma: no cover - numba
+    """The ``link-quality`` stop rule of explorer ``i`` with best reference margin ``best`` (``-inf``: none heard).
+
+    Its moving average is updated as :meth:`~amronet.algorithms.common.link_quality.MarginSmoother.update` updates it
+    (restarted, ``nan``, when nothing is heard); it stops below ``stop_margin_db`` smoothed or ``loss_margin_db`` raw.
+    """
+    smoothed = tracking.smoothed
+    old = smoothed[i]
+    new = best if np.isnan(old) else old + tracking.alpha * (best - old)
+    if not np.isfinite(best):
+        new = np.nan
+    smoothed[i] = new
+    return new < tracking.stop_margin_db or best < tracking.loss_margin_db
 
 
 @njit(cache=True, inline="always")
@@ -117,53 +145,97 @@ def sense_one(grid, robots, big, i, ring, s_csr, sense_bodies, out):  # pragma: 
 
 
 @njit(cache=True)
-def decide_one(i, w, robots, walk, draws, scan, ring, steering, r_eff, dt):  # pragma: no cover - numba
-    """Mover ``i``'s decision from its ring ``scan``, and the length of its step.
+def decide_one(i, w, robots, refused, turn_sigma, draws, scan, ring, steering, r_eff, dt):  # pragma: no cover
+    """Mover ``i``'s decision from its ring ``scan`` under the paper's random walk, and the length of its step.
 
-    A walker (the ``w``-th) walks, a triangle router steers to its goal (and settles when it cannot go on): the
-    operations of :func:`sense_steer_drive`'s decide loop, which keeps them (and its sense loop) written out: calling
-    this function and :func:`sense_one` from there made the one-thread step 15-20 % slower at N = 3 000. Not inlined:
-    in a ``prange`` loop numba 0.68 loses what is written into an array reached through a named tuple's field
-    (``robots.heading[i] = ...``) in the loop's own body, inlined code included; a called function keeps it.
+    A walker (the ``w``-th) walks (``refused``, ``turn_sigma``: the
+    :class:`~amronet.algorithms.self_spreading.kernel_data.Walk`'s; not the whole named tuple, which the call would
+    copy field by field for every mover), a triangle router steers to its goal (and settles when it cannot go on): the
+    operations of :func:`sense_steer_drive`'s decide loop, which keeps them (and its
+    sense loop) written out: calling this function and :func:`sense_one` from there made the one-thread step 15-20 %
+    slower at N = 3 000. Not inlined: in a ``prange`` loop numba 0.68 loses what is written into an array reached
+    through a named tuple's field (``robots.heading[i] = ...``) in the loop's own body, inlined code included; a
+    called function keeps it. :func:`decide_one_rules` takes the other walk rules.
     """
-    state, heading, max_speed = robots.state, robots.heading, robots.max_speed
-    if state[i] == _EXPLORE:
-        noise = walk.turn_sigma * draws.normal[w]
-        fresh = -np.pi + (2.0 * np.pi) * draws.uniform[w]
-        heading[i] = walk_one(heading[i], scan, ring.angles, ring.sensor_range, walk.refused[i], noise, fresh)
-        speed = max_speed[i]
-    else:
-        step, done = steer_one(i, robots.xy, heading, steering, scan, ring.angles, ring.sensor_range,
-                               max_speed[i] * dt, r_eff)
-        if done:
-            state[i] = _TRIANGLE_SETTLED
-        speed = step / dt
+    if robots.state[i] == _EXPLORE:
+        robots.heading[i] = random_heading(robots.heading[i], scan, ring, refused[i], draws.normal[w],
+                                           draws.uniform[w], turn_sigma)
+        return robots.max_speed[i] * dt
+    return _steer_step(i, robots, steering, scan, ring, r_eff, dt)
+
+
+@njit(cache=True)
+def decide_one_rules(i, w, robots, walk, draws, scan, ring, steering, r_eff, dt, table):  # pragma: no cover - numba
+    """:func:`decide_one` under the walk rule ``walk.rule``, whichever it is (``table``: the step's neighbours)."""
+    if robots.state[i] == _EXPLORE:
+        robots.heading[i] = walk_heading(i, robots.heading, scan, ring, walk.refused[i], draws.normal[w],
+                                         draws.uniform[w], walk, robots.xy, table, walk.rule)
+        return robots.max_speed[i] * dt
+    return _steer_step(i, robots, steering, scan, ring, r_eff, dt)
+
+
+@njit(cache=True, inline="always")
+def _steer_step(i, robots, steering, scan, ring, r_eff, dt):  # pragma: no cover - numba
+    """Triangle router ``i``'s go-to-goal step (it settles when it cannot go on): the length of its step."""
+    step, done = steer_one(i, robots.xy, robots.heading, steering, scan, ring.angles, ring.sensor_range,
+                           robots.max_speed[i] * dt, r_eff)
+    if done:
+        robots.state[i] = _TRIANGLE_SETTLED
+    speed = step / dt
     return speed * dt
 
 
 @njit(cache=True)
-def sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, sense_bodies, d_indptr, d_indices,
-                      d_dist, drive_bodies):  # pragma: no cover - numba
-    """Sense, steer and drive the ``n_movers`` movers: the reference's per-robot functions, in the same order.
+def sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices,
+                      d_dist):  # pragma: no cover - numba
+    """Sense, steer and drive the ``n_movers`` movers under the paper's random walk (:data:`RANDOM`).
 
-    ``normal`` and ``uniform``: the walkers' draws (:func:`~amronet.engine.streams.normal_then_uniform`), scaled here as
-    :func:`~amronet.engine.motion.random_walk` scales them (the same operations on the same numbers). The rings meet
-    the bodies of the neighbour list ``s_indptr, s_indices, s_dist`` (when ``sense_bodies``), the moves those of
-    ``d_indptr, d_indices, d_dist`` (when ``drive_bodies``): this step's lists come as arrays, not as
+    The reference's per-robot functions, in the same order. ``normal`` and ``uniform``: the walkers' draws
+    (:func:`~amronet.engine.streams.normal_then_uniform`), scaled here as the walk rule scales them
+    (:func:`~amronet.algorithms.self_spreading.walk_kernels.walk_heading`: the same operations on the same numbers).
+    With more than one robot the rings meet the bodies of the neighbour list ``s_indptr, s_indices, s_dist``, and
+    (with collisions) the moves those of ``d_indptr, d_indices, d_dist``: this step's lists come as arrays, not as
     :class:`~amronet.engine.kernel_data.Csr` s (numba types a named tuple field by field at every call from Python, and
-    three of them would cost more than all the arrays they hold).
+    three of them would cost more than all the arrays they hold). The other walk rules take
+    :func:`sense_steer_drive_rules`; this one is compiled for the random walk alone (no branch on the rule per walker,
+    none of the growth walks' arguments).
     """
+    _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist,
+                       Csr(s_indptr, s_indices, s_dist), RANDOM)
+
+
+@njit(cache=True)
+def sense_steer_drive_rules(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist,
+                            table, t):  # pragma: no cover - numba
+    """:func:`sense_steer_drive` under the walk rule ``data.walk.rule``, whichever it is.
+
+    ``table``: the step's neighbour table as a plain ``(indptr, indices, dist)``, and ``t`` the step's time (the
+    growth walks' field, :func:`~amronet.algorithms.self_spreading.walk_kernels.growth_field_kernel`, computed first).
+    """
+    rows = Csr(table[0], table[1], table[2])
+    walk = data.walk
+    if walk.rule >= GROWTH:
+        growth_field_kernel(walk, data.tracking.deployed, data.robots.state, rows.indptr, rows.indices, t)
+    _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist,
+                       rows, walk.rule)
+
+
+@njit(cache=True, inline="always")
+def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist, rows,
+                       rule):  # pragma: no cover - numba
+    """:func:`sense_steer_drive`'s passes under the walk rule ``rule`` (a constant there: that rule's code alone)."""
     blocked, clear, ox, oy, res = data.grid
-    robots, steering, moves = data.robots, data.steering, data.moves
+    robots, steering, moves, walk, ring = data.robots, data.steering, data.moves, data.walk, data.ring
     xy, heading, state, max_speed, radius, distance = (robots.xy, robots.heading, robots.state, robots.max_speed,
                                                        robots.radius, robots.distance)
-    refused, turn_sigma = data.walk.refused, data.walk.turn_sigma
-    angles, sensor_range = data.ring.angles, data.ring.sensor_range
+    refused, angles, sensor_range = walk.refused, ring.angles, ring.sensor_range
     d_csr = Csr(d_indptr, d_indices, d_dist)
     scans, length = moves.scans, moves.length
     r_eff, dt = data.tracking.r_eff, data.dt
     movers = data.tracked.movers[:n_movers]
     big = radius.max()
+    sense_bodies = xy.shape[0] > 1
+    drive_bodies = data.collisions and sense_bodies
     for m in range(movers.shape[0]):  # sense: every mover's ring, from where everybody stands now
         i = movers[m]
         cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, scans[m])
@@ -175,9 +247,8 @@ def sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_di
     for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
         i = movers[m]
         if state[i] == _EXPLORE:
-            noise = turn_sigma * normal[w]
-            fresh = -np.pi + (2.0 * np.pi) * uniform[w]
-            heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, refused[i], noise, fresh)
+            heading[i] = walk_heading(i, heading, scans[m], ring, refused[i], normal[w], uniform[w], walk, xy, rows,
+                                      rule)
             w += 1
             speed = max_speed[i]
         else:
@@ -220,23 +291,27 @@ def _arrive(movers, state, xy, goal):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def sense_steer_plan_threaded(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist,
-                              sense_bodies):  # pragma: no cover - numba
+def sense_steer_plan_threaded(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, table,
+                              t):  # pragma: no cover - numba
     """:func:`sense_steer_drive` up to the moves' obstacle checks, on several threads; :func:`commit_moves` ends it.
 
     Every mover's ring, decision and path against the map depend on where the robots stand before anybody moves and
     on the mover's own state, nothing else, so each mover is done in one go by one thread: the same numbers. The
     walkers' draws are matched to them by their rank among the walkers (``moves.slot``). ``moves.free[m]`` and
-    ``moves.planned[m]``: whether mover ``m``'s path is clear of obstacles, and where it would end.
+    ``moves.planned[m]``: whether mover ``m``'s path is clear of obstacles, and where it would end. ``table`` and
+    ``t``: as :func:`sense_steer_drive_rules` takes them (the growth field is computed first, on this thread).
     """
+    rows = Csr(table[0], table[1], table[2])
+    if data.walk.rule >= GROWTH:
+        growth_field_kernel(data.walk, data.tracking.deployed, data.robots.state, rows.indptr, rows.indices, t)
     _plan_threaded(data.grid, data.robots, data.walk, Draws(normal, uniform), data.steering, data.ring,
-                   Csr(s_indptr, s_indices, s_dist), sense_bodies, data.tracked.movers[:n_movers], data.moves,
-                   data.tracking.r_eff, data.dt)
+                   Csr(s_indptr, s_indices, s_dist), data.tracked.movers[:n_movers], data.moves, data.tracking.r_eff,
+                   data.dt, rows)
 
 
 @njit(cache=True, parallel=True)
-def _plan_threaded(grid, robots, walk, draws, steering, ring, s_csr, sense_bodies, movers, moves, r_eff,
-                   dt):  # pragma: no cover - numba
+def _plan_threaded(grid, robots, walk, draws, steering, ring, s_csr, movers, moves, r_eff, dt,
+                   rows):  # pragma: no cover - numba
     """:func:`sense_steer_plan_threaded`'s threads.
 
     numba's ``prange`` takes flat named tuples, not nested ones, and loses what its body writes into an array reached
@@ -244,6 +319,8 @@ def _plan_threaded(grid, robots, walk, draws, steering, ring, s_csr, sense_bodie
     """
     scans, length, slot, free, planned = moves
     big = robots.radius.max()
+    sense_bodies = robots.xy.shape[0] > 1
+    random = walk.rule == RANDOM  # the paper's walk: the call compiled for it alone
     w = 0
     for m in range(movers.shape[0]):
         slot[m] = w
@@ -252,7 +329,11 @@ def _plan_threaded(grid, robots, walk, draws, steering, ring, s_csr, sense_bodie
     for m in prange(movers.shape[0]):
         i = movers[m]
         sense_one(grid, robots, big, i, ring, s_csr, sense_bodies, scans[m])
-        length[m] = decide_one(i, slot[m], robots, walk, draws, scans[m], ring, steering, r_eff, dt)
+        if random:
+            length[m] = decide_one(i, slot[m], robots, walk.refused, walk.turn_sigma, draws, scans[m], ring, steering,
+                                   r_eff, dt)
+        else:
+            length[m] = decide_one_rules(i, slot[m], robots, walk, draws, scans[m], ring, steering, r_eff, dt, rows)
         free[m], planned[m, 0], planned[m, 1] = plan_one(grid.blocked, grid.clear, grid.ox, grid.oy, grid.res,
                                                          robots.xy[i, 0], robots.xy[i, 1], robots.heading[i],
                                                          length[m], robots.radius[i])
@@ -280,10 +361,11 @@ def commit_moves(data, n_movers, d_indptr, d_indices, d_dist, drive_bodies):  # 
 
 
 @njit(cache=True)
-def spreading_stretch(limit, data, streams, radio, csr, books):  # pragma: no cover - numba
+def spreading_stretch(limit, data, streams, radio, csr, books, index):  # pragma: no cover - numba
     """Up to ``limit`` steps of a self-spreading loop from the table ``csr``; ``(steps done, how it ended, table)``.
 
-    ``streams``: the walkers' generators; ``radio`` and ``books``: the radio's search and the runs' books
+    ``index``: the first step's index (step ``s`` of the stretch is at ``(index + s) * dt`` seconds, the loop's
+    clock); ``streams``: the walkers' generators; ``radio`` and ``books``: the radio's search and the runs' books
     (:func:`~amronet.algorithms.common.swarm_stretch_kernels.after_step`). The bodies the rings and the moves meet are
     the table's (the caller checked that they reach no farther) or, for the moves without collisions, none.
     """
@@ -299,9 +381,14 @@ def spreading_stretch(limit, data, streams, radio, csr, books):  # pragma: no co
             if not draw_normal_uniform(streams.bitgens, streams.starts, walkers, draws.normal, draws.uniform):
                 return s, BAD_DRAW, csr
             d_csr = csr if data.collisions else data.no_bodies
-            sense_steer_drive(data, n_movers, draws.normal[:n_walkers], draws.uniform[:n_walkers], csr.indptr,
-                              csr.indices, csr.dist, np.bool_(True), d_csr.indptr, d_csr.indices, d_csr.dist,
-                              data.collisions)
+            normal, uniform = draws.normal[:n_walkers], draws.uniform[:n_walkers]
+            if data.walk.rule == RANDOM:
+                sense_steer_drive(data, n_movers, normal, uniform, csr.indptr, csr.indices, csr.dist, d_csr.indptr,
+                                  d_csr.indices, d_csr.dist)
+            else:
+                sense_steer_drive_rules(data, n_movers, normal, uniform, csr.indptr, csr.indices, csr.dist,
+                                        d_csr.indptr, d_csr.indices, d_csr.dist, (csr.indptr, csr.indices, csr.dist),
+                                        (index + s) * data.dt)
         how, csr = after_step(robots.xy, robots.state, radio, books)
         if how != QUIET:
             return s + 1, how, csr

@@ -32,15 +32,19 @@ it hears, their link lengths, and what they announce: state, position, and what 
 
 from __future__ import annotations
 
-import math
-from typing import NamedTuple
-
 import numpy as np
 from numba import njit
 
 from amronet.algorithms.common.swarm_data import Ring
+from amronet.algorithms.self_spreading.walk_kernels import (
+    GROWTH_NOISE,
+    EdgeFollowing,
+    GrowthDraws,
+    growth_one,
+    straight_one,
+)
 from amronet.engine.kernel_data import Csr
-from amronet.engine.motion import random_walk, walk_one
+from amronet.engine.motion import random_walk
 from amronet.engine.network import hop_counts
 from amronet.engine.sensing import beam_angles
 from amronet.engine.streams import RunStreams, normal_then_uniform
@@ -49,142 +53,24 @@ from amronet.engine.table import NeighbourTable
 __all__ = ["WALKS", "Walker"]
 
 WALKS: tuple[str, ...] = ("random", "straight", "growth", "guided")
-"""The walk rules, ``random`` the paper's."""
-
-STRAIGHT_SPREAD = math.pi / 4
-"""``straight``: largest extra turn, either way, off an obstacle (radians)."""
-GROWTH_NOISE = 0.25
-"""``growth``: heading noise as a fraction of the random walk's."""
-EDGE_LEAN = 0.3
-"""``growth``: how far (radians) a router following an obstacle's edge leans toward it, so as not to drift off."""
-CORNER_TURN = 0.35
-"""``growth``: turn per step (radians) toward the side of an edge the router has lost (rounding a corner)."""
-
-
-@njit(cache=True, inline="always")
-def _seen(heading, scans, angles, sensor_range):  # pragma: no cover - numba
-    """Direction away from what the beams see (weighted by closeness); whether anything is seen; whether ahead."""
-    px = 0.0
-    py = 0.0
-    seen = False
-    ahead = False
-    for k in range(scans.shape[0]):
-        w = (sensor_range - scans[k]) / sensor_range
-        if w <= 0.0:
-            continue
-        seen = True
-        if math.cos(angles[k]) > 0.0:
-            ahead = True
-        a = heading + angles[k]
-        px -= min(w, 1.0) * math.cos(a)
-        py -= min(w, 1.0) * math.sin(a)
-    if math.hypot(px, py) < 1e-9:
-        return heading + math.pi, seen, ahead
-    return math.atan2(py, px), seen, ahead
+"""The walk rules, ``random`` the paper's (their places are the kernels' codes,
+:data:`~amronet.algorithms.self_spreading.walk_kernels.RANDOM` and the others)."""
 
 
 @njit(cache=True)
 def _straight(heading, who, scans, angles, sensor_range, refused, fresh, draw):  # pragma: no cover - numba
     for m in range(who.shape[0]):
         i = who[m]
-        if refused[m]:
-            heading[i] = fresh[m]
-            continue
-        away, _, ahead = _seen(heading[i], scans[m], angles, sensor_range)
-        if ahead:
-            heading[i] = away + STRAIGHT_SPREAD * (2.0 * draw[m] - 1.0)
-
-
-class EdgeFollowing(NamedTuple):
-    """``growth``: the routers following an obstacle's edge (the walker's arrays, changed in place)."""
-
-    follow: np.ndarray
-    """``int64 (N,)``: steps left following an obstacle's edge."""
-    side: np.ndarray
-    """``int64 (N,)``: the side each router keeps the obstacle it follows on."""
-    steps: int
-    """At most this many steps following an obstacle's edge."""
-
-
-class GrowthDraws(NamedTuple):
-    """``growth`` and ``guided``: a step's random numbers, walker by walker."""
-
-    noise: np.ndarray
-    """The growth walk's heading noise."""
-    fresh: np.ndarray
-    """Fresh uniform headings (a refused move, a random walk's fresh start)."""
-    draw: np.ndarray
-    """Uniforms in ``[0, 1)``: the side of an edge to follow, the turn off an obstacle."""
-    walk_noise: np.ndarray
-    """``guided``: the random walk's heading noise."""
-
-
-@njit(cache=True, inline="always")
-def _toward(i, m, want, heading, scans, ring, edges, draws):  # pragma: no cover - numba
-    """Head for ``want``; when an obstacle ahead stands in the way, follow its edge until the way is clear."""
-    follow, side, draw, noise = edges.follow, edges.side, draws.draw, draws.noise
-    away, seen, ahead = _seen(heading[i], scans[m], ring.angles, ring.sensor_range)
-    if follow[i] > 0:
-        follow[i] -= 1
-        if follow[i] == 0:  # given up: off the obstacle at a random angle
-            return away + (math.pi / 2) * (2.0 * draw[m] - 1.0) if seen else want + noise[m]
-        if not seen:  # the edge ends (a corner, a door): round it
-            return heading[i] + side[i] * CORNER_TURN
-        if math.cos(want - away) > 0.2:  # the way to want leads off the obstacle
-            follow[i] = 0
-            return want + noise[m]
-        return away + side[i] * (math.pi / 2 - EDGE_LEAN)
-    if ahead:
-        if math.cos(want - away) < 0.0:  # want lies beyond the obstacle: follow its edge
-            follow[i] = edges.steps
-            side[i] = 1 if draw[m] < 0.5 else -1
-            return away + side[i] * (math.pi / 2 - EDGE_LEAN)
-        return math.atan2(math.sin(want) + math.sin(away), math.cos(want) + math.cos(away))
-    return want + noise[m]
+        heading[i] = straight_one(heading[i], scans[m], angles, sensor_range, refused[m], fresh[m], draw[m])
 
 
 @njit(cache=True)
 def _growth(heading, who, xy, field, csr, r_c, scans, ring, refused, draws, edges, diffuse):  # pragma: no cover
     """``growth`` and ``guided``: the walkers ``who``'s headings from the growth ``field`` of the nodes they hear."""
-    indptr, indices, dist = csr.indptr, csr.indices, csr.dist
-    fresh, follow = draws.fresh, edges.follow
     for m in range(who.shape[0]):
         i = who[m]
-        if refused[m]:
-            heading[i] = fresh[m]
-            follow[i] = 0
-            continue
-        low = np.inf
-        target = -1
-        target_d = 0.0
-        for k in range(indptr[i], indptr[i + 1]):
-            f = field[indices[k]]
-            if f < low or (f == low and f < np.inf and dist[k] < target_d):
-                low = f
-                target = indices[k]
-                target_d = dist[k]
-        if diffuse and (target < 0 or low == 0.0):  # guided: the random walk where it grows, or nothing leads there
-            follow[i] = 0
-            heading[i] = walk_one(heading[i], scans[m], ring.angles, ring.sensor_range, False, draws.walk_noise[m],
-                                  fresh[m])
-            continue
-        if target < 0:  # nothing it hears leads to growth: a persistent walk
-            want = heading[i]
-        elif low > 0.0:  # down the field: to the node fewest hops from a new one
-            want = math.atan2(xy[target, 1] - xy[i, 1], xy[target, 0] - xy[i, 0])
-        else:  # where it grows: outward, away from every deployed node it hears
-            px = 0.0
-            py = 0.0
-            for k in range(indptr[i], indptr[i + 1]):
-                j = indices[k]
-                d = dist[k]
-                w = 1.0 - d / r_c
-                if d <= 1e-12 or w <= 0.0 or field[j] == np.inf:
-                    continue
-                px += w * (xy[i, 0] - xy[j, 0]) / d
-                py += w * (xy[i, 1] - xy[j, 1]) / d
-            want = math.atan2(py, px) if math.hypot(px, py) > 1e-9 else heading[i]
-        heading[i] = _toward(i, m, want, heading, scans, ring, edges, draws)
+        drawn = GrowthDraws(draws.noise[m], draws.fresh[m], draws.draw[m], draws.walk_noise[m])
+        heading[i] = growth_one(i, heading, xy, field, csr, r_c, scans[m], ring, refused[m], drawn, edges, diffuse)
 
 
 class Walker:

@@ -13,12 +13,15 @@ SPAWAR, NIST);
 turn rules;
 * :mod:`~amronet.algorithms.agent_assisted.drops.strip_goals` — ``strip-goals``, greedy drops, then each router drives
 to an
-  r-strip goal point (the paper's section 6).
+  r-strip goal point (the paper's section 6);
+* :mod:`~amronet.algorithms.agent_assisted.drops.external` — ``external``, the decisions of a policy outside
+  (:mod:`amronet.env`).
 
 Importing this package registers them all.
 """
 
 from amronet.algorithms.agent_assisted.drops import (  # noqa: F401 (register)
+    external,
     junction,
     last_reference,
     link_quality,

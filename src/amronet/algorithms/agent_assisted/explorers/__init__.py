@@ -11,7 +11,9 @@ Modules: :mod:`~amronet.algorithms.agent_assisted.explorers.base` (the base clas
 :mod:`~amronet.algorithms.agent_assisted.explorers.random_walk` (``"random"``, the paper's, and ``"random-escape"``, a
 random walk
 that leaves rooms), :mod:`~amronet.algorithms.agent_assisted.explorers.frontier`
-(``"frontier"``) and :mod:`~amronet.algorithms.agent_assisted.explorers.wall_follow` (``"wall-follow"``). Importing
+(``"frontier"``), :mod:`~amronet.algorithms.agent_assisted.explorers.wall_follow` (``"wall-follow"``) and
+:mod:`~amronet.algorithms.agent_assisted.explorers.external` (``"external"``: the motion actions of
+:mod:`amronet.env`). Importing
 this package
 registers them all. :mod:`~amronet.algorithms.agent_assisted.explorers.trajectory` (:class:`PathFollower`) is not
 registered: it
@@ -19,9 +21,11 @@ steers agents along the paths a scenario gives (``agents.trajectories``) and fal
 """
 
 from amronet.algorithms.agent_assisted.explorers.base import EXPLORERS, Explorer
+from amronet.algorithms.agent_assisted.explorers.external import ExternalExplorer
 from amronet.algorithms.agent_assisted.explorers.frontier import FrontierExplorer
 from amronet.algorithms.agent_assisted.explorers.random_walk import RandomExplorer
 from amronet.algorithms.agent_assisted.explorers.trajectory import PathFollower
 from amronet.algorithms.agent_assisted.explorers.wall_follow import WallFollowExplorer
 
-__all__ = ["EXPLORERS", "Explorer", "FrontierExplorer", "PathFollower", "RandomExplorer", "WallFollowExplorer"]
+__all__ = ["EXPLORERS", "Explorer", "ExternalExplorer", "FrontierExplorer", "PathFollower", "RandomExplorer",
+           "WallFollowExplorer"]

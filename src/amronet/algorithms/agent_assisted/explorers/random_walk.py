@@ -5,7 +5,7 @@ square-root second); when a forward beam (less than 90 degrees off the heading) 
 (0.6 m), turn to the escape heading of :func:`~amronet.engine.motion.avoidance_heading`, away from everything within
 ``avoid_range`` weighted by closeness; after a refused move, a uniform heading.
 
-Why it stays in rooms (issue #15): to it a doorway narrower than about ``2 x avoid_range`` (1.2 m; office doors are
+Why it stays in rooms: to it a doorway narrower than about ``2 x avoid_range`` (1.2 m; office doors are
 1.0-1.2 m) is nearly a wall. Going through, each jamb passes beside the agent at no more than the door's half-width
 (0.5 m for a 1.0 m door), and while a jamb is between 56 and 90 degrees off the heading the beam at 67.5 degrees of
 the 16-beam ring reads it at about ``half-width / sin 67.5°`` (0.54 m), inside ``avoid_range``, whatever the

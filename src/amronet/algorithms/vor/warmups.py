@@ -1,0 +1,18 @@
+"""The short run that compiles what VOR's first run would otherwise compile (:mod:`amronet.sim.warmup`).
+
+VOR has no fast step; the run compiles the cell clipping and the loop's sense and move kernels.
+"""
+
+from __future__ import annotations
+
+from amronet.algorithms.base import WarmUp
+
+__all__ = ["PRESET", "warm_ups"]
+
+PRESET = "vor-obstacles-6x6"
+"""The preset VOR is warmed up on."""
+
+
+def warm_ups() -> list[WarmUp]:
+    """Its defaults."""
+    return [WarmUp("algorithm vor", PRESET)]
