@@ -7,8 +7,8 @@ from amronet.experiments.fig10 import ALGORITHMS, _hold, _time_to_fraction, run_
 from amronet.experiments.options import RunOptions
 
 
-def _options(time_limit: float) -> RunOptions:
-    return RunOptions(time_limit=time_limit, workers=1, show_progress=False)
+def _options(time_limit: float, baselines: bool | None = None) -> RunOptions:
+    return RunOptions(time_limit=time_limit, workers=1, show_progress=False, baselines=baselines)
 
 
 def test_hold_carries_the_last_value_past_the_end():
@@ -20,7 +20,7 @@ def test_hold_carries_the_last_value_past_the_end():
 
 
 def test_fig10_and_fig11_small(tmp_path):
-    f10 = run_coverage_over_time("fig10", tmp_path / "fig10", runs=2, options=_options(20.0))
+    f10 = run_coverage_over_time("fig10", tmp_path / "fig10", runs=2, options=_options(20.0, baselines=True))
     out = tmp_path / "fig10"
     rows = list(csv.DictReader((out / "fig10_runs.csv").open()))
     assert len(rows) == 12 and {r["algorithm"] for r in rows} == {"self-spreading", "dssa", "potential-field", "vor",
@@ -64,7 +64,7 @@ def test_reproduce_fig10_quick_on_a_dask_local_cluster_resumes_from_the_store(tm
     args = ["reproduce", "fig10", "--quick", "--out", str(out), "-q"]
     assert main([*args, "--cluster", "local", "--workers", "1"]) == 0
     first = (out / "fig10_runs.csv").read_text()
-    assert (out / "results.sqlite").is_file() and len(first.splitlines()) == 13
+    assert (out / "results.sqlite").is_file() and len(first.splitlines()) == 7
     # again on the local pool: every run comes from the store, the table is the same
     assert main([*args, "--workers", "1"]) == 0
     again = (out / "fig10_runs.csv").read_text()
@@ -119,3 +119,22 @@ def test_bad_seed_and_workers_are_one_line_errors(tmp_path, capsys):
     assert main(["reproduce", "fig10", "--quick", "--workers", "0", "--out", str(tmp_path / "f"), "-q"]) == 2
     assert "--workers" in capsys.readouterr().err
     assert not (tmp_path / "r").exists() and not (tmp_path / "f").exists()
+
+
+def test_the_paper_figures_run_the_papers_algorithms_unless_asked_for_the_baselines(tmp_path, capsys):
+    """``reproduce fig10`` stays the paper's three (a minute for the paper); ``--baselines`` adds the Voronoi ones."""
+    from amronet.cli.main import main
+
+    assert main(["reproduce", "fig10", "--quick", "--out", str(tmp_path / "plain"), "--workers", "1", "--quiet"]) == 0
+    plain = {r["algorithm"] for r in csv.DictReader((tmp_path / "plain" / "fig10_runs.csv").open())}
+    assert plain == {"self-spreading", "dssa", "potential-field"}
+    assert main(["reproduce", "fig10", "--quick", "--baselines", "--out", str(tmp_path / "more"), "--workers", "1",
+                 "--quiet"]) == 0
+    more = {r["algorithm"] for r in csv.DictReader((tmp_path / "more" / "fig10_runs.csv").open())}
+    assert more == plain | {"vor", "minimax", "lloyd"}
+    capsys.readouterr()
+    assert main(["reproduce", "fig7", "--baselines", "--out", str(tmp_path / "f7")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "amronet: error: --baselines: fig7 does not take this option (only fig10 and fig11 draw the " \
+                  "Voronoi baselines)"
+    assert not (tmp_path / "f7").exists()

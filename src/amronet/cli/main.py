@@ -126,7 +126,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     # the run options given on the command line (None: not given, the figure's own default applies); each
     # figure must take each of them: checked before anything runs
     given = {"explorer": args.explorer, "time_limit": args.time_limit, "workers": args.workers,
-             "retry_failed": args.retry_failed or None, "optimum": args.optimum}
+             "retry_failed": args.retry_failed or None, "optimum": args.optimum, "baselines": args.baselines or None}
     check_options([FIGURES[name] for name in names], given, args.figure if several else "all")
     outs = {name: Path(args.out or "runs") / name if several else Path(args.out or f"runs/{name}")
             for name in names}
@@ -227,6 +227,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="also the fewest routers on a lattice of r_c / 2 (amronet optimum) per map and r_c, and each "
                          "algorithm's ratio to it, searched for SECONDS each (default 60) and kept in the store "
                          "(only fig5 takes it)")
+    rp.add_argument("--baselines", action="store_true",
+                    help="also the location-aware Voronoi baselines (VOR, Minimax, Lloyd) as extra lines (only fig10 "
+                         "and fig11 take it; they double those figures' runs)")
     rp.add_argument("--retry-failed", action="store_true",
                     help="run again the runs the store holds as failed (otherwise the figure stops at them)")
     add_executor_arguments(rp)

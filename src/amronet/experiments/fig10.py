@@ -65,7 +65,7 @@ def run_coverage_over_time(
     figure: str,
     out_dir: Path,
     runs: int = 50,
-    algorithms: tuple[str, ...] = ALGORITHMS,
+    algorithms: tuple[str, ...] | None = None,
     baseline_dir: Path | None = None,
     options: RunOptions | None = None,
 ) -> dict[str, Any]:
@@ -79,18 +79,22 @@ def run_coverage_over_time(
         figure: ``"fig10"`` (no obstacles) or ``"fig11"`` (obstacles).
         out_dir: Output folder (replaced atomically).
         runs: Runs per algorithm (the paper: 50).
-        algorithms: Which algorithms to compare.
+        algorithms: Which algorithms to compare (default: the paper's three, :data:`PAPER_ALGORITHMS`, and with
+            ``options.baselines`` the Voronoi baselines too, :data:`BASELINES`).
         baseline_dir: For Fig. 11, the folder of a Fig. 10 run to compare final coverage with (default: the
             sibling folder ``fig10`` of ``out_dir``, when it has a table).
         options: How the runs are made (default :class:`RunOptions`): ``time_limit``, the horizon in simulated
             seconds (default :data:`DEFAULT_HORIZON_S`, 900), and ``seed``: run ``k`` uses ``seed * 100000 + k``
             for every algorithm; the others say where the runs execute (:func:`run_jobs`). ``explorer`` is not
-            used: these figures run no agents.
+            used: these figures run no agents; ``baselines``: also the Voronoi baselines (when ``algorithms`` is not
+            given).
     """
     if figure not in MAPS:
         raise ValueError(f"figure must be one of {sorted(MAPS)}, not {figure!r}")
     map_name = MAPS[figure]
     options = options or RunOptions()
+    if algorithms is None:
+        algorithms = ALGORITHMS if options.baselines else PAPER_ALGORITHMS
     time_limit = float(options.time_limit_or(DEFAULT_HORIZON_S))
     obstacles = figure == "fig11"
     jobs = []

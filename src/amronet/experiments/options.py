@@ -42,6 +42,8 @@ class RunOptions:
         retry_failed: Run again the runs ``store`` holds as failed (otherwise they stay failed).
         optimum: Compare with the optimum (:mod:`amronet.optimum`), searched for this many seconds per problem and
             kept in ``store``; ``None``: no optimum (only Fig. 5 takes it).
+        baselines: Also run the location-aware Voronoi baselines (VOR, Minimax, Lloyd) as extra lines; ``None``: the
+            paper's algorithms only (only Figs. 10 and 11 take it).
     """
 
     explorer: str = "frontier"
@@ -53,6 +55,7 @@ class RunOptions:
     executor: Executor | None = None
     retry_failed: bool = False
     optimum: float | None = None
+    baselines: bool | None = None
 
     def time_limit_or(self, default: float) -> float:
         """``time_limit``, or ``default`` when it is ``None``."""

@@ -108,16 +108,19 @@ def _add(figure: Figure) -> None:
     FIGURES.add(figure.name, figure)
 
 
-_NO_OPTIMUM = {"optimum": "only fig5 compares with the optimum"}
+_NO_BASELINES = {"baselines": "only fig10 and fig11 draw the Voronoi baselines"}
+_NO_OPTIMUM = {"optimum": "only fig5 compares with the optimum", **_NO_BASELINES}
 _NO_AGENTS = {"explorer": "it runs no agents", **_NO_OPTIMUM}
+_SPREADING = {"explorer": "it runs no agents", "optimum": "only fig5 compares with the optimum"}
 
-_add(Figure("fig5", "amronet.experiments.fig5:run_fig5", quick={"radii": (6, 10), "agents": (1, 2), "starts": 2}))
+_add(Figure("fig5", "amronet.experiments.fig5:run_fig5", quick={"radii": (6, 10), "agents": (1, 2), "starts": 2},
+            without=_NO_BASELINES))
 _add(Figure("fig7", "amronet.experiments.fig7:run_fig7", quick={"bases": (1, 2), "agents": (1, 2), "runs": 2},
             without=_NO_OPTIMUM))
 _add(Figure("fig10", "amronet.experiments.fig10:run_coverage_over_time", kwargs={"figure": "fig10"},
-            quick={"runs": 2, "time_limit": 30.0}, without=_NO_AGENTS))
+            quick={"runs": 2, "time_limit": 30.0}, without=_SPREADING))
 _add(Figure("fig11", "amronet.experiments.fig10:run_coverage_over_time", kwargs={"figure": "fig11"},
-            quick={"runs": 2, "time_limit": 30.0}, without=_NO_AGENTS))
+            quick={"runs": 2, "time_limit": 30.0}, without=_SPREADING))
 _add(Figure("buildings", "amronet.experiments.buildings:run_buildings",
             quick={"buildings": ("office-32x32", "cave"), "rules": ("last-reference", "link-quality"),
                    "stocks": (None, 6), "runs": 2, "time_limit": 120.0}, without=_NO_OPTIMUM))
