@@ -43,6 +43,7 @@ from amronet.errors import AmronetError
 from amronet.kernel_cache import compiled, mark_compiled
 from amronet.patterns import place
 from amronet.scenario import load_scenario
+from amronet.signals import sigint_deferred
 from amronet.sim.batch import run_seeds
 from amronet.sim.simulation import Simulation
 from amronet.threads import threads_from
@@ -186,18 +187,6 @@ def _run_case(k: int) -> float:
     return time.perf_counter() - t
 
 
-@contextlib.contextmanager
-def _sigint_blocked() -> Any:
-    """Block ``SIGINT`` in this thread within the block (a Ctrl-C meanwhile is raised as it ends)."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
-
 
 def _worker_start(initializer: Callable[..., object] | None, initargs: tuple[Any, ...]) -> None:
     """Start a warm-up worker: it ignores ``SIGINT``, then runs ``initializer(*initargs)``.
@@ -261,7 +250,7 @@ def run_in_pool(pool: Executor, tasks: Sequence[tuple[str, int]], slots: int, ru
             label, key = waiting.pop(_pick(waiting, {busy for _, busy in running.values()}, group))
             if started is not None:
                 started(label)
-            with _sigint_blocked():  # a worker started now starts with it blocked (:func:`_worker_start`)
+            with sigint_deferred():  # a worker started now starts with it blocked (:func:`_worker_start`)
                 running[pool.submit(run, key)] = (label, None if group is None else group(key))
         finished, _ = wait(running, return_when=FIRST_COMPLETED)
         for future in finished:

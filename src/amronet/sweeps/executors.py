@@ -29,9 +29,10 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from amronet.errors import AmronetError
+from amronet.signals import sigint_deferred
 from amronet.sweeps.dask_executor import DEFAULT_WORKER_TIMEOUT_S, ClusterLostError, DaskExecutor
 from amronet.sweeps.executor_base import Executor
-from amronet.sweeps.local_pool import WorkerPool, sigint_deferred, sigint_elsewhere
+from amronet.sweeps.local_pool import WorkerPool, sigint_elsewhere
 from amronet.sweeps.worker import STARTED, reporting_to
 from amronet.sweeps.worker_bounds import check_worker_timeout, check_workers, default_workers, pool_size
 

@@ -7,9 +7,10 @@ ends. The parent never blocks on the pipe: it reads what is there and unpickles 
 worker that dies half-way through a report (killed, out of memory) cannot hang it.
 
 The workers ignore ``SIGINT`` (:func:`~amronet.sweeps.worker.start_pool_worker`; it is blocked from the fork until
-then, :func:`sigint_deferred`): Ctrl-C in a terminal reaches every process of the sweep, and it is the parent that
-ends them, with :meth:`WorkerPool.stop` — ``SIGTERM``, then ``SIGKILL`` after :data:`STOP_GRACE_S` — instead of
-waiting for their jobs. It then reads the reports they completed before they ended (a report cut short is dropped).
+then, :func:`amronet.signals.sigint_deferred`): Ctrl-C in a terminal reaches every process of the sweep, and it is
+the parent that ends them, with :meth:`WorkerPool.stop` — ``SIGTERM``, then ``SIGKILL`` after
+:data:`STOP_GRACE_S` — instead of waiting for their jobs. It then reads the reports they completed before they
+ended (a report cut short is dropped).
 The pool's own futures are never cancelled here: only ``shutdown(cancel_futures=True)`` cancels them (Python 3.11's
 pool hangs when a worker dies after a future was cancelled by hand).
 
@@ -33,28 +34,13 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from multiprocessing.connection import wait as wait_for
 from typing import Any
 
+from amronet.signals import sigint_deferred
 from amronet.sweeps.worker import FRAME, run_reporting, start_pool_worker
 
-__all__ = ["STOP_GRACE_S", "WorkerPool", "sigint_deferred", "sigint_elsewhere"]
+__all__ = ["STOP_GRACE_S", "WorkerPool", "sigint_elsewhere"]
 
 STOP_GRACE_S = 0.5
 """How long a worker has to end after ``SIGTERM`` before :meth:`WorkerPool.stop` kills it."""
-
-
-@contextlib.contextmanager
-def sigint_deferred() -> Iterator[None]:
-    """Block ``SIGINT`` in this thread within the block (processes forked meanwhile start with it blocked).
-
-    A Ctrl-C meanwhile is delivered as the block ends (``KeyboardInterrupt`` there).
-    """
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 def _take_sigint() -> None:
