@@ -24,7 +24,6 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
-from pettingzoo import ParallelEnv
 
 from amronet.engine.network import agents_connected
 from amronet.env.actions import action_space, decode
@@ -32,6 +31,7 @@ from amronet.env.config import EnvConfig
 from amronet.env.errors import EnvError
 from amronet.env.observe import Observer, split
 from amronet.env.scenarios import EnvScenario
+from amronet.env.spaces_of import SharedSpaces
 from amronet.sim.loop import check_seed
 from amronet.sim.simulation import Simulation
 
@@ -42,7 +42,7 @@ AGENT_FLAGS = ("connected", "dropped", "carries")
 a router now."""
 
 
-class DeploymentEnv(ParallelEnv):
+class DeploymentEnv(SharedSpaces):
     """Agents that explore and drop routers (see the module docstring).
 
     Args:
@@ -70,22 +70,6 @@ class DeploymentEnv(ParallelEnv):
         self._act_space = action_space(config)
         self.reset(seed=int(self._seeds.integers(2**31)))  # the spaces' bounds need a built run
         self.agents = []
-
-    # -- spaces -------------------------------------------------------------------------------------------------
-    def observation_space(self, agent: str) -> spaces.Dict:
-        """The observation space of ``agent`` (one object for every agent, as PettingZoo asks)."""
-        self._known(agent)
-        assert self._obs_space is not None
-        return self._obs_space
-
-    def action_space(self, agent: str) -> spaces.Space:
-        """The action space of ``agent`` (one object for every agent)."""
-        self._known(agent)
-        return self._act_space
-
-    def _known(self, agent: str) -> None:
-        if agent not in self.possible_agents:
-            raise EnvError("agent", f"{agent!r} is not one of {', '.join(self.possible_agents)}")
 
     # -- the episode --------------------------------------------------------------------------------------------
     def reset(self, seed: int | None = None, options: dict[str, Any] | None = None

@@ -12,8 +12,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
-from pettingzoo import ParallelEnv
 
 from amronet.env.actions import action_space, decode
 from amronet.env.config import EnvConfig
@@ -21,13 +19,14 @@ from amronet.env.errors import EnvError
 from amronet.env.observe import split
 from amronet.env.router_core import ROUTER_FLAGS, RouterCore
 from amronet.env.scenarios import EnvScenario
+from amronet.env.spaces_of import SharedSpaces
 from amronet.sim.loop import check_seed
 from amronet.sim.simulation import Simulation
 
 __all__ = ["RouterEnv"]
 
 
-class RouterEnv(ParallelEnv):
+class RouterEnv(SharedSpaces):
     """Routers that spread themselves (see the module docstring).
 
     Args:
@@ -53,20 +52,6 @@ class RouterEnv(ParallelEnv):
         assert self.core is not None
         self._obs_space = self.core.observer.space()
         self.agents = []
-
-    def observation_space(self, agent: str) -> spaces.Dict:
-        """The observation space of ``agent`` (one object for every agent, as PettingZoo asks)."""
-        self._known(agent)
-        return self._obs_space
-
-    def action_space(self, agent: str) -> spaces.Space:
-        """The action space of ``agent`` (one object for every agent)."""
-        self._known(agent)
-        return self._act_space
-
-    def _known(self, agent: str) -> None:
-        if agent not in self.possible_agents:
-            raise EnvError("agent", f"{agent!r} is not one of {', '.join(self.possible_agents[:3])}, ...")
 
     def reset(self, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, dict[str, Any]]]:
