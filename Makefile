@@ -10,7 +10,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	@echo "installing amronet and its dependencies into $(VENV) (about 2 minutes)..."
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,cluster,docs,rl]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,cluster,docs,rl,optimum]'
 	@# compile the numba kernels into their on-disk cache now, not in the first run; it prints a line per group of
 	@# kernels as it starts (one updating line on a terminal). Should it fail, runs still work and compile what they
 	@# use (tests/test_warmup.py runs the same warm-up and fails)
@@ -43,7 +43,7 @@ NUMPY_SIMD := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR AVX512F AVX
 test: $(STAMP) browser
 	$(BIN)/ruff check src tests benchmarks tools
 	$(BIN)/lint-imports
-	$(MKDOCS) build --strict --quiet
+	$(MKDOCS) build --strict
 	MPLBACKEND=Agg $(NUMPY_SIMD) $(BIN)/python -m pytest
 
 lint: $(STAMP)

@@ -1,8 +1,10 @@
 """Throughput of the learning environments in env-steps/s (docs/environment.md, *Speed*).
 
 An env-step is one step of one environment with every one of its agents acting (random actions; for the routers a
-settle wish at 0.2 % per step). Single PettingZoo environments, then the vectorised router environment over G seeds
-in one batch. ``.venv/bin/python benchmarks/bench_env.py`` (about a minute).
+settle wish at 0.2 % per step); an agent-step is one agent's share of it (env-steps/s times the agents of one
+environment). Single PettingZoo environments, then the vectorised router environment over G seeds in one batch.
+Rates are per second of this process's CPU time (one core: nothing here runs threads below 30 000 robots), so that
+other jobs on a shared machine do not count. ``.venv/bin/python benchmarks/bench_env.py`` (about a minute).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ RNG = np.random.default_rng(0)
 def single(env) -> float:
     env.reset(seed=1)
     env.step({a: env.action_space(a).sample() for a in env.agents})  # (compiles what is left to compile)
-    t, n = time.perf_counter(), 0
+    t, n = time.process_time(), 0
     while env.agents and n < STEPS:
         actions = {}
         for a in env.agents:
@@ -31,10 +33,11 @@ def single(env) -> float:
             actions[a] = act
         env.step(actions)
         n += 1
-    return n / (time.perf_counter() - t)
+    return n / (time.process_time() - t)
 
 
-def vector(g: int, motion: str) -> float:
+def vector(g: int, motion: str) -> tuple[float, int]:
+    """Env-steps/s of ``G`` runs in one batch, and the routers of one run."""
     env = VecRouterEnv(seeds=list(range(1, g + 1)), max_steps=10 * STEPS, motion=motion, actions="discrete")
     rng = np.random.default_rng(0)
     shape = env.live.shape
@@ -44,19 +47,23 @@ def vector(g: int, motion: str) -> float:
         return wish.astype(np.int64) if motion == "builtin" else np.stack([rng.integers(0, 4, shape), wish], -1)
 
     env.step(act())
-    t = time.perf_counter()
+    t = time.process_time()
     for _ in range(STEPS // 2):
         env.step(act())
-    return g * (STEPS // 2) / (time.perf_counter() - t)
+    return g * (STEPS // 2) / (time.process_time() - t), shape[1]
 
 
 def main() -> None:
-    """Print env-steps/s of each case."""
-    print(f"agents (agent-assisted-office, 3 agents):      {single(deployment_env(max_steps=10 * STEPS)):8.0f}")
-    print(f"routers (self-spreading-obstacles-6x6, 30):    {single(router_env(max_steps=10 * STEPS)):8.0f}")
+    """Print env-steps/s (and agent-steps/s) of each case."""
+    print(f"{'case':48s} {'env-steps/s':>12s} {'agent-steps/s':>14s}")
+    for name, env in (("agents (agent-assisted-office, 3 agents)", deployment_env(max_steps=10 * STEPS)),
+                      ("routers (self-spreading-obstacles-6x6, 30)", router_env(max_steps=10 * STEPS))):
+        rate = single(env)
+        print(f"{name:48s} {rate:12.0f} {rate * len(env.possible_agents):14.0f}")
     for g in (1, 16, 64, 256):
         for motion in ("policy", "builtin"):
-            print(f"vectorised routers, G = {g:3d}, motion {motion:7s}: {vector(g, motion):8.0f}")
+            rate, agents = vector(g, motion)
+            print(f"{f'vectorised routers, G = {g:3d}, motion {motion}':48s} {rate:12.0f} {rate * agents:14.0f}")
 
 
 if __name__ == "__main__":

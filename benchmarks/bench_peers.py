@@ -12,8 +12,11 @@ Bebot's 0.2 m/s x 0.1 s step, reflected at the walls of the square) and a radius
 work of amronet's step, written as a Mesa user would write it.
 
 amronet side: :func:`amronet.sim.bench.run_bench` (``amronet bench --algorithm self-spreading``), the full step on
-the scaled ``hospital_section`` floor plan. Both sides run a warm-up (numba kernels compiled or loaded from the
-cache first) and a short probe that sets the number of timed steps so each measurement lasts about ``--seconds``.
+the scaled ``hospital_section`` floor plan, taken as a run takes the steps between two records
+(:meth:`amronet.sim.loop.Loop.advance`: in compiled stretches, radio included, where they apply; the ratio is this
+one's), and one :meth:`~amronet.sim.loop.Loop.step` call per step (what ``amronet bench`` times; shown beside it).
+Both sides run a warm-up (numba kernels compiled or loaded from the cache first) and a short probe that sets the
+number of timed steps so each measurement lasts about ``--seconds``.
 
 Run: ``.venv/bin/pip install -e .[bench]`` then ``.venv/bin/python benchmarks/bench_peers.py`` (or
 ``make bench-peers``).
@@ -164,11 +167,15 @@ def bench_mesa(n: int, side: float, r_c: float, seconds: float, variant: str = "
             "mean_degree": round(degree, 2), "mesa": mesa.__version__, "variant": variant}
 
 
-def bench_amronet(n: int, map_name: str, r_c: float, seconds: float) -> dict[str, Any]:
-    """Time amronet's self-spreading step at ``n`` robots for about ``seconds`` (after a warm-up and a probe)."""
-    probe = run_bench(robots=n, steps=10, map_name=map_name, r_c=r_c)  # warm-up step inside, compiles kernels
+def bench_amronet(n: int, map_name: str, r_c: float, seconds: float, stretches: bool = True) -> dict[str, Any]:
+    """Time amronet's self-spreading step at ``n`` robots for about ``seconds`` (after a warm-up and a probe).
+
+    ``stretches``: the steps as a run takes them between records (:meth:`amronet.sim.loop.Loop.advance`), else one
+    :meth:`~amronet.sim.loop.Loop.step` call per step.
+    """
+    probe = run_bench(robots=n, steps=10, map_name=map_name, r_c=r_c, stretches=stretches)  # compiles kernels first
     steps = max(3, round(seconds * 10 / max(probe["wall_s"], 1e-3)))
-    return run_bench(robots=n, steps=steps, map_name=map_name, r_c=r_c)
+    return run_bench(robots=n, steps=steps, map_name=map_name, r_c=r_c, stretches=stretches)
 
 
 def measure(n: int, map_name: str, r_c: float, seconds: float, rounds: int) -> dict[str, Any]:
@@ -184,7 +191,8 @@ def measure(n: int, map_name: str, r_c: float, seconds: float, rounds: int) -> d
         variants = {v: bench_mesa(n, side, r_c, seconds, v) for v in MESA_VARIANTS}
         m = max(variants.values(), key=lambda r: r["robot_steps_per_s"])
         a = bench_amronet(n, map_name, r_c, seconds)
-        pairs.append({"mesa": m, "mesa_variants": variants, "amronet": a,
+        one = bench_amronet(n, map_name, r_c, seconds, stretches=False)
+        pairs.append({"mesa": m, "mesa_variants": variants, "amronet": a, "amronet_step_calls": one,
                       "ratio": round(a["robot_steps_per_s"] / m["robot_steps_per_s"], 1)})
     ratios = [p["ratio"] for p in pairs]
     return {"robots": n, "area_m2": round(side**2, 1), "r_c": r_c, "rounds": pairs,
@@ -213,17 +221,18 @@ def main() -> None:
           "round) vs amronet (full self-spreading step), "
           f"r_c = {args.rc} m, map {args.map}, {args.rounds} rounds per N (each ratio within one Mesa-amronet pair)")
     print("| N | area m² | Mesa experimental robot-steps/s | Mesa space robot-steps/s | amronet robot-steps/s | "
-          "ratio per round | median ratio | degree Mesa/amronet |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "ratio per round | median ratio | amronet, one step() call per step | degree Mesa/amronet |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
         pairs = r["rounds"]
         rates = {v: " / ".join(f"{p['mesa_variants'][v]['robot_steps_per_s']:,}" for p in pairs) for v in MESA_VARIANTS}
         ours = " / ".join(f"{p['amronet']['robot_steps_per_s']:,}" for p in pairs)
+        calls = " / ".join(f"{p['amronet_step_calls']['robot_steps_per_s']:,}" for p in pairs)
         ratios = " / ".join(f"{p['ratio']:,.1f}x" for p in pairs)
         degrees = f"{pairs[-1]['mesa']['mean_degree']:.1f}/{pairs[-1]['amronet']['mean_degree']:.1f}"
         print(f"| {r['robots']:,} | {r['area_m2']:,.0f} | {rates['experimental']} | {rates['space']} | {ours} | "
               f"{ratios} | "
-              f"**{r['ratio_median']:,.1f}x** | {degrees} |")
+              f"**{r['ratio_median']:,.1f}x** | {calls} | {degrees} |")
 
 
 if __name__ == "__main__":

@@ -46,11 +46,13 @@ def test_figures_are_a_registry_in_the_order_reproduce_all_runs_them():
     assert isinstance(FIGURES, Registry) and FIGURES.what == "figure"
     assert list(FIGURES) == ["fig5", "fig7", "fig10", "fig11", "buildings", "walks", "failures"]
     assert all(FIGURES[name].name == name for name in FIGURES)
-    no_optimum = {"optimum": "only fig5 compares with the optimum"}
+    no_optimum = {"optimum": "only fig5 and buildings compare with the optimum",
+                  "optimum_spacing": "only fig5 and buildings compare with the optimum"}
     no_baselines = {"baselines": "only fig10 and fig11 draw the Voronoi baselines"}
     assert FIGURES["fig10"].without == FIGURES["fig11"].without == {"explorer": "it runs no agents", **no_optimum}
     assert FIGURES["fig5"].without == no_baselines and FIGURES["fig7"].without == {**no_optimum, **no_baselines}
-    assert [name for name in FIGURES if "optimum" not in FIGURES[name].without] == ["fig5"]
+    assert FIGURES["buildings"].without == no_baselines
+    assert [name for name in FIGURES if "optimum" not in FIGURES[name].without] == ["fig5", "buildings"]
     assert [name for name in FIGURES if "baselines" not in FIGURES[name].without] == ["fig10", "fig11"]
 
 
@@ -64,9 +66,10 @@ def test_figure_modules_are_imported_only_when_a_figure_runs():
 def test_run_options_defaults_are_the_figures_old_defaults():
     o = RunOptions()
     assert (o.explorer, o.time_limit, o.workers, o.show_progress, o.seed, o.store, o.executor, o.retry_failed,
-            o.optimum, o.baselines) == ("frontier", None, None, True, 0, None, None, False, None, None)
+            o.optimum, o.optimum_spacing, o.baselines) == ("frontier", None, None, True, 0, None, None, False, None,
+                                                           None, None)
     assert RUN_OPTIONS == ("explorer", "time_limit", "workers", "show_progress", "seed", "store", "executor",
-                           "retry_failed", "optimum", "baselines")
+                           "retry_failed", "optimum", "optimum_spacing", "baselines")
     assert o.time_limit_or(900.0) == 900.0 and RunOptions(time_limit=30.0).time_limit_or(900.0) == 30.0
     with pytest.raises(dataclasses.FrozenInstanceError):
         o.workers = 2

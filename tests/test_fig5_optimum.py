@@ -55,14 +55,16 @@ def test_reproduce_fig5_passes_optimum_seconds_to_the_figure(tmp_path, monkeypat
     assert main(["reproduce", "fig5", "--optimum", "--out", str(tmp_path / "a"), "-q"]) == 0
     assert main(["reproduce", "fig5", "--optimum", "30", "--out", str(tmp_path / "b"), "-q"]) == 0
     assert main(["reproduce", "fig5", "--out", str(tmp_path / "c"), "-q"]) == 0
-    assert [o.optimum for o in got] == [60.0, 30.0, None]
+    assert main(["reproduce", "fig5", "--optimum", "--optimum-spacing", "2.5", "--out", str(tmp_path / "d"), "-q"]) == 0
+    assert [(o.optimum, o.optimum_spacing) for o in got] == [(60.0, None), (30.0, None), (None, None), (60.0, 2.5)]
 
 
-@pytest.mark.parametrize("figure", ["fig7", "buildings", "paper"])
-def test_figures_without_the_optimum_refuse_it_before_any_run(figure, tmp_path, capsys):
-    assert main(["reproduce", figure, "--optimum", "--out", str(tmp_path / "x"), "-q"]) == 2
+@pytest.mark.parametrize("figure", ["fig7", "paper"])
+@pytest.mark.parametrize("flag", [["--optimum"], ["--optimum-spacing", "2"]])
+def test_figures_without_the_optimum_refuse_it_before_any_run(figure, flag, tmp_path, capsys):
+    assert main(["reproduce", figure, *flag, "--out", str(tmp_path / "x"), "-q"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("amronet: error: --optimum: ") and "only fig5 compares with the optimum" in err
+    assert err.startswith(f"amronet: error: {flag[0]}: ") and "only fig5 and buildings compare with the optimum" in err
     assert len(err.splitlines()) == 1 and not (tmp_path / "x").exists()
 
 

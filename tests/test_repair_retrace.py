@@ -154,3 +154,43 @@ def test_bad_repair_on_the_command_line_exits_2_and_writes_nothing(tmp_path, cap
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "algorithm.params.repair" in err and "retrace" in err
     assert not out.exists()
+
+
+PAIR_WAY = [(0, 1.0, 1.0), (10, 4.0, 1.0), (20, 4.0, 1.0), (30, 7.0, 1.0), (40, 7.0, 1.0), (50, 10.0, 1.0),
+            (60, 10.0, 1.0), (68, 10.0, 3.0), (78, 10.0, 3.0), (110, 1.2, 2.0)]
+"""One agent, on the unit disk (r_c 4 m): P at 3 m from the base, F 3 m on, C1 3 m past F, C2 2 m beside C1."""
+PAIR_DROPS = {15.0: (4.0, 1.0), 35.0: (7.0, 1.0), 55.0: (10.0, 1.0), 73.0: (10.0, 3.0)}
+
+
+def run_pair(tmp_path, repair: str = "retrace"):
+    """F (node 3) fails at 130 s and cuts off C1 and C2, which hear each other and both lost F; run to 200 s."""
+    path = tmp_path / "pair.csv"
+    path.write_text("t,agent,x,y\n" + "".join(f"{t},0,{x},{y}\n" for t, x, y in PAIR_WAY))
+    sc = amronet.load_scenario({
+        "map": "open-32x32", "radio": {"r_c": 4.0},
+        "algorithm": {"name": "agent-assisted", "params": {"repair": repair, "drop_rule": "radius",
+                                                           "drop": {"radius": 2.0}}},
+        "base_stations": [{"x": 1.0, "y": 1.0, "region": [1.0, 1.0]}], "routers": {"count": 0},
+        "agents": {"per_base": 1, "trajectories": str(path)},
+        "sim": {"dt": 0.25, "time_limit": 200.0, "coverage_target": "off"},
+        "faults": [{"at": FAULT_AT, "ids": [3]}]})
+    sim = Simulation(sc, seed=1)
+    ctrl, agent, placed = sim.controller, int(sim.agents[0]), []
+    while sim.t < 200.0 - 1e-9:
+        for t, where in PAIR_DROPS.items():
+            if abs(sim.t - t) < 1e-9:
+                assert np.hypot(*(sim.swarm.xy[agent] - where)) < 0.05, "the agent is not where the drop is due"
+                placed.append(ctrl._release_reference(agent, placed[-1] if placed else int(sim.bases[0]), sim.t))
+        sim.step()
+    return sim, placed
+
+
+def test_of_two_cut_off_routers_that_hear_each_other_one_backs_up_and_the_other_waits(tmp_path):
+    sim, (p, f, c1, c2) = run_pair(tmp_path)
+    assert f == 3 and sim.swarm.state[f] == State.FAILED
+    summary = sim.books.fault_book.summary(sim.books, None)
+    assert summary["events"][0]["restored_after_s"] is not None
+    assert connected_to(sim.table, sim.books.live_bases, sim.swarm.relaying)[[p, c1, c2]].all()
+    moved = sim.swarm.distance
+    assert moved[c1] > 0.5 and moved[c2] == 0.0  # C2 waited, and C1 took it along when it reconnected
+    assert summary["routers_moved"] == 1 and sim.controller.mission_report()["relocations"] == 1

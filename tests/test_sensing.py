@@ -45,3 +45,58 @@ def test_one_pixel_wall_stops_rays():
     omap = box_map(walls=[(slice(None), slice(50, 51))])  # wall at x in [2.5, 2.55)
     scans = range_scan(omap, np.array([[2.0, 2.5]]), np.zeros(1), np.array([0]), 1, 5.0)
     assert scans[0, 0] == pytest.approx(0.5, abs=0.03)
+
+
+def _cluttered_map():
+    rng = np.random.default_rng(5)
+    walls = [(slice(int(r), int(r) + 1 + int(h)), slice(int(c), int(c) + 1 + int(w)))
+             for r, c, h, w in rng.integers(0, 90, size=(40, 4)) % [90, 90, 3, 3]]
+    return box_map(rows=100, cols=100, res=0.047, origin=(-0.3, 0.2), walls=walls)
+
+
+def test_every_beam_from_a_quiet_cell_reads_max_range():
+    from amronet.engine.sensing import quiet_cells
+    from amronet.world.space import clearance
+    omap, max_range = _cluttered_map(), 0.14
+    quiet = quiet_cells(omap, max_range)
+    res = omap.resolution
+    rows, cols = np.nonzero(quiet)
+    assert quiet_cells(omap, max_range) is quiet and not quiet[omap.blocked].any()
+    # more cells than the clearance's own early-out (clear - res >= range) holds: the test is not about those alone
+    assert np.count_nonzero(quiet.astype(bool) & (clearance(omap) - res < max_range)) > 100
+    rng = np.random.default_rng(0)
+    pick = rng.integers(len(rows), size=4000)
+    corner = np.array(omap.origin) + np.stack([cols[pick], rows[pick]], axis=1) * res
+    xy = corner + rng.choice([0.0, 1e-12, 0.5, 1.0 - 1e-12], size=(4000, 2)) * res  # cell edges too
+    heading = rng.uniform(-np.pi, np.pi, 4000)
+    scans = range_scan(omap, xy, heading, np.arange(4000), 12, max_range)
+    assert np.all(scans == max_range)
+
+
+def test_the_ring_in_one_pass_is_the_grid_then_the_bodies_bit_for_bit():
+    from numba import njit
+
+    from amronet.engine.kernel_data import grid_of
+    from amronet.engine.sensing import QuietRing, cast_ring_one, quiet_cells
+
+    @njit
+    def rings(grid, ring, xy, heading, radius, csr, out):
+        dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
+        for i in range(xy.shape[0]):
+            cast_ring_one(grid, ring, i, xy, heading, radius, radius.max(), True, csr, dirs, out[i])
+
+    omap, max_range = _cluttered_map(), 0.14
+    rng = np.random.default_rng(1)
+    free_rows, free_cols = np.nonzero(~omap.blocked)
+    pick = rng.integers(len(free_rows), size=1500)
+    xy = np.array(omap.origin) + (np.stack([free_cols[pick], free_rows[pick]], axis=1) + rng.random((1500, 2))) * \
+        omap.resolution
+    heading = rng.uniform(-np.pi, np.pi, 1500)
+    radius = rng.choice([0.045, 0.165], size=1500)
+    table = UnitDisk(1.0).update(xy)
+    want = range_scan(omap, xy, heading, np.arange(1500), 12, max_range, radius=radius, table=table)
+    got = np.empty_like(want)
+    rings(grid_of(omap), QuietRing(beam_angles(12), max_range, quiet_cells(omap, max_range)), xy, heading, radius,
+          (table.indptr, table.indices, table.dist), got)
+    assert (want < max_range).any(axis=1).mean() > 0.3  # walls and bodies seen by many
+    np.testing.assert_array_equal(got, want)

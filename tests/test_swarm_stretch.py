@@ -98,3 +98,25 @@ def test_the_books_rule_the_kernel_watches_is_the_controllers(preset, overrides)
         np.testing.assert_array_equal(lookup[sim.swarm.state] & robots, sim.controller.unsettled())
         for _ in range(200):
             sim.step()
+
+
+@pytest.mark.parametrize("overrides", [{}, {"sim.robot_collisions": False}])
+def test_advance_takes_stretches_and_leaves_what_as_many_steps_leave(overrides):
+    # a single run with two bases (stretches end before triangles) and a batch: Loop.advance against Loop.step
+    for make in (lambda: Simulation(load_scenario("self-spreading-office", overrides), 2),
+                 lambda: BatchSimulation(load_scenario("self-spreading-6x6", overrides), (1, 2))):
+        fast, slow = make(), make()
+        fast.advance(400)
+        for _ in range(400):
+            slow.step()
+        assert fast.steps == slow.steps == 400 and fast.compiled.stretcher.steps > 200
+        for field in ("xy", "heading", "state", "status", "distance"):
+            np.testing.assert_array_equal(getattr(fast.swarm, field), getattr(slow.swarm, field))
+        for field in ("indptr", "indices", "dist"):
+            np.testing.assert_array_equal(getattr(fast.table, field), getattr(slow.table, field))
+
+
+def test_advance_steps_one_by_one_where_no_stretch_applies():
+    sim = Simulation(load_scenario("self-spreading-6x6", {"radio.model": "log-distance"}), 3)
+    sim.advance(7)
+    assert sim.steps == 7 and sim.compiled.stretcher is None

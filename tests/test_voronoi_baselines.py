@@ -90,7 +90,7 @@ def _cells(xy, extent, reach=3.0, vertices=32):
     xy = np.asarray(xy, dtype=float)
     table = table_of(xy, 10.0)
     return local_cells(np.arange(len(xy)), xy, np.ones(len(xy), dtype=bool), table,
-                       (np.zeros(0, dtype=np.int64), np.zeros((0, 2))), extent, reach, vertices)
+                       (np.zeros((len(xy), 0, 2)), np.zeros(len(xy), dtype=np.int64)), extent, reach, vertices)
 
 
 def test_a_robot_alone_in_a_square_has_the_square_for_its_cell():
@@ -112,7 +112,7 @@ def test_two_robots_split_a_rectangle_at_their_bisector():
 
 def test_a_remembered_wall_point_cuts_the_cell_square_to_the_line_of_sight():
     xy = np.array([(0.0, 0.0)])
-    seen = (np.array([0]), np.array([(0.5, 0.0)]))
+    seen = (np.array([[(0.5, 0.0), (-0.3, 0.0)]]), np.array([1]))  # only the first is remembered (filled: 1)
     cells = local_cells(np.array([0]), xy, np.ones(1, dtype=bool), table_of(xy, 1.0), seen, (-1, 1, -1, 1), 3.0, 32)
     area, _ = area_centroid(cells)
     assert area[0] == pytest.approx(1.5 * 2.0)  # x <= 0.5 of the square [-1, 1]^2
@@ -254,3 +254,24 @@ def test_bad_parameters_are_one_line(name, field, value, capsys, tmp_path):
     assert not (tmp_path / "r").exists()
     out = capsys.readouterr().err.strip().splitlines()
     assert len(out) == 1 and out[0].startswith("amronet: error: ") and field in out[0]
+
+
+# -- the parameters' descriptions -----------------------------------------------------------------------------
+
+
+def test_the_reference_describes_inherited_parameters_from_their_base_class():
+    """VOR and Minimax describe only what they add; the scenario reference takes the rest from ``HoleParams``."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+    import docs_reference
+
+    hole = docs_reference._descriptions(ALGORITHMS["vor"].Params.__mro__[1])
+    vor = docs_reference._descriptions(ALGORITHMS["vor"].Params)
+    minimax = docs_reference._descriptions(ALGORITHMS["minimax"].Params)
+    lloyd = docs_reference._descriptions(ALGORITHMS["lloyd"].Params)
+    assert vor == hole and set(vor) == set(ALGORITHMS["vor"].Params.model_fields)
+    assert minimax == {**hole, "tolerance_factor": minimax["tolerance_factor"]} and "minimax point" in minimax[
+        "tolerance_factor"]
+    assert "Cortés, Martínez and Bullo" in lloyd["cell_radius_factor"]  # its own, not its base class's

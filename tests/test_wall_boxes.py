@@ -18,10 +18,11 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from amronet.engine.hearing import walls_crossed
-from amronet.engine.links import NO_PREVIOUS, candidate_margins
+from amronet.engine.links import NO_PREVIOUS, candidate_margins, path_loss_candidate_margins
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.radio import make_medium
+from amronet.engine.wall_bits import wall_bits
 from amronet.engine.walls import box_clear, count_walls, count_walls_many, wall_grid, wall_sums
 from amronet.world.builtin import BUILTIN_MAPS, resolve_map
 from amronet.world.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
@@ -104,7 +105,7 @@ def test_box_clear_never_says_clear_outside_the_map_or_for_nan():
 
 
 def test_walls_crossed_asks_the_box_first():
-    """With a wall grid the walk would count but a table saying clear, the answer is the table's: no walk."""
+    """With a wall grid the walk would count but bit grids saying clear, the answer is the bits': no walk."""
     omap = OccupancyMap("hand", 0.1, (0.0, 0.0), np.zeros((10, 30), dtype=np.int8))
     medium = make_medium("multi-wall", 1.0, omap)
     h = medium.hearing
@@ -112,7 +113,7 @@ def test_walls_crossed_asks_the_box_first():
     blocked[:, 10] = 1  # a wall the walk meets, which the summed-area table does not know of
     walled = h._replace(walls=h.walls._replace(blocked=blocked))
     assert walls_crossed(0.52, 0.53, 2.07, 0.48, BIG, walled) == 0
-    fenced = walled._replace(wall_sums=wall_sums(OccupancyMap("w", 0.1, (0.0, 0.0),
+    fenced = walled._replace(wall_bits=wall_bits(OccupancyMap("w", 0.1, (0.0, 0.0),
                                                               np.where(blocked == 1, OCCUPIED, FREE).astype(np.int8))))
     assert walls_crossed(0.52, 0.53, 2.07, 0.48, BIG, fenced) == 1
 
@@ -158,6 +159,8 @@ def test_margins_on_real_maps_equal_a_brute_force_walk(name):
     medium = make_medium("multi-wall", budget, omap)
     fast = candidate_margins(xy, indptr, indices, dist, *NO_PREVIOUS, medium.hearing.plain())
     np.testing.assert_array_equal(fast, brute_margins(xy, indptr, indices, dist, omap, budget))
+    law = path_loss_candidate_margins(xy, indptr, indices, dist, *NO_PREVIOUS, medium.hearing.plain())
+    np.testing.assert_array_equal(law, fast)  # the path-loss law's own kernel: the same numbers
     ox, oy, res = float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution)
     rows = np.repeat(np.arange(len(xy)), np.diff(indptr))
     clear = [box_clear(wall_sums(omap), ox, oy, res, *xy[i], *xy[j]) for i, j in zip(rows, indices, strict=True)]

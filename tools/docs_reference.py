@@ -1,8 +1,9 @@
 """The documentation's generated reference pages: every scenario key, and every command-line option.
 
 The scenario reference is read from the pydantic models that validate a scenario (their fields, types, defaults and
-bounds) and from their docstrings (attribute docstrings, or a Google ``Attributes:`` section), so it cannot drift
-from what the code accepts. The command-line reference is read from ``amronet``'s own argparse parser.
+bounds) and from their docstrings (attribute docstrings, or a Google ``Attributes:`` section; a field a model does not
+describe takes its base class's description), so it cannot drift from what the code accepts. The command-line
+reference is read from ``amronet``'s own argparse parser.
 
 ``mkdocs build`` runs this module through the ``gen-files`` plugin (``mkdocs.yml``); the tests import it to check
 that every field and every command appears.
@@ -32,7 +33,21 @@ _SECTIONS = ("algorithm", "radio", "base_stations", "routers", "agents", "sim", 
 
 
 def _descriptions(cls: type[BaseModel]) -> dict[str, str]:
-    """Each field's description: its attribute docstring, else its entry in the class's ``Attributes:`` section."""
+    """Each field's description: its attribute docstring, else its entry in an ``Attributes:`` section.
+
+    A field a class does not describe takes the description of the nearest base class that does (``VORParams``
+    says nothing of the fields it inherits from ``HoleParams``), so a description is written once, where the field
+    is.
+    """
+    out: dict[str, str] = {}
+    for klass in reversed(cls.__mro__):  # the farthest base first: nearer classes override
+        if isinstance(klass, type) and issubclass(klass, BaseModel) and klass is not BaseModel:
+            out.update(_own_descriptions(klass))
+    return {k: _one_paragraph(v) for k, v in out.items() if k in cls.model_fields}
+
+
+def _own_descriptions(cls: type[BaseModel]) -> dict[str, str]:
+    """The descriptions ``cls``'s own docstrings give: its ``Attributes:`` section, then its attribute docstrings."""
     try:
         obj = griffe.load(cls.__module__, resolve_aliases=False)[cls.__qualname__]
     except (KeyError, griffe.GriffeError, ModuleNotFoundError):  # pragma: no cover - a model defined elsewhere
@@ -46,7 +61,7 @@ def _descriptions(cls: type[BaseModel]) -> dict[str, str]:
         doc = getattr(member, "docstring", None)
         if doc is not None and name in cls.model_fields:
             out[name] = doc.value
-    return {k: _one_paragraph(v) for k, v in out.items()}
+    return out
 
 
 def _one_paragraph(text: str) -> str:

@@ -114,6 +114,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from amronet.experiments.common import STORE_FILES
+    from amronet.experiments.options import check_optimum_options
     from amronet.experiments.registry import FIGURES, check_options, group
     from amronet.outputs.files import check_output_folder
     from amronet.sweeps.worker_bounds import check_workers
@@ -126,8 +127,10 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     # the run options given on the command line (None: not given, the figure's own default applies); each
     # figure must take each of them: checked before anything runs
     given = {"explorer": args.explorer, "time_limit": args.time_limit, "workers": args.workers,
-             "retry_failed": args.retry_failed or None, "optimum": args.optimum, "baselines": args.baselines or None}
+             "retry_failed": args.retry_failed or None, "optimum": args.optimum,
+             "optimum_spacing": args.optimum_spacing, "baselines": args.baselines or None}
     check_options([FIGURES[name] for name in names], given, args.figure if several else "all")
+    check_optimum_options(args.optimum, args.optimum_spacing)
     outs = {name: Path(args.out or "runs") / name if several else Path(args.out or f"runs/{name}")
             for name in names}
     for out in outs.values():  # before any run: a folder that holds a user's files is refused, untouched
@@ -224,9 +227,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="simulated seconds per run at most (default: the figure's own, 6000 for fig5 and fig7)")
     rp.add_argument("--quick", action="store_true", help="a small subset, for a smoke test")
     rp.add_argument("--optimum", type=float, nargs="?", const=60.0, metavar="SECONDS",
-                    help="also the fewest routers on a lattice of r_c / 2 (amronet optimum) per map and r_c, and each "
-                         "algorithm's ratio to it, searched for SECONDS each (default 60) and kept in the store "
-                         "(only fig5 takes it)")
+                    help="also the fewest routers on a lattice of r_c / 2 (amronet optimum) per map and r_c "
+                         "(buildings: per building and radio), and each algorithm's ratio to it, searched for SECONDS "
+                         "each (default 60) and kept in the store (only fig5 and buildings take it)")
+    rp.add_argument("--optimum-spacing", type=float, metavar="M",
+                    help="the optimum's candidate spacing in metres (default r_c / 2; only with --optimum)")
     rp.add_argument("--baselines", action="store_true",
                     help="also the location-aware Voronoi baselines (VOR, Minimax, Lloyd) as extra lines (only fig10 "
                          "and fig11 take it; they double those figures' runs)")

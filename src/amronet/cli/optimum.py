@@ -1,7 +1,8 @@
 """The ``amronet optimum`` subcommand: the fewest routers that could cover a building, with a proven bound.
 
 ``amronet optimum --map office-32x32 --base 1,1 [--base X,Y ...] --rc 4 [--spacing 2] [--radio multi-wall
-[--wall-db 6.9] [--shadowing-db 4 --seed 0]] [--time-limit 60] [--no-coarse] [--store S] [--out DIR] [--json] [-q]``
+[--wall-db 6.9] [--shadowing-db 4 --seed 0]] [--time-limit 60] [--no-coarse] [--solver highs|cp-sat] [--store S]
+[--out DIR] [--json] [-q]``
 prints the best placement found, the proven lower bound, the gap and the bounds that explain it (see
 :mod:`amronet.optimum`); ``--out DIR`` writes ``optimum.json`` and ``optimum.png`` (replaced atomically, an amronet
 output folder); ``--store S`` keeps the answer in a result store and loads it the next time the same problem is
@@ -52,7 +53,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
 
     opt = find_or_load_optimum(args.map, bases, args.rc, spacing, radio=radio or None, seed=args.seed,
                                time_limit=args.time_limit, coarse=False if args.no_coarse else None,
-                               store=args.store, instance=args.out is not None, log=log)
+                               solver=args.solver, store=args.store, instance=args.out is not None, log=log)
     if args.out is not None:
         write_optimum(opt, args.out)
     if args.json:
@@ -87,6 +88,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         "reported")
     p.add_argument("--no-coarse", action="store_true",
                    help="do not search the lattice of twice the spacing first (done on large lattices)")
+    p.add_argument("--solver", default="highs",
+                   help="the last phase's solver: highs (default, scipy) or cp-sat (OR-Tools CP-SAT for half of it, "
+                        "then HiGHS; an optional extra: pip install 'amronet[optimum]'; proves higher bounds on "
+                        "open floors)")
     p.add_argument("--out", metavar="DIR", help="write optimum.json and optimum.png (replaced atomically)")
     p.add_argument("--store", metavar="S", help="result store: keep the answer, and load it instead of solving when "
                                                 "the same problem (map, bases, radio, spacing, time limit) was solved")

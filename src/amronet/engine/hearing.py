@@ -33,11 +33,12 @@ from numba import njit
 from amronet.engine.kernel_data import Grid
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.shadowing import FieldGrid, ShadowingField, _lookup, field_at, link_shadowing
-from amronet.engine.walls import box_clear, count_walls, wall_grid, wall_sums
+from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
+from amronet.engine.walls import wall_grid
 from amronet.world.occupancy import OccupancyMap
 
 __all__ = ["BLOCK", "Cells", "HearingInputs", "best_margin_grid", "cells_of", "heard_box", "heard_cells",
-           "named_inputs", "no_bound", "path_loss_bound", "path_loss_margin"]
+           "named_inputs", "no_bound", "open_margin", "path_loss_bound", "path_loss_margin", "wall_limit"]
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -51,7 +52,7 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 _NO_WALLS = _frozen(np.zeros((0, 0), np.uint8))
 _NO_JUMP = _frozen(np.zeros((0, 0), np.float32))
 _NO_SHADOW = _frozen(np.zeros((1, 1)))
-_NO_SUMS = _frozen(np.zeros((1, 1), np.int32))
+_NO_BITS = _frozen(np.zeros((2, 0, 0), np.uint64))
 
 
 class HearingInputs(NamedTuple):
@@ -72,9 +73,9 @@ class HearingInputs(NamedTuple):
     """The shadowing's decorrelation distance (m)."""
     clip: float
     """The largest shadowing of a link (dB); 0 without shadowing."""
-    wall_sums: np.ndarray
-    """The summed-area table of the wall cells (:func:`~amronet.engine.walls.wall_sums`): a link whose rectangle of
-    cells holds no wall needs no walk; 1x1 without walls."""
+    wall_bits: np.ndarray
+    """The map's bit grids of wall cells and of where the walk leaps (:func:`~amronet.engine.wall_bits.wall_bits`):
+    what the walk and the box test read; ``(2, 0, 0)`` without walls."""
 
     @classmethod
     def from_budget(cls, budget: LinkBudget, omap: OccupancyMap | None, field: ShadowingField | None,
@@ -82,13 +83,13 @@ class HearingInputs(NamedTuple):
         """The inputs of ``budget``; walls come from ``omap`` when ``walls`` and ``budget.wall_db > 0``."""
         use_walls = walls and budget.wall_db > 0 and omap is not None
         cells, jump = wall_grid(omap) if use_walls else (_NO_WALLS, _NO_JUMP)
-        sums = wall_sums(omap) if use_walls else _NO_SUMS
+        bits = wall_bits(omap) if use_walls else _NO_BITS
         ox, oy = (float(omap.origin[0]), float(omap.origin[1])) if omap is not None else (0.0, 0.0)
         res = float(omap.resolution) if omap is not None else 1.0
         grid = FieldGrid(_NO_SHADOW, 0.0, 0.0, 1.0) if field is None else field.kernel_grid
         return cls(float(budget.r_c), 10.0 * budget.exponent, float(budget.wall_db) if use_walls else 0.0,
                    Grid(cells, jump, ox, oy, res), grid, float(budget.shadowing_corr_m),
-                   0.0 if field is None else budget.shadowing_clip * budget.shadowing_db, sums)
+                   0.0 if field is None else budget.shadowing_clip * budget.shadowing_db, bits)
 
     def plain(self) -> tuple:
         """The inputs as the kernels take them: a plain tuple in the fields' order, ``walls`` and ``field`` too.
@@ -97,15 +98,15 @@ class HearingInputs(NamedTuple):
         kernels name it again (:func:`named_inputs`) before they hand it to a margin kernel.
         """
         return (self.r_c, self.n10, self.wall_db, tuple(self.walls), tuple(self.field), self.corr, self.clip,
-                self.wall_sums)
+                self.wall_bits)
 
 
 @njit(cache=True, inline="always")
 def named_inputs(t):  # pragma: no cover - numba
     """The :class:`HearingInputs` of its :meth:`~HearingInputs.plain` tuple (in compiled code: no cost)."""
-    r_c, n10, wall_db, walls, field, corr, clip, sums = t
+    r_c, n10, wall_db, walls, field, corr, clip, bits = t
     return HearingInputs(r_c, n10, wall_db, Grid(walls[0], walls[1], walls[2], walls[3], walls[4]),
-                         FieldGrid(field[0], field[1], field[2], field[3]), corr, clip, sums)
+                         FieldGrid(field[0], field[1], field[2], field[3]), corr, clip, bits)
 
 
 @njit(cache=True, inline="always")
@@ -115,12 +116,25 @@ def path_loss_margin(xa, ya, xb, yb, d, sa, sb, floor_db, h):  # pragma: no cove
     Walls are counted only while the margin can stay above ``floor_db``: a result below ``floor_db`` is a bound,
     not the exact margin (``floor_db = 0`` decides usability; the signal map passes its display floor).
     """
-    m = h.n10 * math.log10(h.r_c / max(d, MIN_DISTANCE_M))
-    if h.clip > 0.0:
-        m += link_shadowing(sa, sb, d, h.corr, h.clip)
+    m = open_margin(d, sa, sb, h.r_c, h.n10, h.corr, h.clip)
     if h.wall_db > 0.0 and m >= floor_db:
-        m -= h.wall_db * walls_crossed(xa, ya, xb, yb, int(math.floor((m - floor_db) / h.wall_db)) + 1, h)
+        m -= h.wall_db * walls_crossed(xa, ya, xb, yb, wall_limit(m, floor_db, h.wall_db), h)
     return m
+
+
+@njit(cache=True, inline="always")
+def open_margin(d, sa, sb, r_c, n10, corr, clip):  # pragma: no cover - numba
+    """:func:`path_loss_margin` before walls: distance and shadowing (the inputs' fields, read by the caller)."""
+    m = n10 * math.log10(r_c / max(d, MIN_DISTANCE_M))
+    if clip > 0.0:
+        m += link_shadowing(sa, sb, d, corr, clip)
+    return m
+
+
+@njit(cache=True, inline="always")
+def wall_limit(m, floor_db, wall_db):  # pragma: no cover - numba
+    """The walls :func:`path_loss_margin` counts at most of a link whose margin before walls is ``m``, plus one."""
+    return int(math.floor((m - floor_db) / wall_db)) + 1
 
 
 @njit(cache=True, inline="always")
@@ -128,13 +142,14 @@ def walls_crossed(xa, ya, xb, yb, limit, h):  # pragma: no cover - numba
     """Walls crossed by the segment ``a -> b`` on the radio's map ``h``, counting stopped above ``limit``.
 
     :func:`~amronet.engine.walls.count_walls`, or 0 at once where the rectangle of cells between the two ends holds
-    no wall (:func:`~amronet.engine.walls.box_clear`: the walk's own answer, without the walk). A model's margin
-    kernel that counts walls calls this.
+    no wall (:func:`~amronet.engine.walls.box_clear`: the walk's own answer, without the walk); both asked of the
+    map's bit grids (:mod:`amronet.engine.wall_bits`). A model's margin kernel that counts walls calls this.
     """
     w = h.walls
-    if box_clear(h.wall_sums, w.ox, w.oy, w.res, xa, ya, xb, yb):
+    bits = h.wall_bits
+    if box_clear_bits(bits, w.blocked.shape[1], w.ox, w.oy, w.res, xa, ya, xb, yb):
         return 0
-    return count_walls(w.blocked, w.clear, w.ox, w.oy, w.res, xa, ya, xb, yb, limit)
+    return count_walls_bits(bits, w.blocked, w.clear, w.ox, w.oy, w.res, xa, ya, xb, yb, limit)
 
 
 @njit(cache=True, inline="always")

@@ -44,8 +44,10 @@ class MarginKernels(NamedTuple):
     """:func:`amronet.engine.hearing.best_margin_grid`: the best margin at every cell."""
 
 
-PATH_LOSS = MarginKernels(links.candidate_margins, hearing.heard_cells, hearing.heard_box, hearing.best_margin_grid)
-"""The kernels of the path-loss law (:func:`~amronet.engine.hearing.path_loss_margin` with its bound)."""
+PATH_LOSS = MarginKernels(links.path_loss_candidate_margins, hearing.heard_cells, hearing.heard_box,
+                          hearing.best_margin_grid)
+"""The kernels of the path-loss law (:func:`~amronet.engine.hearing.path_loss_margin` with its bound); its links'
+margins by :func:`~amronet.engine.links.path_loss_candidate_margins`, the same numbers as the generic kernel's."""
 
 _COPIES: dict[tuple[Callable, Callable | None], MarginKernels] = {}
 

@@ -10,16 +10,34 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from scipy import ndimage
 
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.radio import NeighbourTable
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
 
-__all__ = ["beam_angles", "body_table", "cast_bodies_one", "cast_grid_one", "range_scan"]
+__all__ = ["QuietRing", "beam_angles", "body_table", "cast_bodies_one", "cast_grid_one", "cast_ring_one", "quiet_cells",
+           "range_scan"]
+
+QUIET_MARGIN = 0.01
+"""Cells of slack (on top of the sensor's range) in :func:`quiet_cells`: far more than any rounding of a beam's
+points or cells."""
+
+
+class QuietRing(NamedTuple):
+    """A sensor ring as :func:`cast_ring_one` reads it: the beams and where they cannot meet the grid."""
+
+    angles: np.ndarray
+    """``(n_beams,)``: the beams' angles from the heading (:func:`beam_angles`)."""
+    sensor_range: float
+    """A beam's reach, metres."""
+    quiet: np.ndarray
+    """``uint8 (H, W)``: the map's cells from which no beam meets the grid (:func:`quiet_cells`)."""
 
 
 @functools.cache
@@ -96,6 +114,106 @@ def cast_bodies_one(i, indptr, indices, dist, xy, heading, angles, max_range, ot
             t = max(tca - math.sqrt(rj * rj - d2), 0.0)
             if t < out[k]:
                 out[k] = t
+
+
+def quiet_cells(omap: OccupancyMap, max_range: float) -> np.ndarray:
+    """``uint8 (H, W)``: 1 where no beam of reach ``max_range`` cast from any point of the cell can meet the grid.
+
+    Every cell that comes within ``max_range`` (and :data:`QUIET_MARGIN` cells) of the cell's square is free and on
+    the map: every point a beam of :func:`cast_grid_one` tests is then in a free cell, and each beam reads
+    ``max_range``. Computed once per map and range, cached in ``omap._cache``, read-only.
+    """
+    key = ("quiet_cells", float(max_range))
+    if key not in omap._cache:
+        res = omap.resolution
+        k = int(math.ceil(max_range / res + QUIET_MARGIN)) + 1
+        dr, dc = np.mgrid[-k:k + 1, -k:k + 1]
+        gap = np.hypot(np.maximum(np.abs(dr) - 1, 0), np.maximum(np.abs(dc) - 1, 0))  # square to square, cells
+        near = gap <= max_range / res + QUIET_MARGIN
+        padded = np.pad(omap.blocked, k, constant_values=True)
+        quiet = ~ndimage.binary_dilation(padded, structure=near)[k:-k, k:-k]
+        quiet = quiet.astype(np.uint8)
+        quiet.flags.writeable = False
+        omap._cache[key] = quiet
+    return omap._cache[key]
+
+
+@njit(cache=True, inline="always")
+def cast_ring_one(grid, ring, i, xy, heading, radius, big, bodies, csr, dirs, out):  # pragma: no cover - numba
+    """Robot ``i``'s ring into ``out``: :func:`cast_grid_one`, then (``bodies``) :func:`cast_bodies_one`, bit for bit.
+
+    ``grid``: the map's :class:`~amronet.engine.kernel_data.Grid`; ``ring``: a :class:`QuietRing`; ``radius`` and
+    ``big``: every robot's body radius and the largest; ``csr``: ``(indptr, indices, dist)``, the bodies near each
+    robot; ``dirs``: scratch ``(cos, sin)``, ``(n_beams,)`` each. Where the robot's cell is quiet the grid's beams
+    read the range without a march, and each beam's direction is computed once, for the grid and the bodies, and
+    only when one of them needs it: the same numbers, fewer sines.
+    """
+    angles, max_range, quiet = ring
+    indptr, indices, dist = csr
+    cos_a, sin_a = dirs
+    blocked, clear, ox, oy, res = grid
+    x = xy[i, 0]
+    y = xy[i, 1]
+    h = heading[i]
+    rows, cols = blocked.shape
+    c0 = int(math.floor((x - ox) / res))
+    r0 = int(math.floor((y - oy) / res))
+    have = False
+    # (the clearance first: the move reads the same cell of it next, from the cache)
+    if 0 <= r0 < rows and 0 <= c0 < cols and not blocked[r0, c0] and (clear[r0, c0] - res >= max_range or
+                                                                      quiet[r0, c0]):
+        for k in range(angles.shape[0]):
+            out[k] = max_range
+    else:
+        have = True
+        for k in range(angles.shape[0]):  # cast_grid_one's march
+            a = h + angles[k]
+            dx = math.cos(a)
+            dy = math.sin(a)
+            cos_a[k] = dx
+            sin_a[k] = dy
+            t = 0.0
+            hit = max_range
+            while t < max_range:
+                px = x + dx * t
+                py = y + dy * t
+                c = int(math.floor((px - ox) / res))
+                r = int(math.floor((py - oy) / res))
+                if r < 0 or r >= rows or c < 0 or c >= cols or blocked[r, c]:
+                    hit = t
+                    break
+                step = clear[r, c] - res
+                if step < 0.5 * res:
+                    step = 0.5 * res
+                t += step
+            out[k] = min(hit, max_range)
+    if not bodies:
+        return
+    for e in range(indptr[i], indptr[i + 1]):  # cast_bodies_one
+        if dist[e] > max_range + big:
+            continue
+        j = indices[e]
+        vx = xy[j, 0] - x
+        vy = xy[j, 1] - y
+        rj = radius[j]
+        dist2 = vx * vx + vy * vy
+        if dist2 > (max_range + rj) ** 2:
+            continue
+        for k in range(angles.shape[0]):
+            if not have:
+                a = h + angles[k]
+                cos_a[k] = math.cos(a)
+                sin_a[k] = math.sin(a)
+            tca = vx * cos_a[k] + vy * sin_a[k]
+            if tca <= 0.0:
+                continue
+            d2 = dist2 - tca * tca
+            if d2 > rj * rj:
+                continue
+            t = max(tca - math.sqrt(rj * rj - d2), 0.0)
+            if t < out[k]:
+                out[k] = t
+        have = True
 
 
 @njit(cache=True)

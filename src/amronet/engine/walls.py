@@ -14,7 +14,8 @@ more than ``k + 1`` counted), which keeps long walks through thick building core
 table of wall cells (:func:`wall_sums`), :func:`box_clear` tells first whether the rectangle of cells between the
 segment's two ends holds any wall cell (four reads): most links in a building run within one room or corridor, and
 those need no walk. The walk never leaves that rectangle (widened by a hair for rounding), so where it holds no wall
-the count is 0, the walk's own answer.
+the count is 0, the walk's own answer. The radio asks the same questions of bit grids of the map, which stay in the
+processor's cache (:mod:`amronet.engine.wall_bits`).
 """
 
 from __future__ import annotations
@@ -28,7 +29,10 @@ from scipy import ndimage
 from amronet.world.gridwalk import walk_next, walk_start
 from amronet.world.occupancy import FREE, OccupancyMap
 
-__all__ = ["box_clear", "count_walls", "count_walls_many", "wall_grid", "wall_sums"]
+__all__ = ["LEAP_CELLS", "box_clear", "count_walls", "count_walls_many", "wall_grid", "wall_sums"]
+
+LEAP_CELLS = 6.0
+"""The walk leaps where a free cell's safe jump exceeds this many cells."""
 
 
 def wall_grid(omap: OccupancyMap) -> tuple[np.ndarray, np.ndarray]:
@@ -87,6 +91,22 @@ def box_clear(sums, ox, oy, res, x0, y0, x1, y1):  # pragma: no cover - numba
         x1: The other end, x.
         y1: The other end, y.
     """
+    lo_u, hi_u, lo_v, hi_v = _widened(ox, oy, res, x0, y0, x1, y1)
+    if not (lo_u >= 0.0 and lo_v >= 0.0 and hi_u < sums.shape[1] - 1 and hi_v < sums.shape[0] - 1):
+        return False  # outside the map (a wall), or not a number
+    c0 = np.uint64(lo_u)  # non-negative: truncation is the floor (unsigned: no wraparound code in the reads)
+    c1 = np.uint64(hi_u) + np.uint64(1)
+    r0 = np.uint64(lo_v)
+    r1 = np.uint64(hi_v) + np.uint64(1)
+    return sums[r1, c1] - sums[r0, c1] - sums[r1, c0] + sums[r0, c0] == 0
+
+
+@njit(cache=True, inline="always")
+def _widened(ox, oy, res, x0, y0, x1, y1):  # pragma: no cover - numba
+    """The rectangle ``(lo_u, hi_u, lo_v, hi_v)``, in cell coordinates, that holds every cell the walk may visit.
+
+    The rectangle between the ends' cell coordinates ``(u, v)``, widened by the margin of :func:`box_clear`.
+    """
     inv = 1.0 / res
     u0 = (x0 - ox) * inv
     v0 = (y0 - oy) * inv
@@ -96,17 +116,7 @@ def box_clear(sums, ox, oy, res, x0, y0, x1, y1):  # pragma: no cover - numba
     dv = abs(v1 - v0)
     size = abs(x0) + abs(y0) + abs(x1) + abs(y1) + abs(ox) + abs(oy)
     slack = 1e-9 + 1e-12 * size * inv + 1e-6 * (du + dv)
-    lo_u = min(u0, u1) - slack
-    hi_u = max(u0, u1) + slack
-    lo_v = min(v0, v1) - slack
-    hi_v = max(v0, v1) + slack
-    if not (lo_u >= 0.0 and lo_v >= 0.0 and hi_u < sums.shape[1] - 1 and hi_v < sums.shape[0] - 1):
-        return False  # outside the map (a wall), or not a number
-    c0 = np.uint64(lo_u)  # non-negative: truncation is the floor (unsigned: no wraparound code in the reads)
-    c1 = np.uint64(hi_u) + np.uint64(1)
-    r0 = np.uint64(lo_v)
-    r1 = np.uint64(hi_v) + np.uint64(1)
-    return sums[r1, c1] - sums[r0, c1] - sums[r1, c0] + sums[r0, c0] == 0
+    return min(u0, u1) - slack, max(u0, u1) + slack, min(v0, v1) - slack, max(v0, v1) + slack
 
 
 @njit(cache=True, inline="always")
@@ -170,7 +180,7 @@ def count_walls(walls, jump, ox, oy, res, x0, y0, x1, y1, limit):  # pragma: no 
     length = math.sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0))
     if length == 0.0:  # a point: inside a wall or not
         return 1 if _wall(walls, int(math.floor((y0 - oy) / res)), int(math.floor((x0 - ox) / res))) else 0
-    leap_min = 6.0 * res
+    leap_min = LEAP_CELLS * res
     rows = walls.shape[0]
     cols = walls.shape[1]
     count = 0

@@ -100,9 +100,10 @@ def decode_array(config: EnvConfig, space: spaces.Space, actions: np.ndarray, li
     hi = (space.high.astype(float) if isinstance(space, spaces.Box)
           else np.array([space.n - 1]) if isinstance(space, spaces.Discrete) else space.nvec - 1.0)
     on = live.reshape(-1)
-    bad = on & ~(np.all(np.isfinite(flat) & (flat >= lo) & (flat <= hi), axis=1))
+    inside = (flat >= lo) & (flat <= hi)  # (the bounds are finite: NaN and infinities fall outside)
     if not isinstance(space, spaces.Box):
-        bad |= on & ~np.all(flat == np.round(flat), axis=1)
+        inside &= flat == np.round(flat)
+    bad = on & ~inside.all(axis=1)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise EnvError(f"actions[{k // n}, {k % n}]", f"{flat[k].tolist()} is outside the action space {space}")
@@ -111,8 +112,9 @@ def decode_array(config: EnvConfig, space: spaces.Space, actions: np.ndarray, li
     elif config.actions == "continuous":
         turn, speed, wish = flat[:, 0] * config.max_turn, flat[:, 1].copy(), flat[:, 2] >= 0.5
     else:
-        motion = flat[:, 0].astype(np.int64)
-        turn = np.select([motion == 1, motion == 2, motion == 3], [config.max_turn, -config.max_turn, np.pi], 0.0)
+        motion = flat[:, 0].astype(np.int64)  # (0-4 where live; entries not live are not read)
+        turns = np.array([0.0, config.max_turn, -config.max_turn, np.pi, 0.0])
+        turn = turns.take(motion, mode="clip")
         speed = np.where(motion == 4, 0.0, 1.0)
         wish = flat[:, 1] == 1
     return turn.reshape(g, n), speed.reshape(g, n), wish.reshape(g, n)

@@ -39,36 +39,49 @@ MARGIN_CAP_DB = 100.0
 
 @njit(cache=True)
 def _heard(who, indptr, indices, dist, margin, relay, threshold, rows, mask, nearest, best):  # pragma: no cover
-    """:func:`heard_links` per robot: its row's ``k`` strongest links by insertion, its nearest and best relay."""
+    """:func:`heard_links` per robot: its row's ``k`` strongest links by insertion, its nearest and best relay.
+
+    The insertion moves entry numbers (``top``), and the ``k`` rows are written once at the end.
+    """
     k = rows.shape[1]
+    top = np.empty(k, dtype=np.int64)
+    kept = np.empty(k)  # (their margins)
     for m in range(who.shape[0]):
         i = who[m]
         filled = 0
         near = np.inf
-        top = -np.inf
+        strongest = -np.inf
+        weakest = -np.inf  # the k-th strongest so far, once there are k
         for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
             g = margin[e]
-            if relay[j]:
+            if relay[indices[e]]:
                 near = min(near, dist[e])
-                top = max(top, g)
+                strongest = max(strongest, g)
             # the k strongest so far, strongest first; ties go to the lower node id (rows are sorted by id)
-            if filled == k and g <= rows[m, k - 1, 0]:
-                continue
-            slot = filled if filled < k else k - 1
-            while slot > 0 and rows[m, slot - 1, 0] < g:
-                rows[m, slot] = rows[m, slot - 1]
-                slot -= 1
-            rows[m, slot, 0] = g
-            rows[m, slot, 1] = threshold + g
-            rows[m, slot, 2] = dist[e]
-            rows[m, slot, 3] = 1.0 if relay[j] else 0.0
-            if filled < k:
+            if filled == k:
+                if g <= weakest:
+                    continue
+                slot = k - 1
+            else:
+                slot = filled
                 filled += 1
+            while slot > 0 and kept[slot - 1] < g:
+                kept[slot] = kept[slot - 1]
+                top[slot] = top[slot - 1]
+                slot -= 1
+            kept[slot] = g
+            top[slot] = e
+            if filled == k:
+                weakest = kept[k - 1]
         for s in range(filled):
+            e = top[s]
+            rows[m, s, 0] = kept[s]
+            rows[m, s, 1] = threshold + kept[s]
+            rows[m, s, 2] = dist[e]
+            rows[m, s, 3] = 1.0 if relay[indices[e]] else 0.0
             mask[m, s] = 1
         nearest[m] = near
-        best[m] = top
+        best[m] = strongest
 
 
 def heard_links(table: NeighbourTable, who: np.ndarray, relay: np.ndarray, k: int
@@ -118,6 +131,8 @@ class Observer:
         self.angles = beam_angles(n_beams)
         xmin, xmax, ymin, ymax = omap.extent
         self.span = np.array([xmax - xmin, ymax - ymin])
+        self.link_caps = np.array([MARGIN_CAP_DB, self.threshold_dbm + MARGIN_CAP_DB, self.reach, 1.0])
+        """The largest value of each column of ``links`` (a relay flag is at most 1 already)."""
         self.seen = SeenMaps(n, omap.extent, config.patch_cell, config.patch) if config.patch else None
 
     def space(self) -> spaces.Dict:
@@ -167,19 +182,22 @@ class Observer:
         scans = range_scan(self.omap, xy, heading, who, self.n_beams, self.sensor_range, radius=radius, table=table)
         links, mask, nearest, best = heard_links(table, who, relay, self.k)
         heard = np.isfinite(nearest)
-        links[:, :, 0] = np.minimum(links[:, :, 0], MARGIN_CAP_DB)
-        links[:, :, 1] = np.minimum(links[:, :, 1], self.threshold_dbm + MARGIN_CAP_DB)
-        links[:, :, 2] = np.minimum(links[:, :, 2], self.reach)
-        relay_obs = np.stack([heard.astype(float), np.where(heard, np.minimum(nearest, self.reach), self.reach),
-                              np.where(heard, np.minimum(best, MARGIN_CAP_DB), 0.0)], axis=1)
+        np.minimum(links, self.link_caps, out=links)
+        relay_obs = np.empty((len(who), 3))
+        relay_obs[:, 0] = heard
+        np.minimum(nearest, self.reach, out=relay_obs[:, 1])  # (inf when none: the reach)
+        relay_obs[:, 2] = np.where(heard, np.minimum(best, MARGIN_CAP_DB), 0.0)
         h = heading[who]
-        move = np.clip(xy[who] - start_xy, -self.span, self.span)
+        odometry = np.empty((len(who), 4))
+        np.clip(xy[who] - start_xy, -self.span, self.span, out=odometry[:, :2])
+        odometry[:, 2] = np.cos(h)  # (into contiguous arrays first: numpy's vector loops are for those)
+        odometry[:, 3] = np.sin(h)
         out = {
-            "scan": np.clip(scans, 0.0, self.sensor_range),
+            "scan": np.clip(scans, 0.0, self.sensor_range, out=scans),
             "links": links,
             "links_mask": mask,
             "relay": relay_obs,
-            "odometry": np.concatenate([move, np.cos(h)[:, None], np.sin(h)[:, None]], axis=1),
+            "odometry": odometry,
             "flags": np.asarray(flags, dtype=np.int8),
         }
         if self.stock:

@@ -57,16 +57,55 @@ class RouterCore:
         self.live = np.ones(self.ids.shape, dtype=bool)
         """Which routers still act (not settled, their run not over)."""
         self.running = np.ones(len(blocks), dtype=bool)
+        self.blocks = np.array([(b.start or 0, len(sw) if b.stop is None else b.stop) for b in blocks], dtype=np.int64)
+        """First and past-the-last robot of each run ``(G, 2)``."""
+        self.targets = np.array([np.inf if run.coverage_target is None else run.coverage_target for run in loop.runs])
+        """Each run's coverage target (``inf``: none)."""
         self.steps = 0
-        self.coverage = np.array([m.connected_coverage for m in metrics_of(loop.runs)])
+        self._linked_of: tuple[object, np.ndarray, np.ndarray] | None = None
+        self.coverage = self._coverages(np.ones(len(blocks), dtype=bool))[1]
         self.live &= self._unsettled()
 
     def _unsettled(self) -> np.ndarray:
         return self.loop.swarm.in_states(SETTLING_STATES)[self.ids]
 
-    def _linked(self) -> np.ndarray:
+    def _linked_all(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(relays, linked)`` ``(N,)``: which robots relay, which have a path to a base station through them.
+
+        Searched once per table (and set of relays).
+        """
         loop = self.loop
-        return connected_to(loop.table, self.bases, loop.swarm.relaying)[self.ids]
+        relaying = loop.swarm.relaying
+        cached = self._linked_of
+        if cached is None or cached[0] is not loop.table or not np.array_equal(cached[1], relaying):
+            cached = self._linked_of = (loop.table, relaying, connected_to(loop.table, self.bases, relaying))
+        return cached[1], cached[2]
+
+    def _linked(self) -> np.ndarray:
+        return self._linked_all()[1][self.ids]
+
+    def _coverages(self, running: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(coverage, connected coverage)`` ``(G,)`` of the runs ``running`` now (the others' entries are 0).
+
+        What :func:`~amronet.sim.run.metrics_of` gives, without what the reward does not read (components, routers):
+        a batch's coverages in one compiled call (no link joins two runs, so one search from every base station
+        serves them all), otherwise run by run.
+        """
+        loop = self.loop
+        out = np.zeros((len(running), 2))
+        if not running.any():
+            return out[:, 0], out[:, 1]
+        fractions = None
+        if loop.groups is not None:
+            relaying, linked = self._linked_all()
+            blocks = self.blocks if running.all() else self.blocks[running]
+            fractions = loop.medium.run_coverages(loop.world.coverage, loop.swarm.xy, relaying, linked, blocks,
+                                                  loop.scenario.sim.coverage_method)
+        if fractions is None:
+            runs = [loop.runs[g] for g in np.flatnonzero(running)]
+            fractions = [(m.coverage, m.connected_coverage) for m in metrics_of(runs)]
+        out[running] = fractions
+        return out[:, 0], out[:, 1]
 
     def observe(self) -> dict[str, np.ndarray]:
         """Every router's observation, stacked ``(G * R, ...)`` (run by run)."""
@@ -94,14 +133,9 @@ class RouterCore:
         external.command(t, s, w)
         loop.step()
         self.steps += 1
-        active = [run for run in loop.runs if self.running[run.index]]
-        metrics = dict(zip((run.index for run in active), metrics_of(active), strict=True))
-        cov = self.coverage.copy()
-        reached = np.zeros(len(self.running), dtype=bool)
-        for g, m in metrics.items():
-            cov[g] = m.connected_coverage
-            target = loop.runs[g].coverage_target
-            reached[g] = target is not None and m.coverage >= target
+        coverage, connected = self._coverages(self.running)
+        cov = np.where(self.running, connected, self.coverage)
+        reached = self.running & (coverage >= self.targets)
         gained = cov - self.coverage
         self.coverage = cov
         unsettled = self._unsettled()

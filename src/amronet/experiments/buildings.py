@@ -10,7 +10,8 @@ connected to a base station (mean and 95 % CI), how many runs had an outage, the
 
 The base stations sit at free points chosen for each map (:data:`BUILDINGS`, with the communication radius that
 suits its size); the static r-strip pattern placed on the free space the base reaches is the count
-``strip-goals`` is compared with (paper section 6).
+``strip-goals`` is compared with (paper section 6). With ``options.optimum`` the table gains the optimum per
+building and radio and each cell's ratio to it (:mod:`~amronet.experiments.buildings_optimum`).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from amronet.experiments.common import Claim, agent_scenario, claims_markdown, csv_text, write_outputs
-from amronet.experiments.options import RunOptions
+from amronet.experiments.options import RunOptions, check_optimum_options
 from amronet.experiments.runner import run_jobs
 from amronet.sweeps.stats import mean_ci, mean_ci_text
 
@@ -110,12 +111,25 @@ def run_buildings(
         options: How the runs are made (default :class:`RunOptions`): the agents' ``explorer``, ``time_limit``
             (default 600 s) and ``seed``: run ``k`` of cell ``c`` uses ``seed * 100000 + 70000 + c * runs + k``,
             ``c`` the cell's place in the full experiment (:func:`_cell_indices`), so that a subset runs what the
-            full experiment would; the others say where the runs execute (:func:`run_jobs`).
+            full experiment would; ``optimum``: also the optimum per building and radio, searched for that many
+            seconds each on a lattice of ``optimum_spacing`` (default ``r_c / 2``) and kept in ``store``
+            (:func:`~amronet.experiments.buildings_optimum.solve_building_optima`), before the runs; the others
+            say where the runs execute (:func:`run_jobs`).
 
     Returns:
         ``{"rows", "table", "claims", "markdown"}``.
+
+    Raises:
+        AmronetError: A bad ``optimum`` or ``optimum_spacing`` (one line), before any run.
     """
     options = options or RunOptions()
+    check_optimum_options(options.optimum, options.optimum_spacing)
+    optima = None
+    if options.optimum is not None:  # before the runs: bad input fails at once, and a rerun loads them
+        from amronet.experiments.buildings_optimum import solve_building_optima
+
+        optima = solve_building_optima(buildings, radios, options.optimum, options.optimum_spacing, options.store,
+                                       options.show_progress)
     known = _rules()
     rules = tuple(known) if rules is None else rules
     time_limit = options.time_limit_or(TIME_LIMIT_S)
@@ -142,6 +156,11 @@ def run_buildings(
     strips = _strip_counts(buildings)
     claims = _claims(table, strips)
     markdown = _markdown(table, strips, claims, runs, time_limit, options.explorer)
+    if optima is not None:
+        from amronet.experiments.buildings_optimum import add_building_optimum, building_optimum_markdown
+
+        add_building_optimum(table, optima)
+        markdown += "\n" + building_optimum_markdown(table, strips)
     files = {"buildings_runs.csv": csv_text(rows), "buildings_table.csv": csv_text(table),
              "buildings.md": markdown, "buildings.png": _figure(table, buildings, radios)}
     write_outputs(out_dir, files)
@@ -280,6 +299,10 @@ def _figure(table: list[dict[str, Any]], buildings: tuple[str, ...], radios: tup
     for i, radio in enumerate(radios):
         for j, name in enumerate(buildings):
             ax = axes[i][j]
+            opt = next((e for e in table if (e["map"], e["radio"]) == (name, radio) and "optimum_best" in e), None)
+            if opt is not None:  # reproduce buildings --optimum: the lattice optimum, from its bound to its best
+                ax.axvspan(opt["optimum_bound"], opt["optimum_best"], color="0.85", lw=0)
+                ax.axvline(opt["optimum_best"], color="k", ls="--", lw=1)
             for e in table:
                 if e["map"] != name or e["radio"] != radio:
                     continue
@@ -297,6 +320,8 @@ def _figure(table: list[dict[str, Any]], buildings: tuple[str, ...], radios: tup
     handles = [axes[0][0].plot([], [], "o", color=colours[k % len(colours)], label=r)[0] for k, r in enumerate(rules)]
     handles += [axes[0][0].plot([], [], markers[k % len(markers)], color="0.4", label=f"stock {s}")[0]
                 for k, s in enumerate(stocks)]
+    if any("optimum_best" in e for e in table):
+        handles.append(axes[0][0].plot([], [], "k--", lw=1, label="optimum (grey: to bound)")[0])
     fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 8), fontsize=8)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
     buf = io.BytesIO()

@@ -72,7 +72,7 @@ def run_fig5(
             ``seed * 100000 + k``; ``optimum``: also the optimum per map and radius, searched for that many
             seconds each and kept in ``store`` (:func:`~amronet.experiments.fig5_optimum.solve_optima`), before the
             runs; the others say where the runs execute (:func:`run_jobs`).
-        optimum_spacing: The optimum's candidate spacing (m); ``None``: ``r_c / 2``.
+        optimum_spacing: The optimum's candidate spacing (m); ``None``: ``options.optimum_spacing``, or ``r_c / 2``.
 
     Returns:
         ``{"rows": per-run rows, "table": per-(map, r_c) statistics, "claims": [Claim], "markdown": str}``.
@@ -83,7 +83,8 @@ def run_fig5(
     if options.optimum is not None:  # before the runs: bad input fails at once, and a rerun loads them
         from amronet.experiments.fig5_optimum import solve_optima
 
-        optima = solve_optima(maps, [float(r) for r in radii], options.optimum, optimum_spacing, options.store,
+        spacing = optimum_spacing if optimum_spacing is not None else options.optimum_spacing
+        optima = solve_optima(maps, [float(r) for r in radii], options.optimum, spacing, options.store,
                               options.show_progress)
     jobs = []
     for map_name in maps:

@@ -11,14 +11,17 @@ One frozen :class:`RunOptions` carries how many runs are made and where they exe
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from amronet.errors import AmronetError
+
 if TYPE_CHECKING:
     from amronet.sweeps.executors import Executor
 
-__all__ = ["AGENT_TIME_LIMIT_S", "RUN_OPTIONS", "RunOptions"]
+__all__ = ["AGENT_TIME_LIMIT_S", "RUN_OPTIONS", "RunOptions", "check_optimum_options"]
 
 AGENT_TIME_LIMIT_S = 6000.0
 """Default time limit of agent-assisted runs (Figs. 5 and 7, the planner): simulated seconds."""
@@ -41,7 +44,8 @@ class RunOptions:
             local process pool with ``workers`` processes.
         retry_failed: Run again the runs ``store`` holds as failed (otherwise they stay failed).
         optimum: Compare with the optimum (:mod:`amronet.optimum`), searched for this many seconds per problem and
-            kept in ``store``; ``None``: no optimum (only Fig. 5 takes it).
+            kept in ``store``; ``None``: no optimum (only Fig. 5 and the buildings take it).
+        optimum_spacing: The optimum's candidate spacing (m); ``None``: ``r_c / 2`` (only with ``optimum``).
         baselines: Also run the location-aware Voronoi baselines (VOR, Minimax, Lloyd) as extra lines; ``None``: the
             paper's algorithms only (only Figs. 10 and 11 take it).
     """
@@ -55,6 +59,7 @@ class RunOptions:
     executor: Executor | None = None
     retry_failed: bool = False
     optimum: float | None = None
+    optimum_spacing: float | None = None
     baselines: bool | None = None
 
     def time_limit_or(self, default: float) -> float:
@@ -64,3 +69,24 @@ class RunOptions:
 
 RUN_OPTIONS = tuple(f.name for f in dataclasses.fields(RunOptions))
 """The names of :class:`RunOptions`' fields, in order."""
+
+
+def check_optimum_options(optimum: float | None, spacing: float | None) -> None:
+    """Refuse a bad ``optimum`` time limit or ``optimum_spacing``, or a spacing without an optimum (one line).
+
+    Args:
+        optimum: Seconds of search per problem (``None``: no optimum).
+        spacing: The candidate spacing (m) (``None``: ``r_c / 2``).
+
+    Raises:
+        AmronetError: Naming ``--optimum`` or ``--optimum-spacing``.
+    """
+    if spacing is not None and optimum is None:
+        raise AmronetError("--optimum-spacing: only with --optimum (the optimum's candidate spacing); add --optimum "
+                           "or leave it out")
+    if optimum is not None:
+        from amronet.optimum.solve import check_time_limit  # here: the solver's modules load only when asked
+
+        check_time_limit(optimum, "--optimum")
+    if spacing is not None and not (isinstance(spacing, int | float) and math.isfinite(spacing) and spacing > 0):
+        raise AmronetError(f"--optimum-spacing: must be a finite number of metres > 0, got {spacing!r}")

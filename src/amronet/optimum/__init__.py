@@ -22,10 +22,11 @@ separators), and the chain inequality (:mod:`~amronet.optimum.bounds`). Before s
 sites merge, rows implied by a smaller row go, and dominated sites — covered rows *and* links contained in another
 site's — go (:mod:`~amronet.optimum.reduce`). Solved with HiGHS through :func:`scipy.optimize.milp` under a time
 limit, after a greedy connected cover, local search over windows and, on fine lattices, the lattice of twice the
-spacing (:mod:`~amronet.optimum.solve`). A result store keeps solved problems like runs, under a hash of the
-problem (:mod:`~amronet.optimum.stored`).
+spacing (:mod:`~amronet.optimum.solve`); with ``solver="cp-sat"`` OR-Tools CP-SAT, an optional extra, takes the first
+half of the last phase and HiGHS goes on from its best (:mod:`~amronet.optimum.cpsat`). A result store keeps solved
+problems like runs, under a hash of the problem (:mod:`~amronet.optimum.stored`).
 
-**What is proven.** The lower bound is the largest of HiGHS's proven dual bound of the model, the set cover ILP's
+**What is proven.** The lower bound is the largest of the solvers' proven bounds of the model, the set cover ILP's
 bound (coverage alone) and the hop bounds; the gap is ``(best - bound) / bound`` and the answer is optimal when it
 is 0. An optimum over a lattice of candidates is an upper bound on the optimum with routers anywhere; the lower bound
 holds for the chosen coverage sample and candidate lattice only (the straight-line hop bound for any placement).

@@ -8,9 +8,12 @@ Phases, within ``time_limit`` seconds (building and reducing the instance come f
    fine one contains: its best placement, its removed sites replaced by their dominators, starts the fine search
    (coarse-to-fine, a quarter of the time);
 4. local search over windows (:mod:`~amronet.optimum.search`, up to 30 % of the time);
-5. HiGHS on the whole model with ``sum y <= best - 1``, for the rest: it finds a better placement or proves a bound.
+5. the whole model for the rest of the time: HiGHS with ``sum y <= best - 1`` (it finds a better placement or
+   proves a bound); with ``solver="cp-sat"``, OR-Tools CP-SAT first for :data:`CPSAT_SHARE` of it, the best
+   placement as its hint (:mod:`~amronet.optimum.cpsat`, an optional extra), then HiGHS from CP-SAT's best, unless
+   CP-SAT proved it optimal; the larger of the two bounds counts.
 
-The lower bound is the largest of HiGHS's proven dual bound, the set cover's and the hop bounds: each is a valid
+The lower bound is the largest of the solver's proven bound, the set cover's and the hop bounds: each is a valid
 lower bound of the same lattice problem. With a time limit that is reached, what is found depends on the machine's
 speed; a problem solved to the end gives the same answer everywhere.
 """
@@ -29,6 +32,8 @@ from amronet.engine.coverage import CoverageArea
 from amronet.engine.network import connected_to
 from amronet.errors import AmronetError
 from amronet.optimum.bounds import chain_gains, hop_bound_lattice, hop_bound_straight
+from amronet.optimum.cpsat import require as require_cpsat
+from amronet.optimum.cpsat import solve_cpsat
 from amronet.optimum.heuristic import connected, covers_all, greedy_connected_cover, prune
 from amronet.optimum.instance import Instance, build_instance, check_feasible
 from amronet.optimum.model import flow_model, lp_bound, set_cover, solve
@@ -37,7 +42,7 @@ from amronet.optimum.report import Optimum
 from amronet.optimum.search import improve
 from amronet.world.occupancy import OccupancyMap
 
-__all__ = ["COARSE_FROM", "MAX_TIME_LIMIT_S", "check_time_limit", "find_optimum", "verify"]
+__all__ = ["COARSE_FROM", "MAX_TIME_LIMIT_S", "SOLVERS", "check_solver", "check_time_limit", "find_optimum", "verify"]
 
 COARSE_FROM = 400
 """Kept sites from which the lattice of twice the spacing is searched first."""
@@ -45,8 +50,18 @@ COARSE_FROM = 400
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0
 """The longest time limit taken (a week)."""
 
+SOLVERS = ("highs", "cp-sat")
+"""The last phase's solvers: HiGHS (``scipy.optimize.milp``), or OR-Tools CP-SAT (an optional extra) then HiGHS."""
 
-def _solver_name() -> str:
+CPSAT_SHARE = 0.5
+"""With ``solver="cp-sat"``, the share of the last phase CP-SAT gets; HiGHS continues from its best for the rest."""
+
+
+def _solver_name(solver: str = "highs") -> str:
+    if solver == "cp-sat":
+        from ortools import __version__
+
+        return f"OR-Tools CP-SAT {__version__}, then {_solver_name()}"
     try:
         from scipy.optimize._highspy import _core
 
@@ -58,7 +73,8 @@ def _solver_name() -> str:
 
 def find_optimum(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, float]], r_c: float, spacing: float, *,
                  radio: dict[str, Any] | None = None, seed: int = 0, time_limit: float = 60.0,
-                 coarse: bool | None = None, log: Callable[[str], None] | None = None) -> Optimum:
+                 coarse: bool | None = None, solver: str = "highs", log: Callable[[str], None] | None = None
+                 ) -> Optimum:
     """The fewest routers that cover the reachable free space and connect to the base stations, with a proven bound.
 
     Args:
@@ -71,12 +87,14 @@ def find_optimum(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, float
         time_limit: Seconds for the search (heuristics and solver).
         coarse: Search the lattice of twice the spacing first (``None``: when the kept sites exceed
             :data:`COARSE_FROM`).
+        solver: The last phase's solver, ``highs`` or ``cp-sat`` (needs OR-Tools: ``pip install 'amronet[optimum]'``).
         log: Called with a line per phase (progress).
 
     Raises:
         AmronetError: Bad input, one line naming the option.
     """
     check_time_limit(time_limit)
+    check_solver(solver)
     say = log or (lambda line: None)
     t0 = time.perf_counter()
     inst = build_instance(map_ref, bases, r_c, spacing, radio=radio, seed=seed)
@@ -84,7 +102,7 @@ def find_optimum(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, float
     red = reduce_instance(inst)
     t_reduce = time.perf_counter() - t0 - t_build
     say(f"instance: {inst.n_sites} sites, {red.n} kept, {red.rows.shape[0]} rows ({t_build + t_reduce:.1f} s)")
-    out = _search(inst, red, float(time_limit), coarse, say)
+    out = _search(inst, red, float(time_limit), coarse, say, solver=solver)
     out.seconds.update(build=t_build, reduce=t_reduce, total=time.perf_counter() - t0)
     return out
 
@@ -100,8 +118,20 @@ def check_time_limit(time_limit: float, option: str = "--time-limit") -> None:
                            f"got {time_limit!r}")
 
 
+def check_solver(solver: str) -> None:
+    """Refuse an unknown solver, and CP-SAT when OR-Tools is not installed (one line naming ``--solver``).
+
+    Raises:
+        AmronetError: Naming ``--solver``.
+    """
+    if solver not in SOLVERS:
+        raise AmronetError(f"--solver: unknown solver {solver!r}; use one of {', '.join(SOLVERS)}")
+    if solver == "cp-sat":
+        require_cpsat()
+
+
 def _search(inst: Instance, red: Reduced, time_limit: float, coarse: bool | None, say: Callable[[str], None],
-            nested: bool = False) -> Optimum:
+            nested: bool = False, solver: str = "highs") -> Optimum:
     t_start = time.perf_counter()
     end = t_start + time_limit
     seconds: dict[str, float] = {}
@@ -133,7 +163,7 @@ def _search(inst: Instance, red: Reduced, time_limit: float, coarse: bool | None
     use_coarse = (red.n > COARSE_FROM) if coarse is None else coarse
     if use_coarse and not nested and best.any():
         t = time.perf_counter()
-        start, coarse_info = _coarse(inst, red, 0.25 * time_limit, say)
+        start, coarse_info = _coarse(inst, red, 0.25 * time_limit, say, solver)
         if start is not None and start.sum() < best.sum():
             best, source = start, "coarse lattice"
         mark("coarse", t, best, source)
@@ -146,7 +176,15 @@ def _search(inst: Instance, red: Reduced, time_limit: float, coarse: bool | None
         mark("local_search", t, best, source)
         say(f"local search: {int(best.sum())} routers ({windows} windows)")
     t = time.perf_counter()
-    if best.any():
+    sat_lower, sat_run = 0, None
+    if best.any() and solver == "cp-sat":  # CP-SAT's bound search first, then HiGHS from its best
+        sat = solve_cpsat(red.rows, red.links, red.base_linked, CPSAT_SHARE * max(end - time.perf_counter(), 0.5),
+                          start=best, chain=chain)
+        if sat.chosen is not None and sat.value is not None and sat.value < best.sum():
+            best, source = sat.chosen, "solver"
+        sat_lower = min(_ceil(sat.bound), int(best.sum()))
+        sat_run = {"status": sat.status, "seconds": sat.seconds, "branches": sat.nodes, "bound": _finite(sat.bound)}
+    if best.any() and sat_lower < best.sum():
         model = flow_model(red.rows, red.links, red.base_linked, big_m=int(best.sum()) - 1, chain=chain)
         res = solve(model, red.n, max(end - time.perf_counter(), 0.5), cutoff=int(best.sum()) - 1,
                     incumbent=int(best.sum()))
@@ -154,23 +192,29 @@ def _search(inst: Instance, red: Reduced, time_limit: float, coarse: bool | None
             best, source = res.chosen, "solver"
         proved_best = math.isinf(res.bound) and res.bound > 0  # no better placement exists
         solver_lower = int(best.sum()) if proved_best else min(_ceil(res.bound), int(best.sum()))
-        status = res.status
-        solver = {"status": status, "seconds": res.seconds, "nodes": res.nodes, "dual_bound": _finite(res.bound)}
+        solver_lower = max(solver_lower, min(sat_lower, int(best.sum())))
+        status = "optimal" if sat_run is not None and solver_lower >= best.sum() else res.status
+        run = {"status": status, "seconds": res.seconds, "nodes": res.nodes, "dual_bound": _finite(res.bound)}
+    elif best.any():  # CP-SAT proved the best optimal
+        solver_lower = sat_lower
+        run = {"status": "optimal", "seconds": 0.0, "nodes": 0, "dual_bound": None}
     else:  # the base stations cover everything: no router is needed
-        solver_lower, solver = 0, {"status": "optimal", "seconds": 0.0, "nodes": 0, "dual_bound": 0.0}
+        solver_lower, run = 0, {"status": "optimal", "seconds": 0.0, "nodes": 0, "dual_bound": 0.0}
     mark("solver", t, best, source)
     lower = max(solver_lower, sc_lower, hop_s, hop_l)
     chosen = red.keep[np.flatnonzero(best)]
     routers = inst.sites[chosen]
-    say(f"solver: {solver['status']}; best {len(routers)}, lower bound {lower}")
+    if sat_run is not None:
+        run["cp_sat"] = sat_run
+    say(f"solver: {run['status']}; best {len(routers)}, lower bound {lower}")
     return Optimum(
         map=inst.omap.name, bases=[tuple(map(float, b)) for b in inst.bases_xy], radio=inst.radio,
         spacing=inst.spacing, routers=routers, source=source, lower=lower,
-        bounds={"solver": solver_lower, "solver_dual_bound": solver["dual_bound"], "lp_relaxation": lp,
+        bounds={"solver": solver_lower, "solver_dual_bound": run["dual_bound"], "lp_relaxation": lp,
                 "set_cover": {"lower": sc_lower, "status": "empty" if sc is None else sc.status,
                               "value": None if sc is None else sc.value},
                 "hop_straight": hop_s, "hop_lattice": hop_l, "chain_cells": int(chain[1])},
-        solver={"name": _solver_name(), **solver, "time_limit_s": time_limit},
+        solver={"name": _solver_name(solver), **run, "time_limit_s": time_limit},
         sample={"cells": int(inst.reachable.sum()), "cell_m": float(inst.omap.resolution),
                 "covered_by_bases": int(inst.reachable.sum()) - len(inst.cells),
                 "reachable_area_m2": inst.reachable_area_m2},
@@ -189,7 +233,7 @@ def _finite(v: float) -> float | None:
     return float(v) if math.isfinite(v) else None
 
 
-def _coarse(inst: Instance, red: Reduced, budget: float, say: Callable[[str], None]
+def _coarse(inst: Instance, red: Reduced, budget: float, say: Callable[[str], None], solver: str = "highs"
             ) -> tuple[np.ndarray | None, dict[str, Any] | None]:
     """Search the lattice of twice the spacing; its best placement as a start over the fine kept sites."""
     lat = inst.lattice
@@ -199,7 +243,8 @@ def _coarse(inst: Instance, red: Reduced, budget: float, say: Callable[[str], No
     except AmronetError as exc:
         return None, {"used": False, "why": str(exc)}
     small_red = reduce_instance(small)
-    found = _search(small, small_red, budget, False, lambda line: say("  coarse " + line), nested=True)
+    found = _search(small, small_red, budget, False, lambda line: say("  coarse " + line), nested=True,
+                    solver=solver)
     idx = np.flatnonzero(sub)
     placed = idx[_site_indices(small, found.routers)]
     start = red.from_instance(placed)

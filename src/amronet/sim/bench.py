@@ -87,6 +87,7 @@ def run_bench(
     area_per_robot: float = 0.25,
     force: bool = False,
     step: StepKind = "compiled",
+    stretches: bool = False,
 ) -> dict[str, Any]:
     """Time ``steps`` full steps of ``robots`` robots and return a report (robot-steps per second and more).
 
@@ -94,6 +95,9 @@ def run_bench(
     (``BYTES_PER_ROBOT`` per robot, ``BYTES_PER_LINK`` per link at the density the benchmark sets up) and the work
     (robots times steps, the warm-up step included). ``step`` picks the loop's step (``compiled`` or the
     phase-by-phase ``reference``, see :class:`~amronet.sim.loop.Loop`): both give the same robots bit for bit.
+    ``stretches``: time the steps as a run takes those between two records (:meth:`~amronet.sim.loop.Loop.advance`:
+    in compiled stretches where the fast step can), not one :meth:`~amronet.sim.loop.Loop.step` call per step; the
+    same robots bit for bit.
 
     Raises:
         AmronetError: ``robots`` or ``steps`` below 1, ``r_c`` not a finite number > 0, more robots than the
@@ -141,8 +145,11 @@ def run_bench(
     for k in sim.phase_seconds:
         sim.phase_seconds[k] = 0.0
     t0 = time.perf_counter()
-    for _ in range(steps):
-        sim.step()
+    if stretches:
+        sim.advance(steps)
+    else:
+        for _ in range(steps):
+            sim.step()
     wall = time.perf_counter() - t0
     n = int(np.count_nonzero(sim.swarm.role == Role.ROUTER))
     t1 = time.perf_counter()
@@ -156,6 +163,7 @@ def run_bench(
         "robots": n,
         "base_stations": n_bases,
         "steps": steps,
+        "stretches": stretches,
         "r_c": r_c,
         "mean_degree": float(sim.table.degree.mean()),
         "setup_s": round(setup_s, 3),

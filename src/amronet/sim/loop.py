@@ -266,6 +266,18 @@ class Loop:
         self.after_compiled_step()
         return done.steps + 1
 
+    def advance(self, steps: int) -> None:
+        """Take ``steps`` steps with nothing recorded between them, as :meth:`execute` takes those between two records.
+
+        In stretches where the fast step can take them (:meth:`_stretch`: the same robots and table bit for bit as
+        :meth:`step` called ``steps`` times), else one by one. Like :meth:`step`, it keeps no records and stops no run.
+        """
+        fast = self.compiled if self._faulty is None and self.compiled is not None and self.compiled.stretches else None
+        ids, end = np.arange(len(self.runs), dtype=np.int64), self.steps + steps
+        while self.steps < end:
+            if fast is None or not self._stretch(fast, end - self.steps, ids, self._settled_runs()):
+                self.step()
+
     def after_compiled_step(self) -> None:
         """The end of a compiled step, once the robots have moved: the radio's table, then the agents' connection."""
         t3 = time.perf_counter()

@@ -114,7 +114,7 @@ class Relocator:
         cut = self._cut_off(table, sw)
         started = []
         for i, loss in due:
-            if cut[i] and i not in started and self._movable(i, sw):
+            if cut[i] and i not in started and self._movable(i, sw) and not self._waits(i, started, table, sw):
                 self._begin(i, loss, sw)
                 started.append(i)
         for i in started:
@@ -126,6 +126,10 @@ class Relocator:
     def _movable(self, i: int, sw: Swarm) -> bool:
         """Whether router ``i``, cut off and having lost a neighbour, starts to move: a deployed reference router."""
         return bool(sw.role[i] == Role.ROUTER and sw.state[i] == State.REFERENCE)
+
+    def _waits(self, i: int, started: list[int], table: NeighbourTable, sw: Swarm) -> bool:
+        """Whether router ``i``, due to move, waits this step (``started``: those that start this step): never."""
+        return False
 
     def _begin(self, i: int, loss: _Loss, sw: Swarm) -> None:
         """Start router ``i``'s move: toward where its lost neighbour was (or the goal it announced)."""

@@ -25,12 +25,18 @@ drivable and known to have been in contact with the network: the way the router 
   its routing has a path again (the first point of its way back where it hears the connected network), at the start
   of its way, or after skipping :data:`MAX_SKIPS` points in a row. A router that loses its link to one that moved
   away, and is cut off, backs up in turn (the cascade).
+* **One at a time**: a router due to move waits while it hears a neighbour that backs up (state ``relocating``,
+  which it announces), or one that starts to this step (the lower id goes first). A cut-off group that hears one
+  another sends one router back, and the others reconnect through it when it does; one that loses it (it moved
+  out of range) and is still cut off goes next. Without it the whole group backed up side by side, each as far as
+  the first.
 
 Sources: MARBLE's *reverse drop* (DARPA SubT; ``../shared/reference/drop-rules.md``): an agent out of contact backs
 up along its own path until contact returns; RIM and DARA (survey of Younis, Senturk, Akkaya, Lee, Senel, *Computer
 Networks* 58 (2014) 254-283) for who moves (the failed node's neighbours, cascaded moves) and DARA's concern that
 connected nodes stay put. Ours: a router inherits the path of the agent that carried it, the loop erasure with a
-radius that keeps every segment drivable, and applying reverse drop to deployed routers as a repair.
+radius that keeps every segment drivable, applying reverse drop to deployed routers as a repair, and one mover
+at a time among routers that hear one another.
 """
 
 from __future__ import annotations
@@ -169,6 +175,11 @@ class Retracer(Relocator):
 
     def _movable(self, i: int, sw: Swarm) -> bool:
         return bool(sw.role[i] == Role.ROUTER and _MOVABLE[sw.state[i]] and self.node[i] >= 0)
+
+    def _waits(self, i: int, started: list[int], table: NeighbourTable, sw: Swarm) -> bool:
+        """A router waits while it hears a neighbour that backs up (or starts to this step): one mover at a time."""
+        heard = table.indices[table.indptr[i]:table.indptr[i + 1]]
+        return bool((sw.state[heard] == State.RELOCATING).any() or np.isin(heard, started).any())
 
     def _begin(self, i: int, loss: _Loss, sw: Swarm) -> None:  # the way, not the loss, says where
         self.skips[i] = 0

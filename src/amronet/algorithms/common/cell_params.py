@@ -46,20 +46,30 @@ class CellParams(BaseModel):
 class HoleParams(CellParams):
     """What Wang, Cao and La Porta's VOR and Minimax share besides the cell: the sensing disk and its coverage holes.
 
+    Their parameters (:class:`~amronet.algorithms.vor.params.VORParams`,
+    :class:`~amronet.algorithms.minimax.params.MinimaxParams`) take these descriptions (the scenario reference reads
+    a field's description from the nearest class that has one).
+
     Attributes:
-        sensing_radius_factor: Sensing radius ``r_s`` as a fraction of ``r_c`` (the paper's virtual sensing radius
-            of the force-based baselines, 6.2: 0.5; then ``r_c = 2 r_s``, under which a field the sensing disks
-            cover is a connected network).
+        cell_radius_factor: The cell's bounding disk as a fraction of ``r_c``; ``None`` (the default): no disk, the
+            cell reaches to the area's bounding box where no heard node or seen wall bounds it, as Wang et al.'s
+            cells do.
+        max_move_factor: The longest move of a round as a fraction of ``r_c`` (Wang et al.: half the communication
+            range).
+        round_s: Seconds per round (default: the time the longest move takes at full speed).
+        disk_vertices: Vertices of the polygons standing for the bounding and the sensing disks.
+        memory_points: Obstacle points each robot remembers (the most recent; our choice).
+        memory_cell_m: Obstacle points within one grid cell of this size (metres) are remembered once (our choice).
+        sensing_radius_factor: Sensing radius ``r_s`` as a fraction of ``r_c`` (the paper's virtual sensing radius,
+            6.2: 0.5; then ``r_c = 2 r_s``).
         min_gain: A robot moves only if its move covers more of its cell, by at least this fraction of the sensing
-            disk's area (Wang et al.'s movement adjustment and threshold; the value is our choice).
+            disk's area (Wang et al.'s movement adjustment; the value is our choice).
         oscillation_control: A robot whose move would point back against its last round's move waits a round
-            (Wang et al.'s oscillation control).
-        cell_radius_factor: ``None`` (the default): the cell is bounded by the bisectors of the nodes a robot hears
-            and by the area's bounding box, not by a disk, as Wang et al.'s cells are (a disk's arc is no Voronoi
-            edge: Minimax would take a robot on the edge of the swarm to be at its minimax point).
+            (Wang et al.).
     """
 
-    sensing_radius_factor: _Fraction = 0.5
-    cell_radius_factor: _Fraction | None = None
+    sensing_radius_factor: _Fraction = 0.5  # r_c = 2 r_s: a field the sensing disks cover is a connected network
+    cell_radius_factor: _Fraction | None = None  # a disk's arc is no Voronoi edge: with one, Minimax would take a
+    # robot on the edge of the swarm to be at its minimax point
     min_gain: Annotated[float, Field(strict=True, ge=0, lt=1, allow_inf_nan=False)] = 0.01
     oscillation_control: YamlBool = True

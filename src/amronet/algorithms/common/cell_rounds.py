@@ -100,7 +100,7 @@ class CellRounds(Controller):
         self.rounds += 1
         if len(who) == 0:
             return
-        cells = local_cells(who, sw.xy, self.generators, table, self.memory.near(who, sw.xy, self.reach),
+        cells = local_cells(who, sw.xy, self.generators, table, self.memory.remembered(),
                             self.area.extent, self.reach, self.params.disk_vertices)
         move, wants = self.goals(who, cells)
         length = np.hypot(move[:, 0], move[:, 1])

@@ -12,8 +12,8 @@ polygon holds the whole bounding box) that is
   through ``o`` square to the robot's line of sight (what lies beyond a wall it has seen is not its free space);
 * inside the area's bounding box.
 
-All of them are half-planes, so the cell is convex and every robot's is clipped in the same passes of array
-operations (:func:`~amronet.algorithms.common.polygons.clip_each`). The cell comes back in coordinates relative to
+All of them are half-planes, so the cell is convex: the disk clipped by each in turn, robot by robot in one
+compiled pass (:func:`~amronet.algorithms.common.polygons.clip_one`). The cell comes back in coordinates relative to
 ``p``. With ``R`` at most half the distance within which a robot hears every node (``r_c / 2`` under the unit
 disk), the cell is exactly the ``R``-limited Voronoi cell (Cortés, Martínez and Bullo 2005); with a larger ``R`` it
 may be larger than the true cell where an unheard node is near (Wang, Cao and La Porta's caveat).
@@ -21,19 +21,75 @@ may be larger than the true cell where an unheard node is near (Wang, Cao and La
 
 from __future__ import annotations
 
+import numba
 import numpy as np
-import shapely
 
-from amronet.algorithms.common.polygons import Polygons, clip_each, regular, to_shapely
+from amronet.algorithms.common.polygons import Polygons, clip_one, disk_overlap, regular
 from amronet.engine.table import NeighbourTable
 
 __all__ = ["covered_area", "farthest_point", "gains", "local_cells"]
 
 
+@numba.njit(cache=True)
+def _local_cells(robots, xy, generators, indptr, indices, points, filled, box, reach, disk):  # pragma: no cover
+    """The cells of :func:`local_cells`: each robot's half-planes in order, the disk clipped by them.
+
+    The polygons' width is the disk's vertices plus the most half-planes a robot has, as
+    :func:`~amronet.algorithms.common.polygons.clip_each` would have them (the width decides the order in which
+    :func:`~amronet.algorithms.common.polygons.area_centroid` adds up).
+    """
+    m, vertices = robots.shape[0], disk.shape[0]
+    most = 0
+    for r in range(m):  # room for the half-planes each may have
+        i = robots[r]
+        most = max(most, indptr[i + 1] - indptr[i] + filled[i] + 4)
+    room = np.zeros((m, vertices + most, 2))
+    count = np.zeros(m, dtype=np.int64)
+    scratch = np.empty((vertices + most + 1, 2))
+    cut = 2.0 * reach * reach
+    planes = 0
+    for r in range(m):
+        i = robots[r]
+        px, py = xy[i, 0], xy[i, 1]
+        poly = room[r]
+        for v in range(vertices):
+            poly[v, 0] = disk[v, 0]
+            poly[v, 1] = disk[v, 1]
+        n, k = vertices, 0
+        for e in range(indptr[i], indptr[i + 1]):  # the bisectors of the generators it hears
+            j = indices[e]
+            hx, hy = xy[j, 0] - px, xy[j, 1] - py
+            half = 0.5 * (hx * hx + hy * hy)
+            if generators[j] and half > 1e-24 and half < cut:  # |q - p| < 2 R cuts the disk
+                k += 1
+                if n > 0:
+                    n = clip_one(poly, n, hx, hy, half, scratch)
+        for f in range(filled[i]):  # the obstacle points it remembers within R
+            ox, oy = points[i, f, 0] - px, points[i, f, 1] - py
+            if np.hypot(ox, oy) < reach:
+                k += 1
+                if n > 0:
+                    n = clip_one(poly, n, ox, oy, ox * ox + oy * oy, scratch)
+        for side in range(4):  # the area's bounding box
+            nx, ny = _BOX[side]
+            c = box[1] - px if side == 0 else px - box[0] if side == 1 else box[3] - py if side == 2 else py - box[2]
+            if c < reach:
+                k += 1
+                if n > 0:
+                    n = clip_one(poly, n, nx, ny, c, scratch)
+        count[r] = n
+        planes = max(planes, k)
+    return room[:, :vertices + planes].copy(), count
+
+
+_BOX = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0))
+"""The outward normals of the bounding box's sides: ``x <= xmax``, ``-x <= -xmin``, ``y <= ymax``, ``-y <= -ymin``."""
+
+
 def local_cells(robots: np.ndarray, xy: np.ndarray, generators: np.ndarray, table: NeighbourTable,
-                obstacles: tuple[np.ndarray, np.ndarray], extent: tuple[float, float, float, float],
+                seen: tuple[np.ndarray, np.ndarray], extent: tuple[float, float, float, float],
                 reach: float, vertices: int) -> Polygons:
-    """The local cells of ``robots`` ``(M,)``, relative to their positions.
+    """The local cells of ``robots`` ``(M,)``, relative to their positions (compiled, robot by robot).
 
     Args:
         robots: The robots whose cells are wanted.
@@ -41,34 +97,44 @@ def local_cells(robots: np.ndarray, xy: np.ndarray, generators: np.ndarray, tabl
         generators: Mask ``(N,)`` of the nodes that count as Voronoi generators when heard (routers and base
             nodes; not agents).
         table: The neighbour table (who each robot hears).
-        obstacles: ``(rank in robots (K,), offset from the robot (K, 2))``: the obstacle points each remembers.
+        seen: ``(points (N, C, 2), filled (N,))``: the obstacle points each node remembers, the first ``filled``
+            of its row (:meth:`~amronet.algorithms.common.obstacle_memory.ObstacleMemory.remembered`); those
+            within ``reach`` count.
         extent: ``(xmin, xmax, ymin, ymax)`` of the area.
         reach: ``R``, the radius of the bounding disk.
         vertices: Vertices of the polygon standing for the disk.
     """
-    m = len(robots)
-    degree = np.diff(table.indptr)[robots]
-    rank = np.repeat(np.arange(m), degree)
-    entry = np.repeat(table.indptr[robots] - np.cumsum(degree) + degree, degree) + np.arange(len(rank))
-    other = table.indices[entry]
-    heard = xy[other] - xy[robots][rank]
-    half = 0.5 * np.einsum("ij,ij->i", heard, heard)
-    useful = generators[other] & (half > 1e-24) & (half < 2.0 * reach * reach)  # |q - p| < 2 R cuts the disk
-    seen_rank, seen = obstacles
-    seen_sq = np.einsum("ij,ij->i", seen, seen)
-    xmin, xmax, ymin, ymax = extent
-    p = xy[robots]
-    box_normal = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
-    box_offset = np.stack([xmax - p[:, 0], p[:, 0] - xmin, ymax - p[:, 1], p[:, 1] - ymin], axis=1)
-    box_rank, box_side = np.nonzero(box_offset < reach)
-    ranks = np.concatenate([rank[useful], seen_rank, box_rank])
-    normal = np.concatenate([heard[useful], seen, box_normal[box_side]])
-    offset = np.concatenate([half[useful], seen_sq, box_offset[box_rank, box_side]])
-    order = np.argsort(ranks, kind="stable")
-    indptr = np.zeros(m + 1, dtype=np.int64)
-    np.cumsum(np.bincount(ranks, minlength=m), out=indptr[1:])
-    width = vertices + int(np.diff(indptr).max(initial=0))
-    return clip_each(regular(m, reach, vertices, width), indptr, normal[order], offset[order])
+    points, filled = seen
+    xy_, count = _local_cells(np.asarray(robots, dtype=np.int64), xy, np.asarray(generators, dtype=np.bool_),
+                              table.indptr, table.indices, points, np.asarray(filled, dtype=np.int64),
+                              np.asarray(extent, dtype=np.float64), float(reach), regular(1, reach, vertices, 0).xy[0])
+    return Polygons(xy_, count)
+
+
+@numba.njit(cache=True)
+def _farthest(xy, count, tie, far_out, point_out):  # pragma: no cover - numba
+    """Each polygon's farthest vertex (see :func:`farthest_point`)."""
+    for m in range(xy.shape[0]):
+        n = count[m]
+        if n == 0:
+            continue
+        far = -np.inf
+        for v in range(n):
+            far = max(far, np.hypot(xy[m, v, 0], xy[m, v, 1]))
+        ux, uy, ties, first = 0.0, 0.0, 0, -1
+        for v in range(n):
+            d = np.hypot(xy[m, v, 0], xy[m, v, 1])
+            if d >= far - tie:
+                ux += xy[m, v, 0] / d
+                uy += xy[m, v, 1] / d
+                ties += 1
+                first = v if first < 0 else first
+        norm = np.hypot(ux, uy)
+        far_out[m] = max(far, 0.0)
+        if norm <= 1e-6 * max(ties, 1):
+            point_out[m, 0], point_out[m, 1] = xy[m, first, 0], xy[m, first, 1]
+        else:
+            point_out[m, 0], point_out[m, 1] = ux / norm * far, uy / norm * far
 
 
 def farthest_point(cells: Polygons, reach: float) -> tuple[np.ndarray, np.ndarray]:
@@ -76,19 +142,12 @@ def farthest_point(cells: Polygons, reach: float) -> tuple[np.ndarray, np.ndarra
 
     When several vertices are farthest (within ``1e-9 reach``: an arc of the bounding disk), the point at that
     distance in their mean direction stands for them (the middle of the arc), so that the choice does not hang on
-    rounding; when their directions cancel out (a whole disk), the first of them.
+    rounding; when their directions cancel out (a whole disk), the first of them. A cell without vertices: 0.
     """
-    xy, valid = cells.xy, cells.valid()
-    dist = np.where(valid, np.hypot(xy[:, :, 0], xy[:, :, 1]), -np.inf)
-    far = dist.max(axis=1, initial=-np.inf)
-    ties = valid & (dist >= far[:, None] - 1e-9 * reach)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = np.where(ties[:, :, None], xy / dist[:, :, None], 0.0).sum(axis=1)
-    norm = np.hypot(unit[:, 0], unit[:, 1])
-    first = np.take_along_axis(xy, np.argmax(ties, axis=1)[:, None, None], axis=1)[:, 0]
-    cancel = norm <= 1e-6 * np.maximum(ties.sum(axis=1), 1)
-    point = np.where(cancel[:, None], first, unit / np.where(cancel, 1.0, norm)[:, None] * far[:, None])
-    return np.maximum(far, 0.0), np.where((cells.count > 0)[:, None], point, 0.0)
+    m = len(cells.count)
+    far, point = np.zeros(m), np.zeros((m, 2))
+    _farthest(cells.xy, cells.count.astype(np.int64), 1e-9 * reach, far, point)
+    return far, point
 
 
 def covered_area(cells: Polygons, centres: np.ndarray, radius: float, vertices: int) -> np.ndarray:
@@ -96,8 +155,7 @@ def covered_area(cells: Polygons, centres: np.ndarray, radius: float, vertices: 
 
     The disk is the regular polygon of ``vertices`` inscribed in it (as the cell's bounding disk is).
     """
-    disks = regular(len(centres), radius, vertices, vertices)
-    return shapely.area(shapely.intersection(to_shapely(cells), to_shapely(disks, shift=centres)))
+    return disk_overlap(cells, centres, radius, vertices)
 
 
 def gains(cells: Polygons, move: np.ndarray, candidates: np.ndarray, r_s: float, vertices: int,

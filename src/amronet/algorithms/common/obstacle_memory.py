@@ -10,8 +10,10 @@ points. The Voronoi baselines cut a robot's cell with the line through each reme
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
+from amronet.engine.kernel_data import Csr
 from amronet.engine.sensing import beam_angles
 from amronet.engine.table import NeighbourTable
 
@@ -53,57 +55,62 @@ class ObstacleMemory:
         capacity = self.keys.shape[1]
         if capacity == 0 or len(robots) == 0:
             return
-        b = scans.shape[1]
-        hit = scans < sensor_range - 1e-9
-        row, beam = np.nonzero(hit)
-        if len(row) == 0:
-            return
-        who = robots[row]
-        angle = heading[who] + beam_angles(b)[beam]
-        point = xy[who] + scans[row, beam, None] * np.stack([np.cos(angle), np.sin(angle)], axis=1)
-        keep = ~_on_a_body(who, point, xy, table, radius)
-        who, point = who[keep], point[keep]
-        cell = np.floor(point / self.cell_m).astype(np.int64)
-        key = (cell[:, 0] + (1 << 31)) * (1 << 32) + (cell[:, 1] + (1 << 31))
-        key_who = np.stack([who, key], axis=1)
-        _, first = np.unique(key_who, axis=0, return_index=True)  # once per robot and cell in this step
-        first = np.sort(first)
-        who, point, key = who[first], point[first], key[first]
-        known = (self.keys[who] == key[:, None]).any(axis=1)
-        who, point, key = who[~known], point[~known], key[~known]
-        if len(who) == 0:
-            return
-        order = np.argsort(who, kind="stable")
-        who, point, key = who[order], point[order], key[order]
-        starts = np.searchsorted(who, who, side="left")
-        rank = np.arange(len(who)) - starts
-        slot = (self.stored[who] + rank) % capacity
-        self.points[who, slot] = point
-        self.keys[who, slot] = key
-        np.add.at(self.stored, who, 1)
+        row, beam = np.nonzero(scans < sensor_range - 1e-9)
+        angle = heading[robots[row]] + beam_angles(scans.shape[1])[beam]
+        geometric = table.geometric
+        _remember(robots, row, scans[row, beam], np.cos(angle), np.sin(angle), xy, radius,
+                  Csr(geometric.indptr, geometric.indices, geometric.dist), self.cell_m, self.points, self.keys,
+                  self.stored)
 
-    def near(self, robots: np.ndarray, xy: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
-        """The remembered points within ``reach`` of each robot: ``(rank in robots (K,), offset from it (K, 2))``."""
-        capacity = self.keys.shape[1]
-        if capacity == 0 or len(robots) == 0:
-            return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
-        filled = np.arange(capacity)[None, :] < np.minimum(self.stored[robots], capacity)[:, None]
-        offset = self.points[robots] - xy[robots][:, None, :]
-        close = filled & (np.hypot(offset[:, :, 0], offset[:, :, 1]) < reach)
-        rank, slot = np.nonzero(close)
-        return rank, offset[rank, slot]
+    def remembered(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(points (N, C, 2), filled (N,))``: every robot's remembered points, the first ``filled`` of its row."""
+        return self.points, np.minimum(self.stored, self.keys.shape[1])
 
 
-def _on_a_body(who: np.ndarray, point: np.ndarray, xy: np.ndarray, table: NeighbourTable,
-               radius: np.ndarray) -> np.ndarray:
-    """Which obstacle points lie on the body of a node their robot hears (where that node says it is)."""
-    geometric = table.geometric
-    degree = np.diff(geometric.indptr)[who]
-    pair_hit = np.repeat(np.arange(len(who)), degree)
-    start = np.repeat(geometric.indptr[who] - np.cumsum(degree) + degree, degree)
-    entry = start + np.arange(len(pair_hit))
-    other = geometric.indices[entry]
-    gap = np.hypot(*(point[pair_hit] - xy[other]).T) - radius[other]
-    on_body = np.zeros(len(who), dtype=bool)
-    on_body[pair_hit[gap <= BODY_MARGIN_M]] = True
-    return on_body
+@numba.njit(cache=True)
+def _remember(robots, row, reach, cos, sin, xy, radius, heard, cell_m, points, keys, stored):  # pragma: no cover
+    """Store the hits ``(row, reach, cos, sin)`` (by rank in ``robots``, in beam order) in their robots' rings.
+
+    Per robot, in beam order: a hit on the body of a node it hears (``heard``, the table's geometric rows;
+    :data:`BODY_MARGIN_M`) is dropped, then a hit in a grid cell that an earlier hit of this step or a remembered
+    point (before this step) has; the rest go to the ring's next slots (bit for bit what the array form did: the
+    cosines and sines come from NumPy).
+    """
+    indptr, indices = heard.indptr, heard.indices
+    capacity = keys.shape[1]
+    fresh = np.empty(row.shape[0], dtype=np.int64)  # this step's new keys of the robot at hand
+    fresh_xy = np.empty((row.shape[0], 2))
+    h = 0
+    while h < row.shape[0]:
+        i = robots[row[h]]
+        k = 0
+        while h < row.shape[0] and robots[row[h]] == i:
+            x = xy[i, 0] + reach[h] * cos[h]
+            y = xy[i, 1] + reach[h] * sin[h]
+            h += 1
+            body = False
+            for e in range(indptr[i], indptr[i + 1]):
+                j = indices[e]
+                if np.hypot(x - xy[j, 0], y - xy[j, 1]) - radius[j] <= BODY_MARGIN_M:
+                    body = True
+                    break
+            if body:
+                continue
+            key = ((np.int64(np.floor(x / cell_m)) + (1 << 31)) * (1 << 32)
+                   + (np.int64(np.floor(y / cell_m)) + (1 << 31)))
+            seen = False
+            for f in range(k):
+                seen = seen or fresh[f] == key
+            for f in range(capacity):
+                seen = seen or keys[i, f] == key
+            if not seen:
+                fresh[k] = key
+                fresh_xy[k, 0] = x
+                fresh_xy[k, 1] = y
+                k += 1
+        for f in range(k):
+            slot = (stored[i] + f) % capacity
+            points[i, slot, 0] = fresh_xy[f, 0]
+            points[i, slot, 1] = fresh_xy[f, 1]
+            keys[i, slot] = fresh[f]
+        stored[i] += k

@@ -3,8 +3,8 @@
 The cell and the coverage hole are VOR's (:mod:`amronet.algorithms.common.cells`; *location-aware*): a hole is a
 cell vertex farther than the sensing radius ``r_s``. Instead of chasing the farthest vertex, which may turn a near
 vertex into the next farthest, Minimax moves the robot to the cell's *minimax point*, the point whose farthest
-vertex is nearest: the centre of the smallest circle enclosing the cell's vertices (``shapely``'s
-``minimum_bounding_circle``), which lies in the (convex) cell. The move is cut to ``max_move_factor r_c``
+vertex is nearest: the centre of the smallest circle enclosing the cell's vertices (compiled, Welzl's incremental
+algorithm: :mod:`.kernels`), which lies in the (convex) cell. The move is cut to ``max_move_factor r_c``
 (Wang et al.: ``r_c / 2``); Wang et al.'s movement adjustment (the move must cover more of the present cell, by
 ``min_gain`` of the sensing disk's area) and oscillation control (no move straight back: wait a round) apply.
 
@@ -15,26 +15,23 @@ gain, stays (state *reference*); the run has converged when no robot has a move 
 from __future__ import annotations
 
 import numpy as np
-import shapely
 
 from amronet.algorithms.base import ALGORITHMS, WarmUp
 from amronet.algorithms.common.cell_rounds import HoleRounds
 from amronet.algorithms.common.cells import farthest_point, gains
-from amronet.algorithms.common.polygons import Polygons, to_shapely
+from amronet.algorithms.common.polygons import Polygons
+from amronet.algorithms.minimax.kernels import enclosing_centres
 from amronet.algorithms.minimax.params import MinimaxParams
 
 __all__ = ["Minimax", "MinimaxParams", "minimax_points"]
 
 
 def minimax_points(cells: Polygons) -> np.ndarray:
-    """The centre ``(M, 2)`` of the smallest circle enclosing each cell's vertices (relative to the robot)."""
-    out = np.zeros((len(cells.count), 2))
-    shapes = to_shapely(cells)
-    full = ~shapely.is_empty(shapes)
-    if full.any():
-        centres = shapely.centroid(shapely.minimum_bounding_circle(shapes[full]))
-        out[full] = shapely.get_coordinates(centres)
-    return out
+    """The centre ``(M, 2)`` of the smallest circle enclosing each cell's vertices, relative to the robot.
+
+    A cell of fewer than 3 vertices: ``0``.
+    """
+    return enclosing_centres(cells)
 
 
 @ALGORITHMS.register("minimax")

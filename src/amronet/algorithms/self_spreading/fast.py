@@ -53,7 +53,7 @@ import numpy as np
 
 from amronet.algorithms.base import Readings, StepInput
 from amronet.algorithms.common.goto import steering_of
-from amronet.algorithms.common.swarm_data import Ring, robots_of
+from amronet.algorithms.common.swarm_data import robots_of
 from amronet.algorithms.common.swarm_stretch import SwarmStretch
 from amronet.algorithms.common.swarm_stretch_kernels import Books, Radio
 from amronet.algorithms.phases import move, sense
@@ -81,6 +81,7 @@ from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surrou
 from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
 from amronet.engine.robots import DEPLOYED_STATES, Role, State, state_lookup
+from amronet.engine.sensing import QuietRing, quiet_cells
 from amronet.engine.streams import compiled_streams, normal_then_uniform
 from amronet.threads import LOCK, use_threads
 
@@ -169,7 +170,8 @@ class CompiledSpreading(FastStep):
             a.grid, robots_of(sw), self._tracking(c),
             Tracked(self.explorers, self.new_current, self.nearest, self.other, self.movers, self.walkers),
             walk_of(c.walker, c.refused), Draws(self.normal, self.uniform), steering_of(c.steering),
-            Ring(a.angles, a.sensor_range), Moves(self.scans, self.length, self.slot, self.free, self.planned),
+            QuietRing(a.angles, a.sensor_range, quiet_cells(self.omap, a.sensor_range)),
+            Moves(self.scans, self.length, self.slot, self.free, self.planned),
             Csr(*a.no_bodies(n)), bool(a.collisions), float(self.dt))
         """What the kernels read and keep, built once: the arrays are the swarm's, the controller's and those above."""
         stretch = self.streams is not None and not self.by_signal and SwarmStretch.applies(context)

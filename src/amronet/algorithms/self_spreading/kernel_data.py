@@ -4,7 +4,7 @@ The controller's reference tracking (:class:`Tracking`), what the tracking lists
 (:class:`Walk`, :class:`Draws`), the moves' scratch (:class:`Moves`) and the walkers' generators (:class:`Streams`)
 are ``NamedTuple`` s, as are the map's :class:`~amronet.engine.kernel_data.Grid`, the robots'
 :class:`~amronet.algorithms.common.swarm_data.Robots`, the triangle routers'
-:class:`~amronet.algorithms.common.goto.Steering` and the :class:`~amronet.algorithms.common.swarm_data.Ring`.
+:class:`~amronet.algorithms.common.goto.Steering` and the sensor ring, :class:`~amronet.engine.sensing.QuietRing`.
 
 :class:`SpreadingData` holds them all for a loop: the fast step builds it once and hands it to every kernel call. It
 is a numba *structref*, not a ``NamedTuple``: numba types a ``NamedTuple`` argument from Python field by field, names
@@ -25,9 +25,10 @@ from numba import njit, types
 from numba.experimental import structref
 
 from amronet.algorithms.common.goto import Steering
-from amronet.algorithms.common.swarm_data import KernelData, Ring, Robots, unliteral_fields
+from amronet.algorithms.common.swarm_data import KernelData, Robots, unliteral_fields
 from amronet.algorithms.self_spreading.walks import WALKS, Walker
 from amronet.engine.kernel_data import Csr, Grid
+from amronet.engine.sensing import QuietRing
 
 __all__ = ["Draws", "Moves", "SpreadingData", "Streams", "Tracked", "Tracking", "Walk", "walk_of"]
 
@@ -176,7 +177,8 @@ class SpreadingData(KernelData):
         walk: The random walk.
         draws: The walkers' draws' buffers (``(N,)`` each).
         steering: The triangle routers' go-to-goal.
-        ring: The movers' sensor ring.
+        ring: The movers' sensor ring, with the cells where it cannot meet the grid
+            (:class:`~amronet.engine.sensing.QuietRing`).
         moves: The movers' scratch.
         no_bodies: An empty neighbour list (moves without collisions).
         collisions: Whether bodies collide.
@@ -184,7 +186,7 @@ class SpreadingData(KernelData):
     """
 
     def __new__(cls, grid: Grid, robots: Robots, tracking: Tracking, tracked: Tracked, walk: Walk, draws: Draws,
-                steering: Steering, ring: Ring, moves: Moves, no_bodies: Csr, collisions: bool,
+                steering: Steering, ring: QuietRing, moves: Moves, no_bodies: Csr, collisions: bool,
                 dt: float) -> SpreadingData:
         """Build it through a cached kernel (numba's own constructor compiles anew in every process)."""
         parts = (grid, robots, tracking, tracked, walk, draws, steering, ring, moves, no_bodies, collisions, dt)

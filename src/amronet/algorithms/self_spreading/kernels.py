@@ -28,7 +28,7 @@ from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
 from amronet.engine.motion import commit_one, drive_one, plan_one
 from amronet.engine.robots import State
-from amronet.engine.sensing import cast_bodies_one, cast_grid_one
+from amronet.engine.sensing import cast_bodies_one, cast_grid_one, cast_ring_one
 
 __all__ = [
     "commit_moves",
@@ -224,7 +224,6 @@ def sense_steer_drive_rules(data, n_movers, normal, uniform, s_indptr, s_indices
 def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist, rows,
                        rule):  # pragma: no cover - numba
     """:func:`sense_steer_drive`'s passes under the walk rule ``rule`` (a constant there: that rule's code alone)."""
-    blocked, clear, ox, oy, res = data.grid
     robots, steering, moves, walk, ring = data.robots, data.steering, data.moves, data.walk, data.ring
     xy, heading, state, max_speed, radius, distance = (robots.xy, robots.heading, robots.state, robots.max_speed,
                                                        robots.radius, robots.distance)
@@ -236,12 +235,10 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
     big = radius.max()
     sense_bodies = xy.shape[0] > 1
     drive_bodies = data.collisions and sense_bodies
+    s_csr = (s_indptr, s_indices, s_dist)
+    dirs = (np.empty(angles.shape[0]), np.empty(angles.shape[0]))
     for m in range(movers.shape[0]):  # sense: every mover's ring, from where everybody stands now
-        i = movers[m]
-        cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], angles, sensor_range, scans[m])
-        if sense_bodies:
-            cast_bodies_one(i, s_indptr, s_indices, s_dist, xy, heading[i], angles, sensor_range, radius, big,
-                            scans[m])
+        cast_ring_one(data.grid, ring, movers[m], xy, heading, radius, big, sense_bodies, s_csr, dirs, scans[m])
     w = 0
     longest = 0.0
     for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals

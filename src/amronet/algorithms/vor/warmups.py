@@ -1,6 +1,7 @@
 """The short run that compiles what VOR's first run would otherwise compile (:mod:`amronet.sim.warmup`).
 
-VOR has no fast step; the run compiles the cell clipping and the loop's sense and move kernels.
+VOR has no fast step; the run compiles the kernels of its cells, goals and obstacle memory, and the
+loop's sense and move kernels.
 """
 
 from __future__ import annotations

@@ -1,0 +1,126 @@
+"""The radio's wall walk on bit grids (:mod:`amronet.engine.wall_bits`): the same answers as the byte walk.
+
+:func:`count_walls_bits` must count exactly what :func:`amronet.engine.walls.count_walls` counts (it takes the same
+steps and leaps, reads bits instead of bytes and stops once the cells left hold no wall), and
+:func:`box_clear_bits` must answer what :func:`~amronet.engine.walls.box_clear` answers. Checked on random grids
+with ends on and next to cell borders, and on every map in the repository; and the path-loss law's link kernel
+against the generic one, shadowing and reuse included.
+"""
+
+from __future__ import annotations
+
+import glob
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numba import njit
+
+from amronet.engine.links import NO_PREVIOUS, candidate_margins, path_loss_candidate_margins
+from amronet.engine.neighbours import neighbour_csr
+from amronet.engine.propagation import LinkBudget
+from amronet.engine.radio import make_medium
+from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
+from amronet.engine.walls import LEAP_CELLS, box_clear, count_walls, count_walls_many, wall_grid, wall_sums
+from amronet.world.builtin import BUILTIN_MAPS, resolve_map
+from amronet.world.occupancy import OccupancyMap
+from test_wall_boxes import BIG, grids_and_segments, scattered
+
+
+@njit(cache=True)
+def _bits_many(bits, walls, jump, ox, oy, res, a, b, limit):  # pragma: no cover - numba
+    out = np.empty(a.shape[0], np.int64)
+    for k in range(a.shape[0]):
+        out[k] = count_walls_bits(bits, walls, jump, ox, oy, res, a[k, 0], a[k, 1], b[k, 0], b[k, 1], limit[k])
+    return out
+
+
+@njit(cache=True)
+def _boxes_many(bits, cols, ox, oy, res, a, b):  # pragma: no cover - numba
+    out = np.empty(a.shape[0], np.bool_)
+    for k in range(a.shape[0]):
+        out[k] = box_clear_bits(bits, cols, ox, oy, res, a[k, 0], a[k, 1], b[k, 0], b[k, 1])
+    return out
+
+
+@njit(cache=True)
+def _sums_many(sums, ox, oy, res, a, b):  # pragma: no cover - numba
+    out = np.empty(a.shape[0], np.bool_)
+    for k in range(a.shape[0]):
+        out[k] = box_clear(sums, ox, oy, res, a[k, 0], a[k, 1], b[k, 0], b[k, 1])
+    return out
+
+
+def test_the_bit_grids_are_the_wall_cells_and_the_leap_cells():
+    rng = np.random.default_rng(3)
+    cells = np.where(rng.random((70, 150)) < 0.02, 100, 0).astype(np.int8)
+    cells[:, 140:] = -1  # unknown: walls too
+    omap = OccupancyMap("hand", 0.05, (1.0, -2.0), cells)
+    walls, jump = wall_grid(omap)
+    bits = wall_bits(omap)
+    assert bits.shape == (2, 70, 3) and bits.dtype == np.uint64 and not bits.flags.writeable
+    assert wall_bits(omap) is bits  # cached with the map
+    unpacked = ((bits[:, :, :, None] >> np.arange(64, dtype=np.uint64)) & np.uint64(1)).reshape(2, 70, 192) == 1
+    np.testing.assert_array_equal(unpacked[0, :, :150], walls != 0)
+    leap = jump.astype(np.float64) > LEAP_CELLS * 0.05
+    assert leap.any() and not leap.all()
+    np.testing.assert_array_equal(unpacked[1, :, :150], leap)
+    assert not unpacked[:, :, 150:].any()  # the padding is no wall and no leap
+
+
+@settings(max_examples=500, deadline=None)
+@given(grids_and_segments(), st.integers(0, 3))
+def test_the_bit_walk_counts_what_the_byte_walk_counts(case, limit):
+    omap, a, b = case
+    walls, jump = wall_grid(omap)
+    bits = wall_bits(omap)
+    ox, oy, res = float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution)
+    for lim in (limit, BIG):
+        assert count_walls_bits(bits, walls, jump, ox, oy, res, *a, *b, lim) == count_walls(walls, jump, ox, oy, res,
+                                                                                           *a, *b, lim)
+    assert box_clear_bits(bits, walls.shape[1], ox, oy, res, *a, *b) == box_clear(wall_sums(omap), ox, oy, res, *a,
+                                                                                   *b)
+
+
+@pytest.mark.parametrize("name", [*BUILTIN_MAPS, *sorted(glob.glob("/work/shared/maps/*.yaml"))])
+def test_the_bit_walk_on_every_map(name):
+    """Short and long segments (the radio's links, coverage's reach) and ends on cell corners, with limits."""
+    omap = resolve_map(name)
+    walls, jump = wall_grid(omap)
+    bits = wall_bits(omap)
+    ox, oy, res = float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution)
+    xmin, xmax, ymin, ymax = omap.extent
+    rng = np.random.default_rng(len(name))
+    n = 40_000
+    a = np.column_stack([rng.uniform(xmin - 0.5, xmax + 0.5, n), rng.uniform(ymin - 0.5, ymax + 0.5, n)])
+    b = a + rng.normal(0.0, 1.0, (n, 2)) * rng.choice([0.02, 0.05, 0.3], n)[:, None] * max(xmax - xmin, ymax - ymin)
+    b[::17, 1] = a[::17, 1]  # along a row
+    b[::19, 0] = a[::19, 0]  # along a column
+    a[::23] = np.round((a[::23] - (ox, oy)) / res) * res + (ox, oy)  # on cell corners
+    for limit in (np.full(n, BIG), rng.integers(0, 4, n)):
+        np.testing.assert_array_equal(_bits_many(bits, walls, jump, ox, oy, res, a, b, limit),
+                                      count_walls_many(walls, jump, ox, oy, res, a, b, limit))
+    np.testing.assert_array_equal(_boxes_many(bits, walls.shape[1], ox, oy, res, a, b),
+                                  _sums_many(wall_sums(omap), ox, oy, res, a, b))
+
+
+@pytest.mark.parametrize("shadowing_db", [0.0, 5.0])
+@pytest.mark.parametrize("model", ["multi-wall", "log-distance"])
+def test_the_path_loss_kernel_gives_the_generic_kernels_numbers(model, shadowing_db):
+    """Bit for bit, with and without walls and shadowing, fresh and reusing a previous table."""
+    omap = resolve_map("office-32x32")
+    budget = LinkBudget(r_c=2.0, exponent=2.0, wall_db=6.9 if model == "multi-wall" else 0.0,
+                        shadowing_db=shadowing_db)
+    medium = make_medium(model, budget, omap, rng=np.random.default_rng(2))
+    xy = scattered(omap, 1500, seed=4)
+    xy[::40] = np.round(xy[::40] / omap.resolution) * omap.resolution  # some on cell corners
+    plain = medium.hearing.plain()
+    indptr, indices, dist = neighbour_csr(xy, medium.reach)
+    fresh = path_loss_candidate_margins(xy, indptr, indices, dist, *NO_PREVIOUS, plain)
+    np.testing.assert_array_equal(fresh, candidate_margins(xy, indptr, indices, dist, *NO_PREVIOUS, plain))
+    moved = xy.copy()
+    moved[::7] += 0.05
+    indptr2, indices2, dist2 = neighbour_csr(moved, medium.reach)
+    reused = path_loss_candidate_margins(moved, indptr2, indices2, dist2, xy, indptr, indices, fresh, plain)
+    np.testing.assert_array_equal(reused, candidate_margins(moved, indptr2, indices2, dist2, *NO_PREVIOUS, plain))
