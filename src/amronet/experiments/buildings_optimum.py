@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from amronet.errors import AmronetError
-from amronet.experiments.buildings import BUILDINGS, RADIOS, Building
+from amronet.experiments.building_cells import BUILDINGS, RADIOS, Building
 from amronet.experiments.options import check_optimum_options
 from amronet.optimum import CAVEAT, Optimum, find_or_load_optimum
 from amronet.optimum.stored import optimum_key, optimum_problem

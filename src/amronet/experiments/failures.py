@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from amronet.experiments.buildings import BUILDINGS
+from amronet.experiments.building_cells import BUILDINGS
 from amronet.experiments.common import agent_scenario, csv_text, write_outputs
 from amronet.experiments.options import RunOptions
 from amronet.experiments.runner import run_jobs
