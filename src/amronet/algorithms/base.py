@@ -16,6 +16,8 @@ model, its scenario defaults, whether it follows given paths), through its decla
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -181,8 +183,12 @@ class Controller(ABC):
         """The short runs that compile this algorithm's kernels (its rules, its fast step), the defaults' run first.
 
         A test checks that every registered algorithm has them and that an algorithm with a fast step reaches it.
+        By default: ``warm_ups()`` of the ``warmups`` module beside the controller's, none if there is no such module.
         """
-        return []
+        package = cls.__module__.rpartition(".")[0]
+        if not package or importlib.util.find_spec(f"{package}.warmups") is None:
+            return []
+        return importlib.import_module(f"{package}.warmups").warm_ups()
 
     @abstractmethod
     def decide(self, step: StepInput) -> Command:

@@ -54,7 +54,7 @@ from amronet.algorithms.agent_assisted.releases import Releasing, _pair_key, _se
 from amronet.algorithms.agent_assisted.relocate import Relocator
 from amronet.algorithms.agent_assisted.retrace import Retracer
 from amronet.algorithms.agent_assisted.strip_driving import StripDrivers
-from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.common.goto import GoalSteering
 from amronet.algorithms.common.references import check_loss_band
 from amronet.algorithms.common.triangular import select_triangles
@@ -213,13 +213,6 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
         fast = CompiledAgents(self, context)
         fast.quiet = QuietStretch(fast, context) if QuietStretch.applies(fast, context) else None
         return fast
-
-    @classmethod
-    def warm_ups(cls) -> list[WarmUp]:
-        """The runs that compile its kernels ahead of a first run (:mod:`.warmups`)."""
-        from amronet.algorithms.agent_assisted.warmups import warm_ups
-
-        return warm_ups()
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm

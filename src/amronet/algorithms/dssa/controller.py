@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.common.forces import clamp_norm, links_of, obstacle_hits, sum_per_node
 from amronet.algorithms.dssa.params import DSSAParams
 from amronet.engine.robots import Role, State
@@ -105,13 +105,6 @@ class DSSA(Controller):
 
     def unsettled(self) -> np.ndarray:  # noqa: D102
         return (self.swarm.state == State.EXPLORE) & (self.swarm.role == Role.ROUTER)
-
-    @classmethod
-    def warm_ups(cls) -> list[WarmUp]:
-        """The runs that compile its kernels ahead of a first run (:mod:`.warmups`)."""
-        from amronet.algorithms.dssa.warmups import warm_ups
-
-        return warm_ups()
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from amronet.algorithms.base import ALGORITHMS, WarmUp
+from amronet.algorithms.base import ALGORITHMS
 from amronet.algorithms.common.cell_rounds import CellRounds
 from amronet.algorithms.common.polygons import Polygons, area_centroid
 from amronet.algorithms.lloyd.params import LloydParams
@@ -36,13 +36,6 @@ class Lloyd(CellRounds):
 
     Params = LloydParams
     params: LloydParams
-
-    @classmethod
-    def warm_ups(cls) -> list[WarmUp]:
-        """Its defaults (:mod:`.warmups`)."""
-        from amronet.algorithms.lloyd.warmups import warm_ups
-
-        return warm_ups()
 
     def goals(self, robots: np.ndarray, cells: Polygons) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
         area, centroid = area_centroid(cells)

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.common.forces import inverse_square_obstacle_forces
 from amronet.algorithms.common.swarm_data import robots_of
 from amronet.algorithms.potential_field.kernel_data import field_constants_of, field_state_of
@@ -105,13 +105,6 @@ class PotentialField(Controller):
         from amronet.algorithms.potential_field.fast import CompiledField  # (its kernels load with it)
 
         return CompiledField(self, context) if CompiledField.applies(self, context) else None
-
-    @classmethod
-    def warm_ups(cls) -> list[WarmUp]:
-        """The runs that compile its kernels ahead of a first run (:mod:`.warmups`)."""
-        from amronet.algorithms.potential_field.warmups import warm_ups
-
-        return warm_ups()
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw, p = self.swarm, self.params

@@ -78,7 +78,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput, WarmUp
+from amronet.algorithms.base import ALGORITHMS, Command, Controller, Setup, StepInput
 from amronet.algorithms.common.goto import GoalSteering
 from amronet.algorithms.common.link_quality import MarginSearch, MarginSmoother, anchor_margins, strongest_references
 from amronet.algorithms.common.references import check_loss_band, track_references
@@ -143,13 +143,6 @@ class SelfSpreading(Controller):
         from amronet.algorithms.self_spreading.fast import CompiledSpreading  # (its kernels load with it)
 
         return CompiledSpreading(self, context) if CompiledSpreading.applies(self, context) else None
-
-    @classmethod
-    def warm_ups(cls) -> list[WarmUp]:
-        """The runs that compile its kernels ahead of a first run (:mod:`.warmups`)."""
-        from amronet.algorithms.self_spreading.warmups import warm_ups
-
-        return warm_ups()
 
     def decide(self, step: StepInput) -> Command:  # noqa: D102
         sw = self.swarm

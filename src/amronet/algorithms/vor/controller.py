@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from amronet.algorithms.base import ALGORITHMS, WarmUp
+from amronet.algorithms.base import ALGORITHMS
 from amronet.algorithms.common.cell_rounds import HoleRounds
 from amronet.algorithms.common.cells import farthest_point, gains
 from amronet.algorithms.common.polygons import Polygons
@@ -36,13 +36,6 @@ class VOR(HoleRounds):
 
     Params = VORParams
     params: VORParams
-
-    @classmethod
-    def warm_ups(cls) -> list[WarmUp]:
-        """Its defaults (:mod:`.warmups`)."""
-        from amronet.algorithms.vor.warmups import warm_ups
-
-        return warm_ups()
 
     def goals(self, robots: np.ndarray, cells: Polygons) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
         far, vertex = farthest_point(cells, self.reach)
