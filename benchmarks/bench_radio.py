@@ -99,7 +99,7 @@ def coverage(repeats: int = 20) -> list[dict]:
         medium = make_medium(model, budget, omap, rng=np.random.default_rng(1))
 
         def cold(m=medium) -> None:  # every node new to the medium (its cache of heard cells emptied)
-            m.heard.boxes.clear()
+            m.heard.forget()
             m.coverage(area, xy)
 
         out.append({"model": model, "shadowing_db": budget.shadowing_db, "ms": best_of(cold, repeats) * 1e3,

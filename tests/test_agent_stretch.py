@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.algorithms.agent_assisted import kernels, rule_kernels, stretch_kernels
+from amronet.algorithms.agent_assisted import kernels, rule_kernels, stretch_kernels, stretch_links
 from amronet.algorithms.agent_assisted.controller import _pair_key
 from amronet.algorithms.agent_assisted.explorers.frontier import knowledge, planning
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
@@ -20,10 +20,17 @@ from amronet.algorithms.stepping import AgentBooks
 from amronet.engine.kernel_data import Csr, Grid
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.radio import NeighbourTable
+from amronet.experiments.failures import _scenario
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 
 FRONTIER = {"algorithm.params.explorer": "frontier"}
+SMALL = {**FRONTIER, "map": "cave", "radio.r_c": 4.0, "sim.time_limit": 150, "sim.coverage_target": "off",
+         "base_stations": [{"x": 0.0, "y": 0.0, "region": [1.6, 1.6]}]}
+"""A small map the agents explore in a minute, and a run that goes on: most steps with agents without a plan."""
+FAILURES = {k: v for k, v in _scenario("agent-assisted", "office-32x32", 0.2, 600.0, 600.0, "frontier").items()
+            if k != "faults"}
+"""``reproduce failures``' agent-assisted run without its faults (a run with faults takes no stretches)."""
 CASES = {
     "office, r_c 4 m": ("agent-assisted-office", 2, {**FRONTIER, "sim.time_limit": 300, "radio.r_c": 4.0}),
     "open floor, four agents": ("agent-assisted-office", 3, {**FRONTIER, "sim.time_limit": 200, "map": "open-32x32",
@@ -35,6 +42,9 @@ CASES = {
     "hospital floor plan, base by two walls": ("agent-assisted-office", 6, {
         **FRONTIER, "sim.time_limit": 200, "map": "hospital_section", "radio.r_c": 3.0,
         "base_stations": [{"x": 24.8555, "y": 3.4865, "region": [1.6, 1.6]}]}),
+    "small map, agents idle, unit disk": ("agent-assisted-office", 7, SMALL),
+    "small map, agents idle, multi-wall": ("agent-assisted-office", 8, {**SMALL, "radio.model": "multi-wall"}),
+    "failures' run, no coverage target, agents idle": (FAILURES, 9, {"sim.time_limit": 900}),
 }
 
 
@@ -73,8 +83,8 @@ def test_stretches_give_the_step_by_step_run_bit_for_bit(name):
     assert sum(ends.values()) > 0  # stretches ran
     if name == "office, r_c 4 m":  # whole stretches, and stretches that stopped where an agent acted
         assert ends["quiet"] > 0 and ends["acts"] > 0
-    if name.startswith("hospital"):  # here the agents soon run out of plans: stretches stop where one walks at random
-        assert ends["idle"] > 0
+    if name.startswith("hospital") or "idle" in name:  # the agents soon run out of plans: stretches go on with those
+        assert fast.compiled.quiet.idle_steps > 0  # that walk at random
     if name.startswith("four bases"):  # steps where an agent heard another network and the local rule said no
         assert fast.compiled.quiet.triangles_looked_at > 0
         assert fast.controller.triangles_released  # and triangles that went ahead, in Python
@@ -121,7 +131,7 @@ def test_steps_stepped_one_by_one_take_no_stretch():
 
 @pytest.mark.parametrize("overrides", [
     {"algorithm.params.explorer": "random"},  # the paper's explorer steers in Python
-    {**FRONTIER, "radio.model": "multi-wall"},  # walls drop links: the radio's own update
+    {**FRONTIER, "radio.model": "multi-wall", "radio.packet_loss": True},  # links lost at random: the radio's own
 ])
 def test_runs_it_cannot_take_in_stretches_have_none(overrides):
     sim = Simulation(load_scenario("agent-assisted-office", overrides), 1)
@@ -154,6 +164,7 @@ UNPACKED = {  # (module, kernel): {tuple it unpacks: the named structure laid ou
     (R, "rule_commit"): {"books": R.RuleBooks},
     (R, "rule_acts"): {"rules": R.RuleStep},
     (S, "_observe"): {"books": AgentBooks, "arrays": S.Links},
+    (stretch_links, "next_radio"): {"radio": stretch_links.Radio},
     (knowledge, "integrate_readings"): {"cells": knowledge.Cells},
     (planning, "search_target"): {"targets": planning.Targets, "claims": planning.Claims},
 }

@@ -6,6 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from amronet.engine.bitgen import addresses, draw_normal_uniform
+from amronet.engine.motion import random_walk, random_walk_drawing
+from amronet.engine.sensing import beam_angles
 from amronet.engine.streams import RunStreams, compiled_streams
 
 BIT_GENERATORS = (np.random.PCG64, np.random.PCG64DXSM, np.random.Philox, np.random.SFC64, np.random.MT19937)
@@ -51,3 +53,26 @@ def test_refuses_robots_out_of_order_or_outside_the_runs_and_draws_nothing():
     for who in ([4, 2, 7], [1, 1, 2], [3, 6, 10], [-1, 2, 3]):
         assert not draw_normal_uniform(addresses([g, g]), starts, np.array(who, dtype=np.int64), out, out.copy())
     assert g.bit_generator.state == before
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), m=st.integers(1, 6))
+def test_the_compiled_random_walk_draws_and_turns_as_random_walk(seed, m):
+    # the robots without a plan walk: their normals, then their uniforms, from the generator in place (the agents'
+    # idle walk in a quiet stretch, amronet.algorithms.agent_assisted.stretch_kernels)
+    setup = np.random.default_rng(seed)
+    n, beams, reach = m + 3, 16, 0.6
+    who = setup.permutation(n)[:m].astype(np.int64)
+    planned = setup.random(m) < 0.4
+    scans = np.minimum(setup.uniform(0.1, 3.0, (m, beams)), reach)
+    refused = setup.random(m) < 0.3
+    heading = setup.uniform(-np.pi, np.pi, n)
+    ours, theirs = np.random.default_rng([seed, 1]), np.random.default_rng([seed, 1])
+    got, want = heading.copy(), heading.copy()
+    walked = random_walk_drawing(int(addresses([ours])[0]), got, who, planned, scans, beam_angles(beams), reach,
+                                 refused, 0.5 * np.sqrt(0.1), np.empty(m), np.empty(m))
+    idle = ~planned
+    random_walk(want, who[idle], scans[idle], reach, refused[idle], theirs, 0.5 * np.sqrt(0.1))
+    assert walked == np.count_nonzero(idle)
+    np.testing.assert_array_equal(got, want)
+    assert ours.bit_generator.state == theirs.bit_generator.state

@@ -91,7 +91,7 @@ def test_the_compiled_step_gives_the_reference_run_bit_for_bit(name, monkeypatch
 
 
 @pytest.mark.parametrize(("rule", "stretches"), [("radius", True), ("distance-junction", True),
-                                                ("strip-goals", True), ("link-quality", False)])
+                                                ("strip-goals", True), ("link-quality", True)])
 def test_rules_the_kernel_checks_take_quiet_stretches(rule, stretches):
     """Under the unit disk with the frontier explorer, a rule the stretch kernel checks runs many steps per call."""
     sc = load_scenario("agent-assisted-office", {**FRONTIER, "sim.time_limit": 60, "algorithm.params.drop_rule": rule})

@@ -5,15 +5,18 @@ import numpy as np
 import pytest
 
 from amronet.algorithms.common.swarm_stretch import SwarmStretch
+from amronet.engine.robots import State
 from amronet.scenario import load_scenario
 from amronet.sim import BatchSimulation, Simulation
 
 CASES = {
     # runs that settle at different times and leave the batch (each stretch stops after a run settles)
     "self-spreading, runs settle": ("self-spreading-6x6", (1, 2, 3, 4), {"sim.time_limit": 750}),
-    # two bases: steps in which a triangle may start end the stretches before them
+    # two bases: the stretches start the triangles of the none and local rules themselves
     "self-spreading, two bases, no optimization": ("self-spreading-office", (1, 2),
                                                   {"sim.time_limit": 150, "algorithm.params.triangular": "none"}),
+    "self-spreading, two bases, local rule": ("self-spreading-office", (5, 6), {"sim.time_limit": 150}),
+    # the global rule asks the network's components: its steps end the stretches before them
     "self-spreading, global rule, without collisions": ("self-spreading-office", (3, 4), {
         "sim.time_limit": 100, "algorithm.params.triangular": "global", "sim.robot_collisions": False}),
     # routers at rest wake up again: runs that stay in the books while settled, unsettle and settle again
@@ -53,12 +56,17 @@ def test_a_batch_in_stretches_is_the_batch_step_by_step(name):
             {k: v for k, v in b.summary.items() if k != "wall_time_s"}
 
 
-def test_stretches_end_where_runs_settle_and_before_triangles():
+def test_stretches_end_where_runs_settle_and_start_triangles_but_the_global_rules():
     settle, _ = _run(*CASES["self-spreading, runs settle"], True)
     assert settle.compiled.stretcher.ends["settling"] > 0
     assert sum(r.stop_reason == "settled" for r in settle.runs) > 1
-    triangles, _ = _run(*CASES["self-spreading, two bases, no optimization"], True)
-    assert triangles.compiled.stretcher.ends["candidates"] > 0
+    for case in ("self-spreading, two bases, no optimization", "self-spreading, two bases, local rule"):
+        triangles, _ = _run(*CASES[case], True)
+        assert triangles.compiled.stretcher.ends["candidates"] == 0 and triangles.compiled.triangles_started > 0
+        assert (triangles.swarm.state == State.TRIANGLE_SETTLED).any()
+    global_rule, _ = _run("self-spreading-office", (1, 2),
+                          {"sim.time_limit": 150, "algorithm.params.triangular": "global"}, True)
+    assert global_rule.compiled.stretcher.ends["candidates"] > 0 and global_rule.compiled.triangles_started == 0
     woken, _ = _run(*CASES["potential field, settled runs go on"], True)
     assert woken.compiled.stretcher.ends["settling"] > 0 and woken.controller.wakeups.sum() > 0
 

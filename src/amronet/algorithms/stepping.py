@@ -112,6 +112,10 @@ class StepContext:
         radio_reach: The farthest the radio's table reaches, metres.
         keeps_every_pair: Whether the radio's table lists every pair within ``radio_reach`` (the unit disk): what a
             stretch that searches the neighbours itself needs.
+        link_inputs: What a stretch that builds the radio's tables itself needs of it
+            (:func:`~amronet.engine.links.stretch_inputs`: the margin inputs of the built-in path-loss law, whose
+            links are the pairs within ``radio_reach`` with a margin ``>= 0``; without walls and shadowing, every
+            pair), or ``None``: the radio's own tables only.
     """
 
     omap: OccupancyMap
@@ -123,6 +127,7 @@ class StepContext:
     agents: bool
     radio_reach: float
     keeps_every_pair: bool
+    link_inputs: tuple | None = None
 
 
 class AgentBooks(NamedTuple):
@@ -162,12 +167,15 @@ class Stretched:
             fast step (radio, books). ``None``: the stretch stopped between steps.
         non_finite: A robot's position became non-finite in the last step taken (the loop raises, as the table
             would).
+        margin: With ``csr``, the margins of its pairs under the radio's path-loss law (``csr`` is then every pair
+            within reach, the links those with a margin ``>= 0``; ``None``: every pair is a link).
     """
 
     steps: int
     csr: CSR | None = None
     finish: Callable[[StepInput], None] | None = None
     non_finite: bool = False
+    margin: np.ndarray | None = None
 
 
 class FastStep:

@@ -37,7 +37,7 @@ from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
 from amronet.engine.walls import wall_grid
 from amronet.world.occupancy import OccupancyMap
 
-__all__ = ["BLOCK", "Cells", "HearingInputs", "best_margin_grid", "cells_of", "heard_box", "heard_cells",
+__all__ = ["BLOCK", "Cells", "HearingInputs", "best_margin_grid", "cells_of", "heard_cells",
            "named_inputs", "no_bound", "open_margin", "path_loss_bound", "path_loss_margin", "wall_limit"]
 
 
@@ -257,19 +257,22 @@ def _node_box(x, y, reach, cells, rows, cols):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _mark_node(x, y, mask, cells, reach, out, oi, oj, h):  # pragma: no cover - numba
-    """Mark ``out[i - oi, j - oj]`` for the ``mask`` cells ``(i, j)`` heard from the node at ``(x, y)``.
+def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h):  # pragma: no cover - numba
+    """Mark ``out[i, j]`` for the ``mask`` cells ``(i, j)`` of ``window`` heard from the node at ``(x, y)``.
 
-    Cells already marked are skipped. Returns how many were newly marked.
+    Cells already marked are skipped; with an ``owner`` grid (not 0x0) a newly marked cell's owner is ``key``.
+    ``window``: the cells ``(i0, i1, j0, j1)`` looked at. Returns how many were newly marked.
     """
     rows, cols = mask.shape
     total = 0
+    owned = owner.shape[0] > 0
     shadowed = h.clip > 0.0
-    sa = field_at(h.field, x, y) if shadowed else 0.0
-    at_cell, at_block = cells.field, cells.block_field  # out of the loops (see candidate_margins)
     i0, i1, j0, j1 = _node_box(x, y, reach, cells, rows, cols)
+    i0, i1, j0, j1 = max(i0, window[0]), min(i1, window[1]), max(j0, window[2]), min(j1, window[3])
     if i0 > i1 or j0 > j1:
         return 0
+    sa = field_at(h.field, x, y) if shadowed else 0.0
+    at_cell, at_block = cells.field, cells.block_field  # out of the loops (see candidate_margins)
     for bi in range(i0 // BLOCK, i1 // BLOCK + 1):
         for bj in range(j0 // BLOCK, j1 // BLOCK + 1):
             gap = _block_gap(x, y, cells, bi, bj, rows, cols)
@@ -280,7 +283,7 @@ def _mark_node(x, y, mask, cells, reach, out, oi, oj, h):  # pragma: no cover - 
             for i in range(max(bi * BLOCK, i0), min(bi * BLOCK + BLOCK, i1 + 1)):
                 cy = cells.oy + (i + 0.5) * cells.res
                 for j in range(max(bj * BLOCK, j0), min(bj * BLOCK + BLOCK, j1 + 1)):
-                    if not mask[i, j] or out[i - oi, j - oj]:
+                    if not mask[i, j] or out[i, j]:
                         continue
                     cx = cells.ox + (j + 0.5) * cells.res
                     d = math.sqrt((cx - x) * (cx - x) + (cy - y) * (cy - y))
@@ -288,38 +291,31 @@ def _mark_node(x, y, mask, cells, reach, out, oi, oj, h):  # pragma: no cover - 
                         continue
                     sb = at_cell[i, j] if shadowed else 0.0
                     if model_margin(x, y, cx, cy, d, sa, sb, 0.0, h) >= 0.0:
-                        out[i - oi, j - oj] = True
+                        out[i, j] = True
+                        if owned:
+                            owner[i, j] = key
                         total += 1
     return total
 
 
 @njit(cache=True)
-def heard_cells(xy, mask, grid, reach, covered, hearing):  # pragma: no cover - numba
+def heard_cells(xy, keys, mask, grid, reach, covered, owner, window, hearing):  # pragma: no cover - numba
     """Mark in ``covered`` the ``mask`` cells heard from a node of ``xy``; return how many were newly marked.
 
     ``grid``: the :class:`Cells` (:func:`cells_of`) and ``hearing`` the :class:`HearingInputs`, as plain tuples;
-    cells already marked are skipped; no link is longer than ``reach``.
+    cells already marked are skipped; no link is longer than ``reach``. Only the cells of ``window``
+    ``(i0, i1, j0, j1)`` are looked at (a node whose box misses it costs nothing). With an ``owner`` grid (int32,
+    not 0x0), a cell newly marked from ``xy[k]`` gets the owner ``keys[k]`` (``keys`` may be empty without one).
+    Each cell's decision depends on the node and the cell alone: the union marked is the same in any order, over
+    any split of the nodes into calls.
     """
     cells, h = _named_cells(grid), named_inputs(hearing)
+    owned = owner.shape[0] > 0
     total = 0
     for k in range(xy.shape[0]):
-        total += _mark_node(xy[k, 0], xy[k, 1], mask, cells, reach, covered, np.intp(0), np.intp(0), h)
+        key = keys[k] if owned else np.int32(-1)
+        total += _mark_node(xy[k, 0], xy[k, 1], mask, cells, reach, covered, owner, key, window, h)
     return total
-
-
-@njit(cache=True)
-def heard_box(x, y, mask, grid, reach, hearing):  # pragma: no cover - numba
-    """The cells heard from one node, as ``(i0, j0, piece)``: ``piece[i - i0, j - j0]`` for the cells of its box.
-
-    The same decisions as :func:`heard_cells` (cell by cell they depend on the node and the cell alone), so a
-    coverage assembled from boxes is the one :func:`heard_cells` marks.
-    """
-    cells, h = _named_cells(grid), named_inputs(hearing)
-    i0, i1, j0, j1 = _node_box(x, y, reach, cells, mask.shape[0], mask.shape[1])
-    piece = np.zeros((max(i1 - i0 + 1, 0), max(j1 - j0 + 1, 0)), np.bool_)
-    if i0 <= i1 and j0 <= j1:
-        _mark_node(x, y, mask, cells, reach, piece, i0, j0, h)
-    return i0, j0, piece
 
 
 @njit(cache=True)

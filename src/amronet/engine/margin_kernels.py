@@ -37,15 +37,12 @@ class MarginKernels(NamedTuple):
     candidate_margins: Any
     """:func:`amronet.engine.links.candidate_margins`: the margin of every candidate link."""
     heard_cells: Any
-    """:func:`amronet.engine.hearing.heard_cells`: the cells heard from some node."""
-    heard_box: Any
-    """:func:`amronet.engine.hearing.heard_box`: the cells heard from one node."""
+    """:func:`amronet.engine.hearing.heard_cells`: the cells heard from some node (and, optionally, from which)."""
     best_margin_grid: Any
     """:func:`amronet.engine.hearing.best_margin_grid`: the best margin at every cell."""
 
 
-PATH_LOSS = MarginKernels(links.path_loss_candidate_margins, hearing.heard_cells, hearing.heard_box,
-                          hearing.best_margin_grid)
+PATH_LOSS = MarginKernels(links.path_loss_candidate_margins, hearing.heard_cells, hearing.best_margin_grid)
 """The kernels of the path-loss law (:func:`~amronet.engine.hearing.path_loss_margin` with its bound); its links'
 margins by :func:`~amronet.engine.links.path_loss_candidate_margins`, the same numbers as the generic kernel's."""
 
@@ -71,7 +68,6 @@ def margin_kernels(margin: Callable, bound: Callable | None) -> MarginKernels:
         mark = _copy(hearing._mark_node, swap, tag)
         _COPIES[key] = MarginKernels(_copy(links.candidate_margins, swap, tag),
                                      _copy(hearing.heard_cells, {"_mark_node": mark}, tag),
-                                     _copy(hearing.heard_box, {"_mark_node": mark}, tag),
                                      _copy(hearing.best_margin_grid, swap, tag))
     return _COPIES[key]
 

@@ -21,6 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
+from amronet.engine.bitgen import next_double, standard_normal
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.sensing import beam_angles, body_table
 from amronet.engine.streams import RunStreams, normal_then_uniform
@@ -28,7 +29,7 @@ from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance, path_is_clear
 
 __all__ = ["avoidance_heading", "drive", "drive_one", "escape_one", "integrate", "path_clear", "random_walk",
-           "walk_one"]
+           "random_walk_drawing", "walk_one"]
 
 
 @njit(cache=True, inline="always")
@@ -86,6 +87,34 @@ def _random_walk(heading, who, scans, angles, sensor_range, refused, noise, fres
     for m in range(who.shape[0]):
         i = who[m]
         heading[i] = walk_one(heading[i], scans[m], angles, sensor_range, refused[m], noise[m], fresh[m])
+
+
+@njit(cache=True)
+def random_walk_drawing(address, heading, who, planned, scans, angles, sensor_range, refused, turn_sigma, normal,
+                        uniform):  # pragma: no cover - numba
+    """:func:`random_walk` of the robots ``who[k]`` with ``planned[k]`` false, drawing from a run's generator in place.
+
+    The same numbers as ``random_walk(heading, who[~planned], scans[~planned], sensor_range, refused[~planned], rng,
+    turn_sigma)``: their standard normals, then their uniforms, from the bit generator at ``address``
+    (:func:`amronet.engine.bitgen.addresses`), which advances as ``rng`` would. ``normal`` and ``uniform`` are scratch
+    ``(>= len(who),)``. Returns how many robots walked (none: nothing drawn).
+    """
+    walking = 0
+    for k in range(who.shape[0]):
+        if not planned[k]:
+            normal[walking] = standard_normal(address)
+            walking += 1
+    for k in range(walking):
+        uniform[k] = next_double(address)
+    w = 0
+    for k in range(who.shape[0]):
+        if not planned[k]:
+            i = who[k]
+            # (rng.normal(0.0, turn_sigma) and rng.uniform(-pi, pi), bit for bit: as random_walk scales them)
+            heading[i] = walk_one(heading[i], scans[k], angles, sensor_range, refused[k], turn_sigma * normal[w],
+                                  -np.pi + (2.0 * np.pi) * uniform[w])
+            w += 1
+    return walking
 
 
 def avoidance_heading(heading: np.ndarray, scans: np.ndarray, sensor_range: float) -> tuple[np.ndarray, np.ndarray]:

@@ -42,8 +42,8 @@ reaches farther). A model may declare the fast paths it supports (class attribut
   coverage and the signal map skip blocks of cells that cannot be heard. Without one every cell within reach is
   tested, and the signal map tests the whole map (or give :meth:`~RadioMedium.signal_reach`).
 * :attr:`~RadioMedium.every_pair_is_link`: every pair within reach is a link whose margin follows from its length
-  by the link budget (the unit disk): the table needs no margin kernel, and the compiled stretches, which search
-  the neighbours themselves, may run.
+  by the link budget (the unit disk): the table needs no margin kernel, and every algorithm's compiled stretches
+  may run (agent-assisted ones run under the built-in path-loss law too: :func:`~amronet.engine.links.stretch_inputs`).
 * :attr:`~RadioMedium.disk_coverage`: a cell is heard exactly when its centre is within ``r_c`` of a node (Eq. (1)
   of the paper): coverage in closed form, both methods, all runs of a batch in one call.
 
@@ -63,7 +63,7 @@ import numpy as np
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.coverage_heard import HeardCells
 from amronet.engine.hearing import HearingInputs, path_loss_bound, path_loss_margin
-from amronet.engine.links import NO_PREVIOUS, keep_entries, losses
+from amronet.engine.links import NO_PREVIOUS, keep_entries, losses, stretch_inputs
 from amronet.engine.margin_kernels import MarginKernels, margin_kernels
 from amronet.engine.neighbours import GroupIds, neighbour_csr_checked
 from amronet.engine.propagation import LinkBudget
@@ -176,9 +176,7 @@ class RadioMedium:
     def keeps_every_pair(self) -> bool:
         """Whether a table is every pair the search finds within :attr:`reach`, as it is (the unit disk).
 
-        So it is for a single run without failed nodes when the model declares :attr:`every_pair_is_link` and no
-        link is lost: :meth:`update` then builds :meth:`plain_table`, and the compiled stretches may search the
-        neighbours themselves.
+        So it is when the model declares :attr:`every_pair_is_link` and no link is lost (single runs, none failed).
         """
         return self.every_pair_is_link and not self.packet_loss
 
@@ -204,10 +202,13 @@ class RadioMedium:
             raise ValueError(f"xy must have shape (N, 2), got {xy.shape}")
         if not self.keeps_every_pair:
             self._announce()
-        b = self.budget
         indptr, indices, dist = neighbour_csr_checked(xy, self.reach, self._group_ids(groups, len(xy)))
-        margin = self._margins(xy, indptr, indices, dist)
-        candidates = None
+        return self._links(xy, groups, indptr, indices, dist, self._margins(xy, indptr, indices, dist), silent)
+
+    def _links(self, xy: np.ndarray, groups: np.ndarray | None, indptr: np.ndarray, indices: np.ndarray,
+               dist: np.ndarray, margin: np.ndarray | None, silent: np.ndarray | None) -> NeighbourTable:
+        """:meth:`update`'s table of the pairs searched, of their margins (``None``: every pair is a link)."""
+        b = self.budget
         keep = None if margin is None else margin >= 0.0
         if silent is not None and silent.any():
             rows = np.repeat(np.arange(len(xy)), np.diff(indptr))
@@ -216,16 +217,14 @@ class RadioMedium:
         if self.packet_loss:
             lost = losses(self._loss_rng, indptr, indices, b.margin_db(dist) if margin is None else margin)
             keep = ~lost if keep is None else keep & ~lost
-        if keep is not None and not keep.all():
-            candidates = NeighbourTable(xy=xy, r=self.reach, indptr=indptr, indices=indices, dist=dist,
-                                        groups=groups, threshold_dbm=b.threshold_dbm, exponent=b.exponent,
-                                        link_margin=margin)
-            full = b.margin_db(dist) if margin is None else margin
-            indptr, indices, dist, kept = keep_entries(indptr, indices, dist, full, keep)
-            margin = None if margin is None else kept
-        # by position, in the order of the fields (keywords cost more than the rest of a small table's update)
-        return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm, margin, b.exponent,
-                              candidates)
+        if keep is None or keep.all():  # (by position, in the fields' order: keywords cost more than the rest)
+            return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm, margin, b.exponent)
+        candidates = NeighbourTable(xy=xy, r=self.reach, indptr=indptr, indices=indices, dist=dist, groups=groups,
+                                    threshold_dbm=b.threshold_dbm, exponent=b.exponent, link_margin=margin)
+        full = b.margin_db(dist) if margin is None else margin
+        indptr, indices, dist, kept = keep_entries(indptr, indices, dist, full, keep)
+        return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm,
+                              None if margin is None else kept, b.exponent, candidates)
 
     def _margins(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray
                  ) -> np.ndarray | None:
@@ -238,14 +237,14 @@ class RadioMedium:
         return margin
 
     def plain_table(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray,
-                    groups: np.ndarray | None = None) -> NeighbourTable:
-        """The table :meth:`update` builds of ``xy`` (of runs ``groups``) under :attr:`keeps_every_pair`, none silent.
+                    groups: np.ndarray | None = None, margin: np.ndarray | None = None) -> NeighbourTable:
+        """:meth:`update`'s table of ``xy`` (runs ``groups``) from a compiled search within :attr:`reach`, none silent.
 
-        For a compiled caller that searched itself (:func:`~amronet.engine.neighbours.search_kernel` within
-        :attr:`reach`, of these groups) and found this CSR.
+        ``margin``: its pairs' margins (``None``: every pair is a link; :func:`~amronet.engine.links.stretch_inputs`).
         """
-        b = self.budget
-        return NeighbourTable(xy, self.reach, indptr, indices, dist, groups, b.threshold_dbm, None, b.exponent, None)
+        if margin is not None:
+            self._previous = (xy, indptr, indices, margin)  # as _margins leaves it
+        return self._links(xy, groups, indptr, indices, dist, margin, None)
 
     def _group_ids(self, groups: np.ndarray | None, n: int) -> GroupIds:
         """``groups`` checked for ``n`` points; kept while the same array (a loop's, for all its steps) comes back."""
@@ -262,7 +261,8 @@ class RadioMedium:
         slower = []
         if not self.keeps_every_pair:
             why = "packet loss drops links at random" if self.every_pair_is_link else "no every_pair_is_link"
-            slower.append(f"no compiled stretches, steps are taken one at a time ({why})")
+            but = " but for agent-assisted runs" if stretch_inputs(self) is not None else ""
+            slower.append(f"no compiled stretches{but}, steps are taken one at a time ({why})")
         if not self.disk_coverage:
             slower.append("coverage is decided cell by cell, run by run (no disk_coverage)")
         if type(self).margin_bound is None:
@@ -329,7 +329,7 @@ class RadioMedium:
 
     @property
     def heard(self) -> HeardCells:
-        """Coverage and signal maps by the margin kernel (with its cache of the cells of nodes that stay)."""
+        """Coverage and signal maps by the margin kernel (with its running union of the cells heard)."""
         if self._heard is None:
             self._heard = HeardCells(self.hearing, self.kernels)
         return self._heard

@@ -13,8 +13,9 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from amronet.engine.links import distance_margins
 from amronet.engine.neighbours import pairs_from_csr
-from amronet.engine.propagation import LinkBudget, delivery_ratio
+from amronet.engine.propagation import delivery_ratio
 
 __all__ = ["NeighbourTable"]
 
@@ -81,7 +82,8 @@ class NeighbourTable:
         """Margin of every link over the usable threshold (dB), aligned with ``indices``."""
         if self.link_margin is not None:
             return self.link_margin
-        return LinkBudget(r_c=self.r, exponent=self.exponent).margin_db(self.dist)  # r is the range then
+        # r is the range then; the link budget's law by the compiled function a stretch uses (the same last bit)
+        return distance_margins(np.ascontiguousarray(self.dist, dtype=np.float64), float(self.r), 10.0 * self.exponent)
 
     @property
     def rssi(self) -> np.ndarray:

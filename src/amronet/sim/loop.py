@@ -43,6 +43,7 @@ import numpy as np
 from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, Readings, RouterStock, Setup, StepInput
 from amronet.algorithms.phases import move, sense
 from amronet.algorithms.stepping import AgentBooks, FastStep, StepContext, Watch
+from amronet.engine.links import stretch_inputs
 from amronet.engine.motion import path_clear
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.robots import Role, State, Swarm
@@ -165,10 +166,10 @@ class Loop:
     def step_context(self) -> StepContext:
         """What an algorithm's fast step is told of this loop (:mod:`amronet.algorithms.stepping`)."""
         sc, sw = self.scenario, self.swarm
-        return StepContext(omap=self.world.omap, swarm=sw, groups=self.groups, dt=self.dt,
-                           collisions=sc.sim.robot_collisions, faults=bool(sc.faults),
+        return StepContext(omap=self.world.omap, swarm=sw, groups=self.groups, dt=self.dt, faults=bool(sc.faults),
+                           collisions=sc.sim.robot_collisions, radio_reach=float(self.medium.reach),
                            agents=sc.agents.per_base > 0 or bool((sw.role == Role.AGENT).any()),
-                           radio_reach=float(self.medium.reach), keeps_every_pair=self.medium.keeps_every_pair)
+                           keeps_every_pair=self.medium.keeps_every_pair, link_inputs=stretch_inputs(self.medium))
 
     def _now(self) -> StepInput:
         """The input of the step about to be taken (no readings: a fast step senses itself)."""
@@ -257,7 +258,7 @@ class Loop:
         if done.non_finite:
             raise ValueError("xy has non-finite coordinates")
         if done.csr is not None:
-            self.table = self.medium.plain_table(self.swarm.xy.copy(), *done.csr, self.groups)
+            self.table = self.medium.plain_table(self.swarm.xy.copy(), *done.csr, self.groups, done.margin)
         if done.finish is not None:
             done.finish(self._now())
         self.phase_seconds["sense+decide+move"] += time.perf_counter() - t0

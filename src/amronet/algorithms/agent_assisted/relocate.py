@@ -37,15 +37,34 @@ _KEY = np.int64(1 << 31)
 """A link ``i -> j`` is the key ``i * _KEY + j`` (ids stay below 2**31; the swarm grows, so its size cannot be used)."""
 
 
-@dataclass
-class _Loss:
-    since: float
-    where: np.ndarray
+def _links(table: NeighbourTable, on: np.ndarray) -> np.ndarray:
+    """The table's links among the nodes ``on`` (a mask), both ways, as ascending keys (rows and columns ascend)."""
+    indptr = table.indptr
+    rows = np.repeat(np.arange(len(indptr) - 1, dtype=np.int64), indptr[1:] - indptr[:-1])
+    cols = table.indices
+    keep = on[rows] & on[cols]
+    keep &= rows != cols  # (as the table's pairs, which leave the diagonal out)
+    return rows[keep] * _KEY + cols[keep]
+
+
+def _member(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Which entries of ``a`` are in ``b`` (ascending, unique)."""
+    if not len(b):
+        return np.zeros(len(a), dtype=bool)
+    return b[np.minimum(np.searchsorted(b, a), len(b) - 1)] == a
+
+
+def _same(a: np.ndarray | None, b: np.ndarray) -> bool:
+    return a is not None and a.shape == b.shape and bool((a == b).all())
 
 
 @dataclass
 class Relocator:
     """The relocation repair's state (see the module docstring).
+
+    Losses are kept as arrays in the order they were noticed (by time, then by link): the router ``_li`` lost
+    ``_lj`` at ``_since``, which was at (or headed for) ``_where``. A loss stays until the link is heard again or its
+    router starts to move: a loss of a router that is not cut off (or cannot move) now can start a move later.
 
     Args:
         n: Number of robots now (grows with :meth:`grow`).
@@ -60,80 +79,118 @@ class Relocator:
     moves: int = 0
     """Relocations started."""
     _pairs: np.ndarray = field(init=False)
-    _lost: dict[tuple[int, int], _Loss] = field(init=False, default_factory=dict)
+    _li: np.ndarray = field(init=False)
+    _lj: np.ndarray = field(init=False)
+    _since: np.ndarray = field(init=False)
+    _where: np.ndarray = field(init=False)
+    _network: np.ndarray = field(init=False)
+    """This step's links among the base nodes and routers (what :meth:`_cut_off` depends on)."""
+    _cut_links: np.ndarray | None = field(init=False, default=None)
+    _cut: np.ndarray = field(init=False)
+    """The last cut-off mask and the links it was found from (the same links give the same mask)."""
+    _last: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(init=False, default=None)
+    """The last table's links (its ``indptr`` and ``indices``) and the nodes watched then."""
 
     def __post_init__(self) -> None:
         self.steering = GoalSteering(self.n, n_anchors=1, give_up_steps=self.give_up_steps)
-        self._pairs = np.zeros(0, dtype=np.int64)
+        self._pairs = self._network = np.zeros(0, dtype=np.int64)
+        self._li = np.zeros(0, dtype=np.int64)
+        self._lj = np.zeros(0, dtype=np.int64)
+        self._since = np.zeros(0)
+        self._where = np.zeros((0, 2))
+        self._cut = np.zeros(0, dtype=bool)
 
     def grow(self, n_new: int) -> None:
         """Make room for ``n_new`` robots added at the end (routers released)."""
         self.steering.grow(n_new)
         self.n += n_new
 
-    def _watched(self, sw: Swarm) -> np.ndarray:
-        """Base nodes, deployed routers and relocating routers: the nodes whose links are watched."""
-        return (sw.role != Role.AGENT) & (sw.deployed | (sw.state == State.RELOCATING))
-
     def update(self, t: float, table: NeighbourTable, sw: Swarm) -> tuple[np.ndarray, np.ndarray]:
         """Notice lost neighbours and start relocations; which routers start and which stop now.
+
+        Loss detection compares this step's links among the watched nodes (base nodes, deployed and relocating
+        routers) with the previous step's; when they are the same nothing is lost or heard again. When the table
+        holds the same links as the last one (its positions may differ) and the same nodes are watched, so do they.
 
         Returns:
             ``(started, stopped)``: router ids whose state this call changed (to ``relocating`` and back to
             ``reference``).
         """
-        watched = self._watched(sw)
-        pairs = table.pairs
-        keep = watched[pairs[:, 0]] & watched[pairs[:, 1]] if len(pairs) else np.zeros(0, dtype=bool)
-        n = _KEY
-        keys = np.concatenate([pairs[keep, 0] * n + pairs[keep, 1], pairs[keep, 1] * n + pairs[keep, 0]])
-        keys.sort()
-        gone = np.setdiff1d(self._pairs, keys, assume_unique=True)
-        if self._lost:  # neighbours heard again: not lost after all
-            heard = set(keys.tolist())
-            for k in [k for k in self._lost if k[0] * n + k[1] in heard]:
-                del self._lost[k]
-        for key in gone.tolist():
-            i, j = divmod(key, int(_KEY))
-            moving = sw.state[j] == State.RELOCATING
-            where = self.steering.goal[j].copy() if moving else sw.xy[j].copy()
-            self._lost.setdefault((i, j), _Loss(t, where))
-        self._pairs = keys
+        network = sw.role != Role.AGENT
+        watched = (sw.deployed | (sw.state == State.RELOCATING)) & network
+        last = self._last
+        if not (last is not None and _same(last[0], table.indptr) and _same(last[1], table.indices)
+                and _same(last[2], watched)):
+            self._last = (table.indptr.copy(), table.indices.copy(), watched)
+            links = self._network = _links(table, network)
+            keys = links if watched[network].all() else links[watched[links // _KEY] & watched[links % _KEY]]
+            if not _same(self._pairs, keys):
+                self._notice(t, keys, sw)
         started = self._start(t, table, sw)
         stopped = self._stop(table, sw)
         return started, stopped
 
+    def _notice(self, t: float, keys: np.ndarray, sw: Swarm) -> None:
+        """Forget the losses whose link is heard again, note the links gone since the last step."""
+        if len(self._li):
+            heard = _member(self._li * _KEY + self._lj, keys)
+            if heard.any():
+                self._keep(~heard)
+        gone = self._pairs[~_member(self._pairs, keys)]
+        if len(gone):
+            i, j = gone // _KEY, gone % _KEY
+            moving = sw.state[j] == State.RELOCATING
+            self._li = np.concatenate([self._li, i])
+            self._lj = np.concatenate([self._lj, j])
+            self._since = np.concatenate([self._since, np.full(len(gone), t)])
+            self._where = np.concatenate([self._where, np.where(moving[:, None], self.steering.goal[j], sw.xy[j])])
+        self._pairs = keys
+
+    def _keep(self, keep: np.ndarray) -> None:
+        self._li, self._lj, self._since, self._where = (self._li[keep], self._lj[keep], self._since[keep],
+                                                        self._where[keep])
+
     def _cut_off(self, table: NeighbourTable, sw: Swarm) -> np.ndarray:
-        bases = np.flatnonzero(sw.role == Role.BASE)
-        return ~connected_to(table, bases, sw.role != Role.AGENT)
+        """Which nodes have no path to a base station (found again only when the links among the network change)."""
+        if not _same(self._cut_links, self._network) or len(self._cut) != len(table.indptr) - 1:
+            bases = np.flatnonzero(sw.role == Role.BASE)
+            self._cut = ~connected_to(table, bases, sw.role != Role.AGENT)
+            self._cut_links = self._network
+        return self._cut
 
     def _start(self, t: float, table: NeighbourTable, sw: Swarm) -> np.ndarray:
-        due = [(i, loss) for (i, _), loss in self._lost.items() if t - loss.since >= self.confirm_s - 1e-9]
-        if not due:
-            return np.zeros(0, dtype=np.int64)
-        cut = self._cut_off(table, sw)
-        started = []
-        for i, loss in due:
-            if cut[i] and i not in started and self._movable(i, sw) and not self._waits(i, started, table, sw):
-                self._begin(i, loss, sw)
-                started.append(i)
-        for i in started:
-            for key in [k for k in self._lost if k[0] == i]:
-                del self._lost[key]
+        none = np.zeros(0, dtype=np.int64)
+        if not len(self._li) or t - self._since[0] < self.confirm_s - 1e-9:  # (oldest first: none is due)
+            return none
+        due = t - self._since >= self.confirm_s - 1e-9
+        due &= self._movable(self._li, sw)
+        if not due.any():
+            return none
+        due &= self._cut_off(table, sw)[self._li]
+        if not due.any():
+            return none
+        chosen = self._choose(np.flatnonzero(due), table, sw)
+        started = self._li[chosen]
+        self._begin(chosen, sw)
+        self._keep(~np.isin(self._li, started))
         self.moves += len(started)
-        return np.array(started, dtype=np.int64)
+        return started
 
-    def _movable(self, i: int, sw: Swarm) -> bool:
-        """Whether router ``i``, cut off and having lost a neighbour, starts to move: a deployed reference router."""
-        return bool(sw.role[i] == Role.ROUTER and sw.state[i] == State.REFERENCE)
+    def _movable(self, routers: np.ndarray, sw: Swarm) -> np.ndarray:
+        """Which of ``routers``, cut off and having lost a neighbour, may start to move: deployed reference routers."""
+        return (sw.role[routers] == Role.ROUTER) & (sw.state[routers] == State.REFERENCE)
 
-    def _waits(self, i: int, started: list[int], table: NeighbourTable, sw: Swarm) -> bool:
-        """Whether router ``i``, due to move, waits this step (``started``: those that start this step): never."""
-        return False
+    def _choose(self, due: np.ndarray, table: NeighbourTable, sw: Swarm) -> np.ndarray:
+        """Of the due losses ``due`` (indices, in order) of routers that may move, those whose routers start now.
 
-    def _begin(self, i: int, loss: _Loss, sw: Swarm) -> None:
-        """Start router ``i``'s move: toward where its lost neighbour was (or the goal it announced)."""
-        self.steering.start(np.array([i]), loss.where[None], np.array([[-1]]))
+        Every router starts, with its first loss.
+        """
+        _, first = np.unique(self._li[due], return_index=True)
+        return due[np.sort(first)]
+
+    def _begin(self, chosen: np.ndarray, sw: Swarm) -> None:
+        """Start the moves of the losses ``chosen``: toward where the lost neighbour was (or the goal it announced)."""
+        self.steering.start(self._li[chosen], self._where[chosen], np.full((len(chosen), 1), -1, dtype=np.int64))
 
     def carried(self, router: int, agent: int, sw: Swarm) -> None:
         """An agent has just put ``router`` down (relocation keeps nothing of how it got there)."""

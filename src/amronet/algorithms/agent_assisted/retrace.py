@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from amronet.algorithms.agent_assisted.relocate import Relocator, _Loss
+from amronet.algorithms.agent_assisted.relocate import Relocator
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.robots import Role, State, Swarm, state_lookup
 from amronet.errors import ScenarioError
@@ -75,23 +75,44 @@ class Breadcrumbs:
         self.count = 0
         self.paths = [np.array([self.add(p, -1)], dtype=np.int64) for p in np.asarray(xy, dtype=float)]
         """Per agent, the points of its loop-erased path, from its start."""
+        self.tip = np.array([path[-1] for path in self.paths], dtype=np.int64)
+        """Per agent, the newest point of its path."""
+
+    def _room(self, k: int) -> None:
+        """Make room for ``k`` more points."""
+        while self.count + k > len(self.xy):
+            self.xy = np.concatenate([self.xy, np.zeros_like(self.xy)])
+            self.parent = np.concatenate([self.parent, np.full(len(self.parent), -1, dtype=np.int64)])
 
     def add(self, p: np.ndarray, parent: int) -> int:
         """A new point at ``p`` that follows ``parent`` (-1: none); its index."""
-        if self.count == len(self.xy):
-            self.xy = np.concatenate([self.xy, np.zeros_like(self.xy)])
-            self.parent = np.concatenate([self.parent, np.full(len(self.parent), -1, dtype=np.int64)])
+        self._room(1)
         k = self.count
         self.xy[k] = p
         self.parent[k] = parent
         self.count += 1
         return k
 
+    def add_many(self, p: np.ndarray, parent: np.ndarray) -> np.ndarray:
+        """New points at ``p`` ``(k, 2)`` that follow ``parent`` ``(k,)`` (-1: none); their indices."""
+        self._room(len(p))
+        k = np.arange(self.count, self.count + len(p), dtype=np.int64)
+        self.xy[k] = p
+        self.parent[k] = parent
+        self.count += len(p)
+        return k
+
+    def set_path(self, m: int, path: np.ndarray) -> None:
+        """Agent ``m``'s path is now ``path`` (points, from its start)."""
+        self.paths[m] = path
+        self.tip[m] = path[-1]
+
     def record(self, xy: np.ndarray, who: np.ndarray) -> None:
         """The agents at ``xy`` ``(m, 2)`` now: those of ``who`` (a mask) that have moved ``spacing`` add a point."""
-        for m in np.flatnonzero(who):
-            if np.hypot(*(xy[m] - self.xy[self.paths[m][-1]])) >= self.spacing:
-                self.extend(m, xy[m])
+        tip = self.xy[self.tip]
+        moved = who & (np.hypot(xy[:, 0] - tip[:, 0], xy[:, 1] - tip[:, 1]) >= self.spacing)
+        for m in np.flatnonzero(moved):  # (an agent every few steps: each path erases its own loops)
+            self.extend(m, xy[m])
 
     def back(self, m: int, p: np.ndarray, reach: float) -> int:
         """The point agent ``m`` at ``p`` backs up to next, the points within ``reach`` forgotten (-1: none left)."""
@@ -99,7 +120,7 @@ class Breadcrumbs:
         k = len(path)
         while k > 1 and np.hypot(*(self.xy[path[k - 1]] - p)) <= reach:
             k -= 1
-        self.paths[m] = path[:k]
+        self.set_path(m, path[:k])
         return -1 if k == 1 and np.hypot(*(self.xy[path[0]] - p)) <= reach else int(path[k - 1])
 
     def extend(self, m: int, p: np.ndarray) -> int:
@@ -110,7 +131,7 @@ class Breadcrumbs:
         if len(close):
             path = path[:close[0] + 1]
         k = self.add(p, int(path[-1]))
-        self.paths[m] = np.append(path, k)
+        self.set_path(m, np.append(path, k))
         return k
 
 
@@ -168,22 +189,39 @@ class Retracer(Relocator):
         """Record the agents' and self-driven routers' odometry, then :meth:`.Relocator.update`."""
         self.crumbs.record(sw.xy[self.agents], ~self.backing)
         driving = np.flatnonzero(_SELF_DRIVEN[sw.state])
-        for i in driving[self.node[driving] >= 0]:
-            if np.hypot(*(sw.xy[i] - self.crumbs.xy[self.node[i]])) > 1e-9:
-                self.node[i] = self.crumbs.add(sw.xy[i], int(self.node[i]))
+        if len(driving):
+            driving = driving[self.node[driving] >= 0]
+            at = self.crumbs.xy[self.node[driving]]
+            xy = sw.xy[driving]
+            driving = driving[np.hypot(xy[:, 0] - at[:, 0], xy[:, 1] - at[:, 1]) > 1e-9]
+            self.node[driving] = self.crumbs.add_many(sw.xy[driving], self.node[driving])
         return super().update(t, table, sw)
 
-    def _movable(self, i: int, sw: Swarm) -> bool:
-        return bool(sw.role[i] == Role.ROUTER and _MOVABLE[sw.state[i]] and self.node[i] >= 0)
+    def _movable(self, routers: np.ndarray, sw: Swarm) -> np.ndarray:
+        """Deployed routers (references and settled triangle routers) that know the way they came."""
+        return (sw.role[routers] == Role.ROUTER) & _MOVABLE[sw.state[routers]] & (self.node[routers] >= 0)
 
-    def _waits(self, i: int, started: list[int], table: NeighbourTable, sw: Swarm) -> bool:
-        """A router waits while it hears a neighbour that backs up (or starts to this step): one mover at a time."""
-        heard = table.indices[table.indptr[i]:table.indptr[i + 1]]
-        return bool((sw.state[heard] == State.RELOCATING).any() or np.isin(heard, started).any())
+    def _choose(self, due: np.ndarray, table: NeighbourTable, sw: Swarm) -> np.ndarray:
+        """One mover at a time: a router waits while it hears a neighbour that backs up, or one that starts now.
 
-    def _begin(self, i: int, loss: _Loss, sw: Swarm) -> None:  # the way, not the loss, says where
-        self.skips[i] = 0
-        self._aim(i, sw.xy, fresh=True)
+        The due routers are cut off (the aftermath of a failure: few), so they are taken one by one in the order of
+        their first due loss; a router that waits at its first loss waits at its others too.
+        """
+        _, first = np.unique(self._li[due], return_index=True)
+        chosen: list[int] = []
+        started: list[int] = []
+        for k in due[np.sort(first)]:
+            i = int(self._li[k])
+            heard = table.indices[table.indptr[i]:table.indptr[i + 1]]
+            if not ((sw.state[heard] == State.RELOCATING).any() or np.isin(heard, started).any()):
+                chosen.append(int(k))
+                started.append(i)
+        return np.array(chosen, dtype=np.int64)
+
+    def _begin(self, chosen: np.ndarray, sw: Swarm) -> None:  # the way, not the loss, says where
+        for i in self._li[chosen]:
+            self.skips[i] = 0
+            self._aim(int(i), sw.xy, fresh=True)
 
     def _aim(self, i: int, xy: np.ndarray, fresh: bool = False) -> bool:
         """Head router ``i`` for the first point of its way it has not reached; ``False``: none left.
@@ -252,8 +290,8 @@ class Retracer(Relocator):
             length, blocked = self.steering.steer(np.array([a]), sw.xy, sw.heading, scans[m:m + 1], sensor_range, step,
                                                   np.inf)
             if blocked[0]:  # this point cannot be reached: skip it
-                self.crumbs.paths[m] = self.crumbs.paths[m][:-1] if len(self.crumbs.paths[m]) > 1 else \
-                    self.crumbs.paths[m]
+                if len(self.crumbs.paths[m]) > 1:
+                    self.crumbs.set_path(m, self.crumbs.paths[m][:-1])
                 self.skipped += 1
             speed[m] = length[0] / dt
         return speed

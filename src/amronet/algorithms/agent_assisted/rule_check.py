@@ -87,14 +87,12 @@ class RuleCheck:
         self._no_contact = np.zeros(a, dtype=np.bool_)
         self._no_margin = np.full(a, -np.inf)
         self._contact = np.zeros(a, dtype=np.bool_)
+        self._best = np.full(a, -np.inf)
 
     @property
     def stretches(self) -> bool:
-        """Whether the check can be made inside a quiet stretch.
-
-        Not for the link-quality rule (its margins are the radio's) nor with reverse drops (paths kept in Python).
-        """
-        return self.code != LINK and self.controller.reverse_after_s is None
+        """Whether the check can be made inside a quiet stretch: not with reverse drops (paths kept in Python)."""
+        return self.controller.reverse_after_s is None
 
     def in_stretch(self, first: int, dt: float) -> RuleStep:
         """The check as a quiet stretch makes it (:func:`~.rule_kernels.rule_acts`), from step ``first`` on.
@@ -104,7 +102,12 @@ class RuleCheck:
         c = self.controller
         self._check_books()
         return RuleStep(self.plain, c.deployed_nodes()[1], self.base_xy, c.bases, c.swarm.relaying, first, dt,
-                        self._contact, self._no_margin)
+                        self._contact, self._best)
+
+    @property
+    def reads_margins(self) -> bool:
+        """Whether the check reads the agents' link margins (the link-quality rule)."""
+        return self.code == LINK
 
     @staticmethod
     def knows(controller: AgentControls) -> bool:

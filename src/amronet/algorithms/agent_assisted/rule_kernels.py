@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from amronet.algorithms.common.references import _best_margin as best_margins
 from amronet.engine.network import agents_linked_kernel
 
 __all__ = ["JUNCTION", "LIMITS", "LINK", "LOSING", "PAPER", "RADIUS", "RuleBooks", "RuleInputs", "RuleStep",
@@ -119,7 +120,7 @@ class RuleStep(NamedTuple):
     contact: np.ndarray
     """Scratch ``(A,)``: the agents' contact with a base station."""
     best: np.ndarray
-    """``(A,)`` of ``-inf`` (the link-quality rule, which reads margins, takes no stretch)."""
+    """Scratch ``(A,)``: the agents' best margins to a reference (read by the link-quality rule)."""
 
 
 @njit(cache=True)
@@ -230,13 +231,18 @@ def rule_commit(books):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def rule_acts(rules, done, agents, xy, current, nearest_d, left, scans, indptr, indices):  # pragma: no cover - numba
+def rule_acts(rules, done, agents, xy, current, nearest_d, left, scans, links, is_ref):  # pragma: no cover - numba
     """Whether an agent acts in step ``done`` of a stretch by the rule's check (:func:`rule_quiet`) on its table.
 
-    ``rules``: a :class:`RuleStep`; the other arguments as :class:`RuleInputs` has them, the table as its rows.
+    ``rules``: a :class:`RuleStep`; the other arguments as :class:`RuleInputs` has them; ``links``: the table's
+    ``(indptr, indices, margin)`` (its margins where the link-quality rule reads them); ``is_ref``: which nodes are
+    references ``(N,)``.
     """
     books, relay_xy, base_xy, bases, relaying, first, dt, contact, best = rules
+    indptr, indices, margin = links
     if books[0] == JUNCTION:
         agents_linked_kernel(indptr, indices, agents, bases, relaying, contact)
+    elif books[0] == LINK:  # what best_reference_margin reads of the table
+        best_margins(agents, is_ref, indptr, indices, margin, best)
     t = (first + done) * dt
     return not rule_quiet(books, (t, agents, xy, current, nearest_d, left, relay_xy, base_xy, contact, best, scans))

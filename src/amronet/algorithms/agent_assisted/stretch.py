@@ -7,10 +7,12 @@ calls (the compiled step's three kernels, the explorer's inputs, the radio's tab
 :func:`~amronet.algorithms.agent_assisted.stretch_kernels.quiet_stretch`, which does them one after another with the
 same compiled
 functions, and finishes in Python the step at which it stopped, if any, the way
-:class:`~amronet.algorithms.agent_assisted.fast.CompiledAgents` does it. The explorer's fresh headings are drawn for
-the whole
-stretch at once and the generator is put back to where the steps done leave it, so every run's numbers stay the same
-bit for bit (``tests/test_agent_stretch.py``).
+:class:`~amronet.algorithms.agent_assisted.fast.CompiledAgents` does it. The explorer's fresh headings and the random
+walk of the agents without a plan are drawn in the kernel from the run's generator itself
+(:mod:`amronet.engine.bitgen`), number for number in the order the explorer draws them, so every run's numbers stay
+the same bit for bit (``tests/test_agent_stretch.py``). The kernel builds the radio's tables itself, as the radio does
+(:mod:`.stretch_links`): under the unit disk and the built-in path-loss law, walls and shadowing too
+(``tests/test_agent_stretch_radio.py``).
 """
 
 from __future__ import annotations
@@ -22,17 +24,18 @@ import numpy as np
 from amronet.algorithms.agent_assisted.rule_check import paper_rule_step
 from amronet.algorithms.agent_assisted.stretch_kernels import (
     ACTS,
-    IDLE,
     NON_FINITE,
     TRIANGLES_END,
     Frontier,
     Moves,
     Moving,
-    Radio,
     Triangles,
     quiet_stretch,
 )
+from amronet.algorithms.agent_assisted.stretch_links import NO_MARGIN, Radio
 from amronet.algorithms.stepping import AgentBooks, StepContext, Stretched
+from amronet.engine import bitgen
+from amronet.engine.hearing import HearingInputs
 from amronet.engine.robots import State
 from amronet.engine.sensing import beam_angles
 from amronet.threads import use_threads
@@ -40,6 +43,7 @@ from amronet.threads import use_threads
 if TYPE_CHECKING:
     from amronet.algorithms.agent_assisted.fast import CompiledAgents
     from amronet.algorithms.base import StepInput
+    from amronet.engine.table import NeighbourTable
 
 __all__ = ["QuietStretch"]
 
@@ -58,9 +62,18 @@ class QuietStretch:
     def __init__(self, compiled: CompiledAgents, context: StepContext) -> None:
         self.compiled = compiled
         self.radio_reach = float(context.radio_reach)
-        self.ends = {"quiet": 0, "acts": 0, "idle": 0, "triangle": 0}
-        """How many stretches ended each way: all steps quiet, an agent acting, an agent without a plan, a triangle
-        router arriving or giving up."""
+        self.hearing = context.link_inputs
+        """The radio's inputs as the stretch builds its tables (:mod:`.stretch_links`)."""
+        h = None if self.hearing is None else HearingInputs(*self.hearing)
+        self.laws = h is not None and (h.wall_db > 0.0 or h.clip > 0.0)
+        """Whether the links are decided by their margins (walls or shadowing)."""
+        self.ends = {"quiet": 0, "acts": 0, "triangle": 0}
+        """How many stretches ended each way: all steps quiet, an agent acting, a triangle router arriving or giving
+        up."""
+        self.idle_steps = 0
+        """Steps taken in stretches in which an agent without a plan walked at random."""
+        self._bitgen: tuple[object, int] | None = None
+        """The run's generator and its bit generator's address (:func:`amronet.engine.bitgen.addresses`)."""
         self.triangles_looked_at = 0
         """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
         self.triangle_steps = 0
@@ -98,26 +111,30 @@ class QuietStretch:
     def applies(compiled: CompiledAgents, context: StepContext) -> bool:
         """Whether the loop's steps can be taken in stretches.
 
-        The frontier explorer, a radio that keeps every pair, a drop rule the kernel checks (the paper's, or one
-        where :attr:`.rule_check.RuleCheck.stretches`).
+        The frontier explorer, a radio whose tables the stretch can build (the unit disk, the built-in path-loss
+        law: :attr:`~amronet.algorithms.stepping.StepContext.link_inputs`), a drop rule the kernel checks (the
+        paper's, or one where :attr:`.rule_check.RuleCheck.stretches`), and draws in compiled code
+        (:data:`amronet.engine.bitgen.AVAILABLE`).
         """
         rules = compiled.rules
-        return compiled.frontier and context.keeps_every_pair and (rules is None or rules.stretches)
+        return (bitgen.AVAILABLE and compiled.frontier and context.link_inputs is not None
+                and (rules is None or rules.stretches))
 
     def take(self, limit: int, now: StepInput, agent_books: AgentBooks) -> Stretched | None:
         """Take up to ``limit`` steps (at least one), none of them recorded; ``None`` where none can be taken.
 
         A stretch starts only where a quiet step may: no router settling and no strip router driving, the agents' and
-        the triangle routers' readings and moves within the radio's table, the explorer's deployed nodes painted,
-        every agent on a plan. The step at which the kernel stops (an agent acts or has no plan, a triangle router
-        arrives or gives up) is left for the loop to finish (:attr:`~amronet.algorithms.stepping.Stretched.finish`).
+        the triangle routers' readings and moves within the radio's table, the explorer's deployed nodes painted.
+        Agents without a plan walk at random in it. The step at which the kernel stops (an agent acts, a triangle
+        router arrives or gives up) is left for the loop to finish
+        (:attr:`~amronet.algorithms.stepping.Stretched.finish`).
         The agents' connection books are kept in ``agent_books``'s arrays, step by step; the loop closes them.
         """
         comp = self.compiled
         c, explorer, a = comp.controller, comp.explorer, comp.around
         sw, table = comp.swarm, now.table
         n = len(sw)
-        if (c.settle_at or n < 2 or use_threads(n) or table.candidates is not None
+        if (c.settle_at or n < 2 or use_threads(n) or (table.candidates is not None and not self.laws)
                 or (c.strips is not None and c.strips.moving)):
             return None
         length, reach = comp.moves()
@@ -128,8 +145,6 @@ class QuietStretch:
             return None
         tri = moving.tri
         m = len(c.agents)
-        if np.count_nonzero(explorer.plans.active) < m:  # an agent without a plan: the stretch would stop in its
-            return None  # first step (the frontier spent), at more cost than the step alone
         is_ref, deployed_xy = c.deployed_nodes()
         inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)
         if inputs is None:
@@ -137,39 +152,50 @@ class QuietStretch:
         avoid, layers, settings, plans, buffers = inputs
         grid = comp.knowledge
         knowledge = comp.knowledge_for(deployed_xy, a.sensor_range)
-        rng = c.rng
-        state = rng.bit_generator.state
-        uniform = rng.random(limit * m)
         # every structure as a plain tuple (see .kernels)
-        frontier = Frontier(explorer.steps, grid.stamp, avoid, uniform, *layers, settings, plans, buffers,
-                            explorer.plans.active)
+        sigma = float(explorer.turn_noise * np.sqrt(explorer.dt))  # (its RandomExplorer's, as it scales the noise)
+        frontier = Frontier(explorer.steps, grid.stamp, avoid, self._address(c.rng), sigma, *layers, settings, plans,
+                            buffers, explorer.plans.active)
         triangles = Triangles(comp.triangle_rule, float(c.r_c), c.disabled, c.served_pairs())
         rules = self.paper if comp.rules is None else comp.rules.in_stretch(now.index, now.dt)
-        done, how, n_cand, n_losing, csr, scans, grid.stamp, explorer.steps, looked = quiet_stretch(
+        done, how, n_cand, n_losing, radio, scans, grid.stamp, explorer.steps, looked, idle = quiet_stretch(
             comp.grid, comp.robots(), comp.ring, tuple(Moves(c.agents, length, reach, a.collisions)),
-            tuple(Radio(self.radio_reach, table.indptr, table.indices, table.dist)), comp.tracking(is_ref),
+            self._radio(table, comp.rules is not None and comp.rules.reads_margins), comp.tracking(is_ref),
             (tuple(triangles), tuple(rules)), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
         if how == NON_FINITE:
-            return Stretched(done, csr if done else None, non_finite=True)
-        self.ends[{ACTS: "acts", IDLE: "idle", TRIANGLES_END: "triangle"}.get(how, "quiet")] += 1
+            return Stretched(done, non_finite=True)
+        csr = (radio[5], radio[6], radio[7]) if done else None  # the pairs searched, and their margins
+        margin = radio[9] if done and self.laws else None
+        self.ends[{ACTS: "acts", TRIANGLES_END: "triangle"}.get(how, "quiet")] += 1
+        self.idle_steps += idle
         self.triangles_looked_at += looked
         self.triangle_steps += done if len(tri) else 0
-        if how not in (ACTS, IDLE, TRIANGLES_END):
-            return Stretched(done, csr if done else None)
-        rng.bit_generator.state = state  # stopped part-way through a step: the generator as those steps leave it,
-        rng.random((done + (how != ACTS)) * m)  # then the rest of the step when the loop has the table
+        if how not in (ACTS, TRIANGLES_END):
+            return Stretched(done, csr, margin=margin)
+        # stopped part-way through a step, the generator as the step-by-step path leaves it there: the loop finishes it
 
         def finish(step: StepInput) -> None:
             readings = comp.readings(step, scans, tri)
             if how == ACTS:
                 comp.act(step, n, n_cand, n_losing, scans, readings)
                 return
-            if how == IDLE:
-                explorer.steer_idle(sw.heading, c.agents, scans, a.sensor_range, c.refused[c.agents], rng, sw.xy,
-                                    deployed_xy)
             if len(tri):
                 comp.finish(step, n, readings)
             else:
                 comp.drive(step)
 
-        return Stretched(done, csr if done else None, finish=finish)
+        return Stretched(done, csr, finish=finish, margin=margin)
+
+    def _address(self, rng: np.random.Generator) -> int:
+        """The ``bitgen_t`` address of ``rng``'s bit generator (kept while it is the run's generator)."""
+        if self._bitgen is None or self._bitgen[0] is not rng:
+            self._bitgen = (rng, int(bitgen.addresses([rng])[0]))
+        return self._bitgen[1]
+
+    def _radio(self, table: NeighbourTable, margins: bool) -> tuple:
+        """The kernel's :class:`~.stretch_links.Radio` of this step's ``table`` (``margins``: the rule reads them)."""
+        near = table.geometric
+        assert self.hearing is not None  # (applies)
+        return tuple(Radio(self.radio_reach, table.indptr, table.indices, table.dist,
+                           table.margin if margins else NO_MARGIN, near.indptr, near.indices, near.dist, near.xy,
+                           near.link_margin if self.laws else NO_MARGIN, self.hearing))

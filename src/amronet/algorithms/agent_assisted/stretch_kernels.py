@@ -1,12 +1,14 @@
 """The kernel of an agent-assisted run's quiet stretch: many whole steps in one compiled call.
 
 A *quiet* step of an agent-assisted run with the frontier explorer is one in which no agent has to act (release a
-router, turn back) and every agent follows a plan: the agents sense, track their references, put their readings
-into the shared grid, plan and steer, and drive; the radio builds the next neighbour table; the agents' connection
-is accounted. Most steps are quiet, and each is a dozen small calls with Python in between, most of a step's time
-when there are a few agents. :func:`quiet_stretch` does up to ``limit`` such steps in a row, each with the same
-compiled functions the step-by-step path calls, in the same order, on the same numbers, so the result is the same
-bit for bit (:mod:`amronet.algorithms.agent_assisted.stretch` drives it; ``tests/test_agent_stretch.py`` compares).
+router, turn back): the agents sense, track their references, put their readings into the shared grid, plan and
+steer (an agent without a plan walks at random, drawing from the run's generator in place as numpy draws:
+:func:`~amronet.engine.motion.random_walk_drawing`), and drive; the radio builds the next neighbour table; the
+agents' connection is accounted. Most steps are quiet, and each is a dozen small calls with Python in between, most
+of a step's time when there are a few agents. :func:`quiet_stretch` does up to ``limit`` such steps in a row, each
+with the same compiled functions the step-by-step path calls, in the same order, on the same numbers, so the result
+is the same bit for bit (:mod:`amronet.algorithms.agent_assisted.stretch` drives it; ``tests/test_agent_stretch.py``
+compares).
 
 A step in which an agent hears a reference of another network (a triangle candidate) is quiet too when no triangle
 would go ahead by the local rule or none (:func:`~amronet.algorithms.common.triangular.select_triangles`): the
@@ -29,13 +31,15 @@ from numba import njit
 
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
-from amronet.algorithms.agent_assisted.rule_kernels import PAPER, rule_acts, rule_commit
+from amronet.algorithms.agent_assisted.rule_kernels import LINK, PAPER, rule_acts, rule_commit
+from amronet.algorithms.agent_assisted.stretch_links import Radio, next_radio
 from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
-from amronet.engine.neighbours import search_kernel
+from amronet.engine.bitgen import next_double
+from amronet.engine.motion import random_walk_drawing
 from amronet.engine.network import agents_linked_kernel
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
-__all__ = ["ACTS", "IDLE", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL", "TRIANGLES_NONE",
+__all__ = ["ACTS", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL", "TRIANGLES_NONE",
            "TRIANGLE_RULES", "Frontier", "Links", "Moves", "Moving", "Radio", "StretchEnd", "Triangles",
            "quiet_stretch", "triangle_goes"]
 
@@ -43,15 +47,12 @@ QUIET = 0
 """Every step asked for was done."""
 ACTS = 1
 """The step after the last one done: an agent must act. Sensed and tracked; nothing else done."""
-IDLE = 2
-"""The step after the last one done: an agent has no plan. Sensed, tracked, in the grid and steered by the plans;
-the idle agents' random steering, the move and the radio are left."""
 NON_FINITE = 3
 """A robot's position became non-finite in the last step done (its radio table was not built)."""
 
 TRIANGLES_END = 4
 """The step after the last one done: a triangle router driving to its goal arrives or gives up. Sensed, tracked, in
-the grid and steered by the plans; the triangle routers' steering, the move and the radio are left."""
+the grid, the agents steered; the triangle routers' steering, the move and the radio are left."""
 
 TRIANGLES_NONE = 0
 """Triangle rule ``none``: a candidate whose references are farther apart than ``r_c`` goes ahead."""
@@ -74,15 +75,6 @@ class Moves(NamedTuple):
     """The reach of the moves' collision checks."""
     collisions: bool
     """Whether bodies stop moves."""
-
-
-class Radio(NamedTuple):
-    """The radio's search radius ``r`` and this step's neighbour table (every sensing and driving reach is in ``r``)."""
-
-    r: float
-    indptr: np.ndarray
-    indices: np.ndarray
-    dist: np.ndarray
 
 
 class Triangles(NamedTuple):
@@ -138,8 +130,12 @@ class Frontier(NamedTuple):
     """The knowledge grid's stamp."""
     avoid: float
     """Its avoidance reach."""
-    uniform: np.ndarray
-    """``limit`` times as many uniform draws as there are agents (the fresh headings, step by step)."""
+    bitgen: int
+    """The run's generator's bit generator (:func:`amronet.engine.bitgen.addresses`): the fresh headings' uniforms,
+    the idle agents' normals and uniforms are drawn from it in place, step by step, in the order the explorer draws."""
+    sigma: float
+    """The idle agents' heading noise per step, as
+    :meth:`~amronet.algorithms.agent_assisted.explorers.random_walk.RandomExplorer.steer` scales it."""
     robots: np.ndarray
     no_robots: np.ndarray
     covered: np.ndarray
@@ -178,21 +174,23 @@ class StretchEnd(NamedTuple):
     steps: int
     """Steps done whole."""
     how: int
-    """``QUIET``, ``ACTS``, ``IDLE``, ``TRIANGLES_END`` or ``NON_FINITE``."""
+    """``QUIET``, ``ACTS``, ``TRIANGLES_END`` or ``NON_FINITE``."""
     n_cand: int
-    """After ``ACTS``, ``IDLE`` or ``TRIANGLES_END``: that step's triangle candidates, as its tracking counts them."""
+    """After ``ACTS`` or ``TRIANGLES_END``: that step's triangle candidates, as its tracking counts them."""
     n_losing: int
     """And its agents about to lose their last reference."""
-    table: tuple
-    """The neighbour table's rows ``(indptr, indices, dist)`` after the steps done."""
+    radio: tuple
+    """The :class:`~.stretch_links.Radio` after the steps done (its tables, a plain tuple)."""
     scans: np.ndarray
-    """After ``ACTS``, ``IDLE`` or ``TRIANGLES_END``: that step's agents' readings."""
+    """After ``ACTS`` or ``TRIANGLES_END``: that step's agents' readings."""
     stamp: int
     """The knowledge grid's stamp."""
     explorer_steps: int
     """The explorer's step count."""
     looked: int
     """Steps with a triangle candidate and none going ahead."""
+    idle: int
+    """Steps done with an agent walking at random."""
 
 
 @njit(cache=True)
@@ -203,7 +201,8 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     Every argument but ``limit`` is a named structure, as a plain tuple: the map's
     :class:`~amronet.engine.kernel_data.Grid`; the robots (:class:`~amronet.algorithms.agent_assisted.kernels.Robots`,
     updated in place) and the agents' :class:`~amronet.algorithms.agent_assisted.kernels.Ring`; the agents' moves
-    (:class:`Moves`); the :class:`Radio`; the controller's
+    (:class:`Moves`); the :class:`~.stretch_links.Radio` (its tables built anew every step,
+    :func:`~.stretch_links.next_radio`); the controller's
     :class:`~amronet.algorithms.agent_assisted.kernels.Tracking`; who acts, ``(triangles, rules)``: the
     :class:`Triangles` and the drop rule's :class:`~amronet.algorithms.agent_assisted.rule_kernels.RuleStep`; the
     triangle routers driving to
@@ -219,14 +218,13 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     xy, heading, radius, _, _ = robots
     angles, _ = ring
     agents, length, reach, collisions = moves
-    r, indptr, indices, dist = radio
-    current, _, _, left, _, nearest_d, other_ref, refused = tracking
+    current, is_ref, _, left, _, nearest_d, other_ref, refused = tracking
     triangles, rules = who_acts
     (tri, t_angles, t_sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress,
      r_keep, dt, largest) = moving
     cells, _, _, _, _ = knowledge
     score, seen, _, _, _, row_stamp = cells
-    (now, stamp, avoid, uniform, layer_robots, no_robots, covered, gap, visited, settings, plans, buffers,
+    (now, stamp, avoid, bitgen, sigma, layer_robots, no_robots, covered, gap, visited, settings, plans, buffers,
      active) = frontier
     blocked, clear, ox, oy, res = grid
     m = agents.shape[0]
@@ -243,19 +241,25 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     group = np.zeros(n, np.int64)
     refused_m = np.empty(m, np.bool_)
     fresh = np.empty(m)
+    normal = np.empty(m)  # (the idle agents' draws)
+    uniform = np.empty(m)
     no_bodies = (np.zeros(n + 1, np.int64), np.zeros(0, np.int32), np.zeros(0))
     paper = rules[0][0] == PAPER
+    margins = rules[0][0] == LINK  # (the rule reads the links' margins)
     done = 0
     looked = 0
+    idle = 0
     while done < limit:
+        _, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, _, _, _ = radio
         scans = np.empty((m, angles.shape[0]))
-        table = (indptr, indices, dist)
-        n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, table, scans, tracking, table, paper,
-                                              knowledge, stamp + 1)
+        near = (near_indptr, near_indices, near_dist)  # the rings and the moves read every pair within r
+        n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, near, scans, tracking,
+                                              (indptr, indices, dist), paper, knowledge, stamp + 1)
         if not paper:  # the drop rule decides who acts
             if ((n_cand and triangle_goes(triangles, agents, current, other_ref, left, xy))
-                    or rule_acts(rules, done, agents, xy, current, nearest_d, left, scans, indptr, indices)):
-                return StretchEnd(done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now, looked)
+                    or rule_acts(rules, np.int64(done), agents, xy, current, nearest_d, left, scans,  # (no literal 0)
+                                 (indptr, indices, margin), is_ref)):
+                return StretchEnd(done, ACTS, n_cand, n_losing, radio, scans, stamp, now, looked, idle)
             rule_commit(rules[0])
             looked += 1 if n_cand else 0
             integrate_agents(robots, agents, ring, scans, knowledge, stamp + 1)
@@ -264,11 +268,11 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
             looked += 1
             integrate_agents(robots, agents, ring, scans, knowledge, stamp + 1)
         elif n_cand or n_losing:
-            return StretchEnd(done, ACTS, n_cand, n_losing, (indptr, indices, dist), scans, stamp, now, looked)
+            return StretchEnd(done, ACTS, n_cand, n_losing, radio, scans, stamp, now, looked, idle)
         stamp += 1
-        # the frontier explorer's plan_and_steer
+        # the frontier explorer's plan_and_steer: its uniforms (rng.uniform(-pi, pi, m) as it scales them), ...
         for j in range(m):
-            fresh[j] = -np.pi + (2.0 * np.pi) * uniform[done * m + j]
+            fresh[j] = -np.pi + (2.0 * np.pi) * next_double(bitgen)
             refused_m[j] = refused[agents[j]]
         avoided = np.empty((m, angles.shape[0]))
         for j in range(m):
@@ -278,22 +282,22 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
                         (score, seen, row_stamp, stamp, layer_robots, no_robots, covered, gap, visited), settings,
                         plans, buffers)
         now += 1
-        for j in range(m):
-            if not active[j]:
-                return StretchEnd(done, IDLE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked)
-        near = reach
+        # ... then the agents its plans left idle walk at random (steer_idle; a plan may come back any step)
+        walked = random_walk_drawing(bitgen, heading, agents, active, avoided, angles, avoid, refused_m, sigma, normal,
+                                     uniform)
+        reach_now = reach
         if nt:  # the triangle routers' rings, then their steering, unless one of them arrives or gives up now
             for q in range(nt):
                 if goal_ends(tri[q], xy, Steering(goal, anchors, last_to_goal, blocked_steps, give_up, min_progress),
                              max_step[q]):
-                    return StretchEnd(done, TRIANGLES_END, 0, 0, (indptr, indices, dist), scans, stamp, now, looked)
+                    return StretchEnd(done, TRIANGLES_END, 0, 0, radio, scans, stamp, now, looked, idle)
             for q in range(nt):
                 i = tri[q]
                 cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], t_angles, t_sensor_range,
                               t_scans[q])
                 if n > 1:
-                    cast_bodies_one(i, indptr, indices, dist, xy, heading[i], t_angles, t_sensor_range, radius, largest,
-                                    t_scans[q])
+                    cast_bodies_one(i, near_indptr, near_indices, near_dist, xy, heading[i], t_angles, t_sensor_range,
+                                    radius, largest, t_scans[q])
             farthest = 0.0
             for j in range(m):
                 farthest = max(farthest, lengths[j])
@@ -303,16 +307,16 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
                                     t_scans[q], t_angles, t_sensor_range, max_step[q], r_keep)
                 lengths[m + q] = (step / dt) * dt  # the command's speed times the step, as the move phase has it
                 farthest = max(farthest, lengths[m + q])
-            near = 2.0 * largest + 2.0 * farthest  # the move phase's reach, over every mover
+            reach_now = 2.0 * largest + 2.0 * farthest  # the move phase's reach, over every mover
         # the move, then the radio's next table and the agents' connection
-        bodies = (indptr, indices, dist) if collisions else no_bodies
-        drive_movers(grid, robots, movers, lengths, collisions, bodies, near, refused)
-        ok, indptr, indices, dist = search_kernel(xy.copy(), r, group, np.int64(1))
+        drive_movers(grid, robots, movers, lengths, collisions, near if collisions else no_bodies, reach_now, refused)
+        ok, radio = next_radio(xy, radio, group, margins)
         done += 1
+        idle += 1 if walked else 0
         if not ok:
-            return StretchEnd(done, NON_FINITE, 0, 0, (indptr, indices, dist), scans, stamp, now, looked)
-        _observe(indptr, indices, agents, books)
-    return StretchEnd(done, QUIET, 0, 0, (indptr, indices, dist), np.empty((m, angles.shape[0])), stamp, now, looked)
+            return StretchEnd(done, NON_FINITE, 0, 0, radio, scans, stamp, now, looked, idle)
+        _observe(radio[1], radio[2], agents, books)  # (the links)
+    return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
 
 
 @njit(cache=True)

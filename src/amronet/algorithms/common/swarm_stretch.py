@@ -12,7 +12,8 @@ is what such stretches share: when one may start, the radio's search and the boo
 
 A stretch runs only where its steps need nothing else: a radio that keeps every pair within its reach (the unit
 disk), rings and moves that reach no farther than the table, one thread. It stops after a step that changed whether an
-active run is settled, and (self-spreading) before a step in which a triangular deployment may start.
+active run is settled, and (self-spreading under the ``global`` triangle rule) before a step in which a triangular
+deployment may start.
 """
 
 from __future__ import annotations

@@ -5,8 +5,10 @@ is two or
 three kernels with Python in between: the compiled sense-decide-move, the radio's neighbour search, the books (did a
 run settle?). :func:`spreading_stretch` and :func:`field_stretch` take up to ``limit`` such steps in a row, each with
 the same kernels in the same order on the same numbers, and stop after the first step in which some active run's
-settled state changed (the loop's books then see it, as after any step), or, for self-spreading, *before* a step in
-which a triangular deployment may start (the controller's Python decides those; that step is left whole).
+settled state changed (the loop's books then see it, as after any step), or, for self-spreading under the ``global``
+triangle rule, *before* a step in which a triangular deployment may start (the controller's Python decides those;
+that step is left whole; the ``none`` and ``local`` rules' are decided in the stretch,
+:mod:`amronet.algorithms.self_spreading.triangle_kernels`).
 """
 
 from __future__ import annotations
@@ -27,7 +29,8 @@ QUIET = 0
 SETTLING = 1
 """The last step done changed whether an active run is settled."""
 CANDIDATES = 2
-"""The step after the last one done may start a triangular deployment: nothing of it was done."""
+"""The step after the last one done may start a triangular deployment the kernel does not decide (self-spreading's
+``global`` rule): nothing of it was done."""
 NON_FINITE = 3
 """A robot's position became non-finite in the last step done (its radio table was not built)."""
 BAD_DRAW = 4

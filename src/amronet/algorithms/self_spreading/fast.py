@@ -28,11 +28,13 @@ bodies and the moves one after another (:func:`~amronet.algorithms.self_spreadin
 numbers.
 
 Between two records the steps may be taken in a stretch (:class:`~amronet.algorithms.common.swarm_stretch.SwarmStretch`,
-:func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`), which stops before a step in which a triangular
-deployment may start (the ``link-quality`` stop rule takes no stretch: it reads the margins of the radio's table,
-which the stretch's neighbour search does not give). Every per-robot computation is the same compiled function the
-phase-by-phase path calls, in the same order, so a run gives the same result bit for bit with either step
-(``tests/test_compiled_step.py``).
+:func:`~amronet.algorithms.self_spreading.kernels.spreading_stretch`), which starts the triangular deployments of
+the ``none`` and ``local`` rules itself (:mod:`~amronet.algorithms.self_spreading.triangle_kernels`) and stops before
+a step in which one of the ``global`` rule may start (the ``link-quality`` stop rule takes no stretch: it reads the
+margins of the radio's table, which the stretch's neighbour search does not give). The moves and rings read the
+map's cells through one byte of flags each (:mod:`~amronet.algorithms.self_spreading.cells`). Every per-robot
+computation is the same compiled function the phase-by-phase path calls, in the same order, so a run gives the
+same result bit for bit with either step (``tests/test_compiled_step.py``).
 
 Under a radio whose links are not decided by distance alone (walls, shadowing, packet loss), a triangle router settles
 by the controller's link test (:meth:`~amronet.algorithms.common.goto.GoalSteering.check_links`), and under
@@ -57,6 +59,7 @@ from amronet.algorithms.common.swarm_data import robots_of
 from amronet.algorithms.common.swarm_stretch import SwarmStretch
 from amronet.algorithms.common.swarm_stretch_kernels import Books, Radio
 from amronet.algorithms.phases import move, sense
+from amronet.algorithms.self_spreading.cells import Roomy, cell_flags
 from amronet.algorithms.self_spreading.kernel_data import (
     Draws,
     Moves,
@@ -81,7 +84,7 @@ from amronet.algorithms.stepping import FastStep, StepContext, Stretched, Surrou
 from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
 from amronet.engine.robots import DEPLOYED_STATES, Role, State, state_lookup
-from amronet.engine.sensing import QuietRing, quiet_cells
+from amronet.engine.sensing import QuietRing
 from amronet.engine.streams import compiled_streams, normal_then_uniform
 from amronet.threads import LOCK, use_threads
 
@@ -155,6 +158,9 @@ class CompiledSpreading(FastStep):
         self.other = np.zeros(n, dtype=np.int64)
         self.movers = np.zeros(n, dtype=np.int64)
         self.walkers = np.zeros(n, dtype=np.int64)
+        self.started = np.zeros(n + 1, dtype=np.int64)
+        self.triangles_started = 0
+        """Triangular deployments started inside stretches (:mod:`.triangle_kernels`)."""
         self.scans = np.zeros((n, model.sensor_beams))
         self.length = np.zeros(n)
         self.slot = np.zeros(n, dtype=np.int64)  # the threaded step's (large runs: amronet.threads)
@@ -166,12 +172,16 @@ class CompiledSpreading(FastStep):
         self.normal = np.zeros(n)
         self.uniform = np.zeros(n)
         a = self.around
+        routers = sw.role == Role.ROUTER
+        roomy = Roomy(float(sw.max_speed[routers].max(initial=0.0)) * self.dt,
+                      float(sw.radius[routers].max(initial=0.0)))  # the walkers' step and body (.cells)
         self.data = SpreadingData(
             a.grid, robots_of(sw), self._tracking(c),
-            Tracked(self.explorers, self.new_current, self.nearest, self.other, self.movers, self.walkers),
+            Tracked(self.explorers, self.new_current, self.nearest, self.other, self.movers, self.walkers,
+                    self.started),
             walk_of(c.walker, c.refused), Draws(self.normal, self.uniform), steering_of(c.steering),
-            QuietRing(a.angles, a.sensor_range, quiet_cells(self.omap, a.sensor_range)),
-            Moves(self.scans, self.length, self.slot, self.free, self.planned),
+            QuietRing(a.angles, a.sensor_range, cell_flags(self.omap, a.grid, a.sensor_range, roomy)),
+            Moves(self.scans, self.length, self.slot, self.free, self.planned, roomy),
             Csr(*a.no_bodies(n)), bool(a.collisions), float(self.dt))
         """What the kernels read and keep, built once: the arrays are the swarm's, the controller's and those above."""
         stretch = self.streams is not None and not self.by_signal and SwarmStretch.applies(context)
@@ -187,7 +197,7 @@ class CompiledSpreading(FastStep):
         smoothed, alpha = (np.zeros(0), 1.0) if smoother is None else (smoother.value, float(smoother.alpha))
         return Tracking(c.current, self.deployed_lookup, self.is_ref, bool(self.want_other), float(c.r_eff), self.r_c,
                         bool(self.local), c.disabled, self.by_signal, smoothed, alpha, float(p.stop_margin_db),
-                        float(p.loss_margin_db))
+                        float(p.loss_margin_db), not self.checks_links and p.triangular in ("none", "local"))
 
     @staticmethod
     def applies(controller: SpreadingControls, context: StepContext) -> bool:
@@ -258,4 +268,13 @@ class CompiledSpreading(FastStep):
             assert self.streams is not None
             return spreading_stretch(limit, self.data, self.streams, radio, csr, books, index)
 
-        return self.stretcher.take(limit, now.table, watch, kernel)
+        done = self.stretcher.take(limit, now.table, watch, kernel)
+        count = int(self.started[0])
+        if count:  # what GoalSteering.start sets besides the kernels' arrays: the link test's references
+            who, steering = self.started[1:count + 1], self.controller.steering
+            steering.refs[who] = steering.anchors[who]
+            steering.heard_xy[who] = np.nan
+            steering.retreating[who] = False
+            self.started[0] = 0
+            self.triangles_started += count
+        return done

@@ -26,6 +26,7 @@ from numba.experimental import structref
 
 from amronet.algorithms.common.goto import Steering
 from amronet.algorithms.common.swarm_data import KernelData, Robots, unliteral_fields
+from amronet.algorithms.self_spreading.cells import Roomy
 from amronet.algorithms.self_spreading.walks import WALKS, Walker
 from amronet.engine.kernel_data import Csr, Grid
 from amronet.engine.sensing import QuietRing
@@ -63,6 +64,10 @@ class Tracking(NamedTuple):
     """``link-quality``: stop where the smoothed best margin is below this."""
     loss_margin_db: float
     """``link-quality``: stop at once where the raw best margin is below this."""
+    starts: bool
+    """Whether a stretch starts the triangular deployments itself
+    (:func:`~amronet.algorithms.self_spreading.triangle_kernels.settle_with_triangles`: the ``none`` and ``local``
+    rules, where the controller needs no link test), instead of ending before a step in which one may start."""
 
 
 class Tracked(NamedTuple):
@@ -80,6 +85,8 @@ class Tracked(NamedTuple):
     """The routers that move this step."""
     walkers: np.ndarray
     """The walkers among them."""
+    started: np.ndarray
+    """``int64 (N + 1,)``: how many routers a stretch sent to a triangle goal (entry 0), then their ids."""
 
 
 class Walk(NamedTuple):
@@ -146,6 +153,9 @@ class Moves(NamedTuple):
     """The threaded step's: whether the path is clear of obstacles."""
     planned: np.ndarray
     """``(N, 2)``, the threaded step's: where the move would end."""
+    roomy: Roomy
+    """The step and body for which the map's cells (the ring's ``quiet``) say whether a move has room
+    (:func:`~amronet.algorithms.self_spreading.cells.drive_roomy`)."""
 
 
 class Streams(NamedTuple):
@@ -178,7 +188,8 @@ class SpreadingData(KernelData):
         draws: The walkers' draws' buffers (``(N,)`` each).
         steering: The triangle routers' go-to-goal.
         ring: The movers' sensor ring, with the cells where it cannot meet the grid
-            (:class:`~amronet.engine.sensing.QuietRing`).
+            (:class:`~amronet.engine.sensing.QuietRing`; its ``quiet`` are the map's
+            :func:`~amronet.algorithms.self_spreading.cells.cell_flags`).
         moves: The movers' scratch.
         no_bodies: An empty neighbour list (moves without collisions).
         collisions: Whether bodies collide.

@@ -16,7 +16,9 @@ from numba import njit, prange
 from amronet.algorithms.common.goto import steer_one
 from amronet.algorithms.common.references import track_row
 from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, QUIET, after_step
+from amronet.algorithms.self_spreading.cells import drive_roomy
 from amronet.algorithms.self_spreading.kernel_data import Draws
+from amronet.algorithms.self_spreading.triangle_kernels import settle_with_triangles
 from amronet.algorithms.self_spreading.walk_kernels import (
     GROWTH,
     RANDOM,
@@ -26,7 +28,7 @@ from amronet.algorithms.self_spreading.walk_kernels import (
 )
 from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
-from amronet.engine.motion import commit_one, drive_one, plan_one
+from amronet.engine.motion import commit_one, plan_one
 from amronet.engine.robots import State
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one, cast_ring_one
 
@@ -260,7 +262,8 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
     refused[:] = False
     for m in range(movers.shape[0]):  # move, one after another
         i = movers[m]
-        r, travelled = drive_one(data.grid, i, heading[i], length[m], xy, radius, drive_bodies, d_csr, near)
+        r, travelled = drive_roomy(data.grid, ring.quiet, moves.roomy, i, heading[i], length[m], xy, radius,
+                                   drive_bodies, d_csr, near)
         refused[i] = r
         distance[i] += travelled
     _arrive(movers, state, xy, steering.goal)
@@ -314,7 +317,7 @@ def _plan_threaded(grid, robots, walk, draws, steering, ring, s_csr, movers, mov
     numba's ``prange`` takes flat named tuples, not nested ones, and loses what its body writes into an array reached
     through a named tuple's field: the arrays written here are taken out first, :func:`decide_one` is a call.
     """
-    scans, length, slot, free, planned = moves
+    scans, length, slot, free, planned, _ = moves
     big = robots.radius.max()
     sense_bodies = robots.xy.shape[0] > 1
     random = walk.rule == RANDOM  # the paper's walk: the call compiled for it alone
@@ -368,9 +371,12 @@ def spreading_stretch(limit, data, streams, radio, csr, books, index):  # pragma
     """
     robots, tracked, draws = data.robots, data.tracked, data.draws
     for s in range(limit):
-        _, candidates, n_movers, n_walkers = track_explorers(data, csr.indptr, csr.indices, csr.dist)
-        if candidates:
+        k, candidates, n_movers, n_walkers = track_explorers(data, csr.indptr, csr.indices, csr.dist)
+        if candidates and not data.tracking.starts:
             return s, CANDIDATES, csr
+        if candidates:  # the none and local rules: the controller's choices, compiled
+            settle_with_triangles(data, k)
+            n_movers, n_walkers = list_movers(robots.state, tracked.movers, tracked.walkers)
         if n_movers == 0:
             data.walk.refused[:] = False
         else:

@@ -1,0 +1,81 @@
+"""Quiet stretches of agent-assisted runs under the path-loss radio and the link-quality rule, against the same runs
+step by step (amronet.algorithms.agent_assisted.stretch_links)."""
+
+import numpy as np
+import pytest
+
+from amronet.algorithms.agent_assisted.stretch import QuietStretch
+from amronet.engine.links import stretch_inputs
+from amronet.engine.radio import make_medium
+from amronet.experiments.building_cells import BUILDINGS, RULES
+from amronet.experiments.common import agent_scenario
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from amronet.world.builtin import resolve_map
+from test_agent_stretch import _books, _summary
+
+CASES = {  # name: (building, drop rule, radio fields, agents fields, simulated seconds)
+    **{f"{b}, {rule}, multi-wall {db} dB": (b, rule, {"model": "multi-wall", "shadowing_db": db}, {}, 150.0)
+       for b in ("hospital_section", "office-32x32") for db in (0.0, 4.0)
+       for rule in ("last-reference", "radius", "distance-junction", "link-quality")},
+    "office-32x32, link-quality, unit disk": ("office-32x32", "link-quality", {}, {}, 200.0),
+    "hospital_section, link-quality, unit disk": ("hospital_section", "link-quality", {}, {}, 150.0),
+    "office-32x32, link-quality, log-distance": ("office-32x32", "link-quality", {"model": "log-distance"}, {}, 150.0),
+    "hospital_section, radius, 3 routers then on": (
+        "hospital_section", "radius", {"model": "multi-wall", "shadowing_db": 4.0},
+        {"routers_carried": 3, "when_empty": "continue"}, 200.0),
+    "office-32x32, link-quality, 6 routers then on": (
+        "office-32x32", "link-quality", {"model": "multi-wall", "shadowing_db": 4.0},
+        {"routers_carried": 6, "when_empty": "continue"}, 200.0),
+}
+
+
+def _scenario(building, rule, radio, agents, seconds):
+    b = BUILDINGS[building]
+    name, drop = RULES[rule]
+    return load_scenario(agent_scenario(b.map, b.r_c, (b.base,), 3, "frontier", seconds, radio=radio,
+                                        drop_rule=name, drop=drop, agents=agents))
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_stretches_under_the_path_loss_radio_give_the_step_by_step_run_bit_for_bit(name):
+    sc = _scenario(*CASES[name])
+    fast, slow = Simulation(sc, 7), Simulation(sc, 7)
+    assert isinstance(fast.compiled.quiet, QuietStretch)
+    slow.compiled.quiet = None
+    a, b = fast.run(), slow.run()
+    for key, value in _books(slow).items():
+        np.testing.assert_array_equal(_books(fast)[key], value, err_msg=key)
+    np.testing.assert_array_equal(fast.table.margin, slow.table.margin)
+    np.testing.assert_array_equal(fast.table.geometric.indices, slow.table.geometric.indices)
+    assert fast.rows == slow.rows
+    assert _summary(a) == _summary(b)
+    assert sum(fast.compiled.quiet.ends.values()) > 0  # stretches ran
+    assert fast.compiled.quiet.laws == (sc.radio.model != "unit-disk")  # (links decided by their margins)
+
+
+def test_a_stretch_leaves_the_radio_where_its_own_steps_leave_it():
+    # the table after a stretch under walls and shadowing, its dropped links and the margins the next step reuses
+    sc = _scenario("hospital_section", "distance-junction", {"model": "multi-wall", "shadowing_db": 4.0}, {}, 150.0)
+    fast, slow = Simulation(sc, 3), Simulation(sc, 3)
+    slow.compiled.quiet = None
+    dropped = 0
+    while fast.steps < 600:
+        fast.advance(40)
+        slow.advance(40)
+        for t, u in ((fast.table, slow.table), (fast.table.geometric, slow.table.geometric)):
+            for key in ("xy", "indptr", "indices", "dist", "margin"):
+                np.testing.assert_array_equal(getattr(t, key), getattr(u, key), err_msg=key)
+        for k in range(4):
+            np.testing.assert_array_equal(fast.medium._previous[k], slow.medium._previous[k])
+        dropped += fast.table.candidates is not None
+    assert sum(fast.compiled.quiet.ends.values()) > 0 and dropped > 0
+
+
+def test_only_the_path_loss_law_without_packet_loss_builds_its_tables_in_a_stretch():
+    omap = resolve_map("office-32x32")
+    rng = np.random.default_rng(1)
+    assert stretch_inputs(make_medium("unit-disk", 4.0, omap, rng)) is not None
+    assert stretch_inputs(make_medium("multi-wall", 4.0, omap, rng)) is not None
+    assert stretch_inputs(make_medium("multi-wall", 4.0, omap, rng, packet_loss=True)) is None
+    assert stretch_inputs(make_medium("unit-disk", 4.0, omap, rng, packet_loss=True)) is None

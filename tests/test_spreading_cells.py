@@ -1,0 +1,92 @@
+"""Self-spreading's cell flags (amronet.algorithms.self_spreading.cells): the same rings and moves, one byte read."""
+
+import numpy as np
+
+from amronet.algorithms.self_spreading.cells import QUIET_RING, ROOMY, Roomy, cell_flags, drive_roomy
+from amronet.engine.kernel_data import grid_of
+from amronet.engine.motion import drive_one
+from amronet.engine.sensing import QuietRing, beam_angles, cast_ring_one, quiet_cells
+from helpers import box_map
+
+SENSOR_RANGE = 0.14
+ROOM = Roomy(0.02, 0.045)  # the Bebot's step (0.2 m/s x 0.1 s) and body
+
+
+def _cluttered_map():
+    rng = np.random.default_rng(7)
+    walls = [(slice(int(r), int(r) + 1 + int(h)), slice(int(c), int(c) + 1 + int(w)))
+             for r, c, h, w in rng.integers(0, 90, size=(40, 4)) % [90, 90, 3, 3]]
+    return box_map(rows=100, cols=100, res=0.047, origin=(-0.3, 0.2), walls=walls)
+
+
+def _free_points(omap, rng, n):
+    rows, cols = np.nonzero(~omap.blocked)
+    pick = rng.integers(len(rows), size=n)
+    return np.array(omap.origin) + (np.stack([cols[pick], rows[pick]], axis=1) + rng.random((n, 2))) * omap.resolution
+
+
+def test_the_flags_are_the_rings_and_the_moves_own_tests():
+    omap = _cluttered_map()
+    grid = grid_of(omap)
+    flags = cell_flags(omap, grid, SENSOR_RANGE, ROOM)
+    assert cell_flags(omap, grid, SENSOR_RANGE, ROOM) is flags and not flags.flags.writeable
+    ring = (grid.blocked == 0) & ((grid.clear - grid.res >= SENSOR_RANGE) | (quiet_cells(omap, SENSOR_RANGE) != 0))
+    room = grid.clear >= ROOM.radius + ROOM.length + 1.5 * grid.res
+    np.testing.assert_array_equal((flags & QUIET_RING) != 0, ring)
+    np.testing.assert_array_equal((flags & ROOMY) != 0, room)
+    assert 0 < ring.mean() < 1 and 0 < room.mean() < 1 and (ring != room).any()
+
+
+def test_a_ring_reads_only_bit_0_of_its_quiet_cells():
+    """The flags' other bits (ROOMY) set where no beam is quiet must not make a ring read its range."""
+    from numba import njit
+
+    @njit
+    def rings(grid, ring, xy, heading, radius, csr, out):
+        dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
+        for i in range(xy.shape[0]):
+            cast_ring_one(grid, ring, i, xy, heading, radius, radius.max(), False, csr, dirs, out[i])
+
+    omap = _cluttered_map()
+    grid = grid_of(omap)
+    rng = np.random.default_rng(2)
+    xy = _free_points(omap, rng, 2000)
+    heading = rng.uniform(-np.pi, np.pi, 2000)
+    radius = np.full(2000, 0.045)
+    csr = (np.zeros(2001, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
+    angles = beam_angles(12)
+    quiet = quiet_cells(omap, SENSOR_RANGE)
+    want = np.empty((2000, 12))
+    rings(grid, QuietRing(angles, SENSOR_RANGE, quiet), xy, heading, radius, csr, want)
+    for flags in (quiet | np.uint8(ROOMY), cell_flags(omap, grid, SENSOR_RANGE, ROOM)):
+        got = np.empty_like(want)
+        rings(grid, QuietRing(angles, SENSOR_RANGE, flags), xy, heading, radius, csr, got)
+        np.testing.assert_array_equal(got, want)
+    assert (want < SENSOR_RANGE).any(axis=1).mean() > 0.2  # many rings see a wall
+
+
+def test_a_move_by_the_flags_is_the_move_by_the_clearance_bit_for_bit():
+    """Bodies and steps larger than the flag's fall back to the clearance; everyone ends where drive_one puts them."""
+    omap = _cluttered_map()
+    grid = grid_of(omap)
+    flags = cell_flags(omap, grid, SENSOR_RANGE, ROOM)
+    rng = np.random.default_rng(3)
+    n = 3000
+    start = _free_points(omap, rng, n)
+    heading = rng.uniform(-np.pi, np.pi, n)
+    length = rng.choice([0.0, 0.01, ROOM.length, np.nextafter(ROOM.length, 1.0), 0.05], size=n)
+    radius = rng.choice([0.03, ROOM.radius, np.nextafter(ROOM.radius, 1.0), 0.165], size=n)
+    csr = (np.zeros(n + 1, dtype=np.int64), np.zeros(0, dtype=np.int32), np.zeros(0))
+    outcomes = []
+    for drive in ("flags", "clearance"):
+        xy = start.copy()
+        refused = np.empty(n, dtype=bool)
+        for i in range(n):
+            if drive == "flags":
+                refused[i], _ = drive_roomy(grid, flags, ROOM, i, heading[i], length[i], xy, radius, False, csr, 1.0)
+            else:
+                refused[i], _ = drive_one(grid, i, heading[i], length[i], xy, radius, False, csr, 1.0)
+        outcomes.append((xy, refused))
+    np.testing.assert_array_equal(outcomes[0][0], outcomes[1][0])
+    np.testing.assert_array_equal(outcomes[0][1], outcomes[1][1])
+    assert 0.02 < outcomes[0][1].mean() < 0.9  # walls refuse some moves, not all
