@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
-from amronet.engine.links import stretch_inputs
 from amronet.engine.radio import make_medium
 from amronet.experiments.building_cells import BUILDINGS, RULES
 from amronet.experiments.common import agent_scenario
@@ -75,7 +74,7 @@ def test_a_stretch_leaves_the_radio_where_its_own_steps_leave_it():
 def test_only_the_path_loss_law_without_packet_loss_builds_its_tables_in_a_stretch():
     omap = resolve_map("office-32x32")
     rng = np.random.default_rng(1)
-    assert stretch_inputs(make_medium("unit-disk", 4.0, omap, rng)) is not None
-    assert stretch_inputs(make_medium("multi-wall", 4.0, omap, rng)) is not None
-    assert stretch_inputs(make_medium("multi-wall", 4.0, omap, rng, packet_loss=True)) is None
-    assert stretch_inputs(make_medium("unit-disk", 4.0, omap, rng, packet_loss=True)) is None
+    assert make_medium("unit-disk", 4.0, omap, rng).stretch_inputs is not None
+    assert make_medium("multi-wall", 4.0, omap, rng).stretch_inputs is not None
+    assert make_medium("multi-wall", 4.0, omap, rng, packet_loss=True).stretch_inputs is None
+    assert make_medium("unit-disk", 4.0, omap, rng, packet_loss=True).stretch_inputs is None

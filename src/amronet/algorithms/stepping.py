@@ -113,9 +113,9 @@ class StepContext:
         keeps_every_pair: Whether the radio's table lists every pair within ``radio_reach`` (the unit disk): what a
             stretch that searches the neighbours itself needs.
         link_inputs: What a stretch that builds the radio's tables itself needs of it
-            (:func:`~amronet.engine.links.stretch_inputs`: the margin inputs of the built-in path-loss law, whose
-            links are the pairs within ``radio_reach`` with a margin ``>= 0``; without walls and shadowing, every
-            pair), or ``None``: the radio's own tables only.
+            (:attr:`~amronet.engine.radio.RadioMedium.stretch_inputs`: the margin inputs of the built-in
+            path-loss law, whose links are the pairs within ``radio_reach`` with a margin ``>= 0``; without walls
+            and shadowing, every pair), or ``None``: the radio's own tables only.
     """
 
     omap: OccupancyMap

@@ -12,21 +12,16 @@ each (:func:`candidate_margins`, once per pair and mirrored) and keeps those at 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numba import njit
 
-from amronet.engine.hearing import HearingInputs, named_inputs, open_margin, path_loss_margin, wall_limit
+from amronet.engine.hearing import named_inputs, open_margin, path_loss_margin, wall_limit
 from amronet.engine.propagation import delivery_ratio
 from amronet.engine.shadowing import _cell_value
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits
 
-if TYPE_CHECKING:
-    from amronet.engine.radio import RadioMedium
-
 __all__ = ["NO_PREVIOUS", "candidate_margins", "distance_margins", "keep_entries", "losses", "mirror",
-           "path_loss_candidate_margins", "stretch_inputs"]
+           "path_loss_candidate_margins"]
 
 model_margin = path_loss_margin
 """The margin kernel :func:`candidate_margins` calls (a model's own in the copies of
@@ -230,17 +225,3 @@ def distance_margins(dist, r_c, n10):  # pragma: no cover - numba
         out[e] = open_margin(dist[e], 0.0, 0.0, r_c, n10, 0.0, 0.0)
     return out
 
-
-def stretch_inputs(medium: RadioMedium) -> tuple | None:
-    """What a compiled stretch that builds ``medium``'s tables itself needs of it, or ``None`` where none may.
-
-    The :class:`~amronet.engine.hearing.HearingInputs` (a plain tuple) whose margins decide its links: under
-    :attr:`~amronet.engine.radio.RadioMedium.keeps_every_pair` none are (inputs without walls and shadowing: every
-    pair within reach is a link); under the built-in path-loss law without packet loss a link is a pair within reach
-    whose margin (:func:`path_loss_candidate_margins`) is ``>= 0``. Other models' tables are the medium's own.
-    """
-    if medium.keeps_every_pair:
-        return HearingInputs.from_budget(medium.budget, None, None, walls=False).plain()
-    if type(medium).link_margin is path_loss_margin and not medium.packet_loss:
-        return medium.hearing.plain()
-    return None

@@ -43,7 +43,7 @@ reaches farther). A model may declare the fast paths it supports (class attribut
   tested, and the signal map tests the whole map (or give :meth:`~RadioMedium.signal_reach`).
 * :attr:`~RadioMedium.every_pair_is_link`: every pair within reach is a link whose margin follows from its length
   by the link budget (the unit disk): the table needs no margin kernel, and every algorithm's compiled stretches
-  may run (agent-assisted ones run under the built-in path-loss law too: :func:`~amronet.engine.links.stretch_inputs`).
+  may run (agent-assisted ones run under the built-in path-loss law too: :attr:`~RadioMedium.stretch_inputs`).
 * :attr:`~RadioMedium.disk_coverage`: a cell is heard exactly when its centre is within ``r_c`` of a node (Eq. (1)
   of the paper): coverage in closed form, both methods, all runs of a batch in one call.
 
@@ -63,7 +63,7 @@ import numpy as np
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.coverage_heard import HeardCells
 from amronet.engine.hearing import HearingInputs, path_loss_bound, path_loss_margin
-from amronet.engine.links import NO_PREVIOUS, keep_entries, losses, stretch_inputs
+from amronet.engine.links import NO_PREVIOUS, keep_entries, losses
 from amronet.engine.margin_kernels import MarginKernels, margin_kernels
 from amronet.engine.neighbours import GroupIds, neighbour_csr_checked
 from amronet.engine.propagation import LinkBudget
@@ -151,8 +151,7 @@ class RadioMedium:
         self.hearing = HearingInputs.from_budget(budget, omap, self.shadowing, walls=self.uses_walls)
         self._plain = self.hearing.plain()
         self._kernels: MarginKernels | None = None
-        self._told = False
-        """Whether :meth:`_announce` ran."""
+        self._told = False  # whether _announce ran
         self._heard: HeardCells | None = None
 
     @property
@@ -179,6 +178,17 @@ class RadioMedium:
         So it is when the model declares :attr:`every_pair_is_link` and no link is lost (single runs, none failed).
         """
         return self.every_pair_is_link and not self.packet_loss
+
+    @property
+    def stretch_inputs(self) -> tuple | None:
+        """What a compiled stretch that builds this medium's tables itself needs: its margin inputs, or ``None``.
+
+        Under :attr:`keeps_every_pair` inputs without walls and shadowing (every pair within reach is a link); under
+        the built-in path-loss law without packet loss :attr:`hearing` (a link: a pair whose margin is ``>= 0``).
+        """
+        if self.keeps_every_pair:
+            return HearingInputs.from_budget(self.budget, None, None, walls=False).plain()
+        return self._plain if type(self).link_margin is path_loss_margin and not self.packet_loss else None
 
     def signal_reach(self, floor_db: float) -> float:
         """The farthest a link with a margin of at least ``floor_db`` may reach (``inf``: unknown, the whole map).
@@ -240,7 +250,7 @@ class RadioMedium:
                     groups: np.ndarray | None = None, margin: np.ndarray | None = None) -> NeighbourTable:
         """:meth:`update`'s table of ``xy`` (runs ``groups``) from a compiled search within :attr:`reach`, none silent.
 
-        ``margin``: its pairs' margins (``None``: every pair is a link; :func:`~amronet.engine.links.stretch_inputs`).
+        ``margin``: its pairs' margins (``None``: every pair is a link; :attr:`~RadioMedium.stretch_inputs`).
         """
         if margin is not None:
             self._previous = (xy, indptr, indices, margin)  # as _margins leaves it
@@ -261,7 +271,7 @@ class RadioMedium:
         slower = []
         if not self.keeps_every_pair:
             why = "packet loss drops links at random" if self.every_pair_is_link else "no every_pair_is_link"
-            but = " but for agent-assisted runs" if stretch_inputs(self) is not None else ""
+            but = " but for agent-assisted runs" if self.stretch_inputs is not None else ""
             slower.append(f"no compiled stretches{but}, steps are taken one at a time ({why})")
         if not self.disk_coverage:
             slower.append("coverage is decided cell by cell, run by run (no disk_coverage)")
@@ -382,14 +392,7 @@ class MultiWall(_PathLoss):
 
 def make_medium(model: str, budget: LinkBudget | float, omap: OccupancyMap | None = None,
                 rng: np.random.Generator | None = None, packet_loss: bool = False) -> RadioMedium:
-    """Instantiate the radio medium registered as ``model``.
-
-    Args:
-        model: The registered name (``radio.model``).
-        budget: The link budget, or just ``r_c`` (the model's defaults for the rest).
-        omap: The map (walls, the shadowing field's extent).
-        rng: The run's generator (shadowing, packet loss).
-        packet_loss: Drop links per step by their delivery ratio.
+    """The radio medium registered as ``model`` (``radio.model``), made as :class:`RadioMedium` takes its arguments.
 
     Raises:
         ScenarioError: ``model`` is unknown (field ``radio.model``).

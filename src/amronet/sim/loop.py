@@ -43,7 +43,6 @@ import numpy as np
 from amronet.algorithms import ALGORITHMS, AreaKnowledge, Command, Controller, Readings, RouterStock, Setup, StepInput
 from amronet.algorithms.phases import move, sense
 from amronet.algorithms.stepping import AgentBooks, FastStep, StepContext, Watch
-from amronet.engine.links import stretch_inputs
 from amronet.engine.motion import path_clear
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.robots import Role, State, Swarm
@@ -169,7 +168,7 @@ class Loop:
         return StepContext(omap=self.world.omap, swarm=sw, groups=self.groups, dt=self.dt, faults=bool(sc.faults),
                            collisions=sc.sim.robot_collisions, radio_reach=float(self.medium.reach),
                            agents=sc.agents.per_base > 0 or bool((sw.role == Role.AGENT).any()),
-                           keeps_every_pair=self.medium.keeps_every_pair, link_inputs=stretch_inputs(self.medium))
+                           keeps_every_pair=self.medium.keeps_every_pair, link_inputs=self.medium.stretch_inputs)
 
     def _now(self) -> StepInput:
         """The input of the step about to be taken (no readings: a fast step senses itself)."""

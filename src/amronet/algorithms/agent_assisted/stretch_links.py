@@ -5,9 +5,10 @@ A quiet stretch (:mod:`.stretch_kernels`) builds each step's neighbour table its
 
 * the pairs within the radio's reach (:func:`~amronet.engine.neighbours.search_kernel`): the *geometric* table, which
   the rings and the collision checks read;
-* under the built-in path-loss law with walls or shadowing (:func:`~amronet.engine.links.stretch_inputs`), the margin
-  of every pair (:func:`~amronet.engine.links.path_loss_candidate_margins`, taking the previous step's margin of a
-  pair whose two ends have not moved) and, as the table of links, the pairs whose margin is ``>= 0``
+* under the built-in path-loss law with walls or shadowing
+  (:attr:`~amronet.engine.radio.RadioMedium.stretch_inputs`), the margin of every pair
+  (:func:`~amronet.engine.links.path_loss_candidate_margins`, taking the previous step's margin of a pair whose two
+  ends have not moved) and, as the table of links, the pairs whose margin is ``>= 0``
   (:func:`~amronet.engine.links.keep_entries`); otherwise every pair is a link;
 * where the drop rule reads them (``link-quality``), the margins of the links: the path-loss law's, or by distance
   (:func:`~amronet.engine.links.distance_margins`, what :attr:`~amronet.engine.table.NeighbourTable.margin` gives).
@@ -55,7 +56,8 @@ class Radio(NamedTuple):
     """Its pairs' margins under the path-loss law (else :data:`NO_MARGIN`)."""
     hearing: tuple
     """The radio's :class:`~amronet.engine.hearing.HearingInputs` as a plain tuple
-    (:func:`~amronet.engine.links.stretch_inputs`): with ``wall_db`` and ``clip`` 0, every pair is a link."""
+    (:attr:`~amronet.engine.radio.RadioMedium.stretch_inputs`): with ``wall_db`` and ``clip`` 0, every pair is a
+    link."""
 
 
 @njit(cache=True)
