@@ -30,7 +30,10 @@ SMALL = {**FRONTIER, "map": "cave", "radio.r_c": 4.0, "sim.time_limit": 150, "si
 """A small map the agents explore in a minute, and a run that goes on: most steps with agents without a plan."""
 FAILURES = {k: v for k, v in _scenario("agent-assisted", "office-32x32", 0.2, 600.0, 600.0, "frontier").items()
             if k != "faults"}
-"""``reproduce failures``' agent-assisted run without its faults (a run with faults takes no stretches)."""
+"""``reproduce failures``' agent-assisted run without its faults."""
+FAULTS = {"sim.time_limit": 260, "faults": [{"at": 100.0, "routers": 0.3}, {"at": 101.05, "ids": [3]},
+                                             {"rate_per_hour": 30.0, "at": 200.0}]}
+"""Faults in the failures' run: stretches until the first, none once a node failed (the table silences it)."""
 CASES = {
     "office, r_c 4 m": ("agent-assisted-office", 2, {**FRONTIER, "sim.time_limit": 300, "radio.r_c": 4.0}),
     "open floor, four agents": ("agent-assisted-office", 3, {**FRONTIER, "sim.time_limit": 200, "map": "open-32x32",
@@ -45,6 +48,7 @@ CASES = {
     "small map, agents idle, unit disk": ("agent-assisted-office", 7, SMALL),
     "small map, agents idle, multi-wall": ("agent-assisted-office", 8, {**SMALL, "radio.model": "multi-wall"}),
     "failures' run, no coverage target, agents idle": (FAILURES, 9, {"sim.time_limit": 900}),
+    "failures' run with faults": (FAILURES, 10, FAULTS),
 }
 
 
@@ -81,6 +85,9 @@ def test_stretches_give_the_step_by_step_run_bit_for_bit(name):
     assert _summary(a) == _summary(b)
     ends = fast.compiled.quiet.ends
     assert sum(ends.values()) > 0  # stretches ran
+    if "faults" in overrides:  # before the first fault only, and up to the step before it
+        assert fast.books.fault_book.events[0].t == 100.0
+        assert fast.compiled.quiet.ends["quiet"] > 0 and a.summary["faults"]["nodes_failed"] > 0
     if name == "office, r_c 4 m":  # whole stretches, and stretches that stopped where an agent acted
         assert ends["quiet"] > 0 and ends["acts"] > 0
     if name.startswith("hospital") or "idle" in name:  # the agents soon run out of plans: stretches go on with those

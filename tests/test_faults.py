@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import amronet
 from amronet.engine.network import connected_to
@@ -205,3 +207,25 @@ def test_relocation_is_deterministic():
     _, a = corridor_run("relocate", seed=2)
     _, b = corridor_run("relocate", seed=2)
     assert a.network == b.network and a.summary["faults"] == b.summary["faults"]
+
+
+@settings(max_examples=150, deadline=None)
+@given(at=st.floats(0.0, 50.0), dt=st.sampled_from([0.1, 0.05, 0.2, 0.3, 1.0 / 3.0]), step=st.integers(0, 600),
+       limit=st.integers(1, 40), poisson=st.booleans())
+def test_quiet_steps_are_the_steps_in_which_due_finds_and_draws_nothing(at, dt, step, limit, poisson):
+    """What a stretch may take in a run with faults (amronet.sim.loop.Loop._stretch), against due() step by step."""
+    from amronet.scenario.schema import FaultSpec
+    from amronet.sim.faults import FaultSchedule
+
+    # a Poisson rate so high that every step it is on fails a router: a step that draws has an event
+    spec = FaultSpec(rate_per_hour=1e12, at=at) if poisson else FaultSpec(at=at, ids=[1])
+    schedule = FaultSchedule([spec], np.array([0]), dt, np.random.default_rng(0))
+    quiet = schedule.quiet_steps(step, limit)
+    role, deployed = np.array([Role.BASE, Role.ROUTER]), np.array([True, True])
+    expected = 0
+    while expected < limit:
+        state = np.full(2, State.REFERENCE)
+        if schedule.due((step + expected) * dt, role, state, deployed):
+            break
+        expected += 1
+    assert quiet == expected

@@ -106,8 +106,8 @@ class StepContext:
         dt: Step length, seconds.
         collisions: Whether robots' bodies collide (``sim.robot_collisions``).
         faults: Whether nodes may fail in the run (``faults``). The loop fails them before it calls
-            :meth:`FastStep.step` (and offers no stretch); a fast step that takes such a run must never move a
-            failed robot (the phases' move gives it speed 0).
+            :meth:`FastStep.step`, and offers a stretch only while no node has failed and none will within it; a
+            fast step that takes such a run must never move a failed robot (the phases' move gives it speed 0).
         agents: Whether the run has agents (or agents releasing routers).
         radio_reach: The farthest the radio's table reaches, metres.
         keeps_every_pair: Whether the radio's table lists every pair within ``radio_reach`` (the unit disk): what a

@@ -69,6 +69,27 @@ class FaultSchedule:
         self.skipped: list[str] = []
         """Entries that named nodes that could not fail (not there yet, agents, failed already), one line each."""
 
+    @staticmethod
+    def _strikes(at: float, t: float) -> bool:
+        """Whether an event at ``at`` is due in the step that starts at ``t`` (:meth:`due`'s test)."""
+        return at <= t + 1e-9 * max(1.0, t)
+
+    def quiet_steps(self, step: int, limit: int) -> int:
+        """Steps from step index ``step`` on (at most ``limit``) in which :meth:`due` would find and draw nothing.
+
+        A timed fault strikes in the first step whose start is at or past its time; a Poisson failure rate draws in
+        every step from its ``at`` on. The loop takes such steps in a stretch (:meth:`amronet.sim.loop.Loop.advance`).
+        """
+        dt = self.dt
+        starts = [at for at, _, _ in self.timed[:1]] + [float(s.at or 0.0) for s in self.poisson]
+        quiet = limit
+        for at in starts:
+            k = max(int(at / dt) - 2, step)  # (then up to the exact step, with due's own arithmetic)
+            while k < step + quiet and not self._strikes(at, k * dt):
+                k += 1
+            quiet = min(quiet, k - step)
+        return max(quiet, 0)
+
     def due(self, t: float, role: np.ndarray, state: np.ndarray, deployed: np.ndarray) -> list[tuple[str, np.ndarray]]:
         """The faults of the step that starts at ``t``: ``(kind, node ids)`` per event, ids sorted.
 
@@ -80,8 +101,7 @@ class FaultSchedule:
         """
         events = []
         alive = state != State.FAILED
-        eps = 1e-9 * max(1.0, t)
-        while self.timed and self.timed[0][0] <= t + eps:
+        while self.timed and self._strikes(self.timed[0][0], t):
             _, k, spec = self.timed.pop(0)
             if spec.kind == "routers":
                 pool = np.flatnonzero(deployed & (role == Role.ROUTER) & alive)
@@ -100,7 +120,7 @@ class FaultSchedule:
             events.append((spec.kind, ids))
             alive[ids] = False
         for spec in self.poisson:
-            if t + eps < (spec.at or 0.0):
+            if not self._strikes(spec.at or 0.0, t):
                 continue
             pool = np.flatnonzero(deployed & (role == Role.ROUTER) & alive)
             p = -np.expm1(-spec.rate_per_hour * self.dt / 3600.0)

@@ -91,11 +91,9 @@ class Loop:
         omap: Use this map instead of loading the scenario's (for generated or scaled maps).
         force: Run even what the resource guard (:mod:`amronet.sim.guard`) calls absurdly long: more than
             ``amronet.limits.MAX_STEPS`` steps or ``MAX_ROBOT_STEPS`` robot-steps (``--force`` on the command line).
-        step: ``compiled`` (the default): where the algorithm has one (self-spreading with its paper rules and the
-            potential field and agent-assisted runs under the paper's drop rule: the algorithm's
-            :meth:`~amronet.algorithms.base.Controller.fast_step`), sense, decide and move run as one or two compiled
-            passes; ``reference``: always the phases one by one, through the controller's Python code. Both give the
-            same result bit for bit.
+        step: ``compiled`` (the default): sense, decide and move run as the algorithm's compiled passes where it has
+            them (:meth:`~amronet.algorithms.base.Controller.fast_step`); ``reference``: always the phases one by one,
+            through the controller's Python code. Both give the same result bit for bit.
 
     Raises:
         ScenarioError: A seed is invalid, the scenario cannot be set up (see the scenario's fields), or the resource
@@ -158,6 +156,7 @@ class Loop:
         self._with_agents = [run for run in self.runs if len(run.agents)]
         self._faulty = self.runs[0] if sc.faults else None
         """The run whose nodes may fail (faults are never batched), or ``None``."""
+        self._failed = False  # a node has failed: the table silences it from then on (a stretch would not)
         settled = self._settled_runs()
         for run, now in zip(self.runs, settled, strict=True):
             run.settled_at = 0.0 if now else None
@@ -199,16 +198,14 @@ class Loop:
         """Advance every run by one step: faults → sense → decide → move → radio, then the agents' connection."""
         sw = self.swarm
         clock = time.perf_counter
+        if self._faulty is not None:
+            self._fail_nodes(self._faulty)
         if self.compiled is not None:
-            if self._faulty is not None:
-                self._fail_nodes(self._faulty)
             t0 = clock()
             self.compiled.step(self._now())
             self.phase_seconds["sense+decide+move"] += clock() - t0
             self.after_compiled_step()
             return
-        if self._faulty is not None:
-            self._fail_nodes(self._faulty)
         t0 = clock()
         readings = sense(self.controller, sw, self.world.omap, self.table)
         t1 = clock()
@@ -224,12 +221,7 @@ class Loop:
         t3 = clock()
         self.table = self.medium.update(sw.xy, self.groups, self._silent())
         t4 = clock()
-        self.steps += 1
-        for run in self._with_agents:
-            run.observe_agents()
-        if self._faulty is not None:
-            assert self._faulty.fault_book is not None
-            self._faulty.fault_book.observe(self._faulty)
+        self._close_step()
         for name, dt in (("sense", t1 - t0), ("decide", t2 - t1), ("move", t3 - t2), ("radio", t4 - t3)):
             self.phase_seconds[name] += dt
 
@@ -242,6 +234,11 @@ class Loop:
             ValueError: A robot's position became non-finite (what the radio's table refuses).
         """
         run = self.runs[0]
+        if self._faulty is not None:  # (a stretch fails and silences nobody: only while none has, nor will in it)
+            schedule = self._faulty.faults
+            limit = 0 if self._failed or schedule is None else schedule.quiet_steps(self.steps, limit)
+            if limit <= 0:
+                return 0
         books = None
         if self.groups is None and len(run.agents):  # the agents' books, kept by the stretch step by step
             *arrays, counts, sums = run.connection_books()
@@ -272,7 +269,7 @@ class Loop:
         In stretches where the fast step can take them (:meth:`_stretch`: the same robots and table bit for bit as
         :meth:`step` called ``steps`` times), else one by one. Like :meth:`step`, it keeps no records and stops no run.
         """
-        fast = self.compiled if self._faulty is None and self.compiled is not None and self.compiled.stretches else None
+        fast = self.compiled if self.compiled is not None and self.compiled.stretches else None
         ids, end = np.arange(len(self.runs), dtype=np.int64), self.steps + steps
         while self.steps < end:
             if fast is None or not self._stretch(fast, end - self.steps, ids, self._settled_runs()):
@@ -282,8 +279,12 @@ class Loop:
         """The end of a compiled step, once the robots have moved: the radio's table, then the agents' connection."""
         t3 = time.perf_counter()
         self.table = self.medium.update(self.swarm.xy, self.groups, self._silent())
-        self.steps += 1
         self.phase_seconds["radio"] += time.perf_counter() - t3
+        self._close_step()
+
+    def _close_step(self) -> None:
+        """The step is taken: the clock moves on, then the agents' connection and the faults' books."""
+        self.steps += 1
         for run in self._with_agents:
             run.observe_agents()
         if self._faulty is not None:
@@ -291,17 +292,15 @@ class Loop:
             self._faulty.fault_book.observe(self._faulty)
 
     def _silent(self) -> np.ndarray | None:
-        """Nodes that send nothing (failed ones), or ``None`` when none can have failed."""
-        return None if self._faulty is None else self.swarm.state == State.FAILED
+        """Nodes that send nothing (failed ones), or ``None`` when none has failed."""
+        return self.swarm.state == State.FAILED if self._failed else None
 
     def _fail_nodes(self, run: Run) -> None:
-        """The faults phase: nodes whose fault is due fail, and the table loses their links at once.
-
-        Cold: it does something only in the steps of a fault event (or a Poisson failure).
-        """
+        """The faults phase (cold: it acts only in a fault's step): nodes due fail, the table loses their links."""
         assert run.faults is not None and run.fault_book is not None
         sw = self.swarm
         for kind, ids in run.faults.due(self.t, sw.role, sw.state, sw.deployed):
+            self._failed = self._failed or len(ids) > 0
             run.fault_book.before(run, self.t, kind, ids)
             sw.state[ids] = State.FAILED
             self.table = self.medium.update(sw.xy, self.groups, self._silent())
@@ -351,8 +350,8 @@ class Loop:
                 active.append(run)
         max_steps = round(sim.time_limit / self.dt)
         unrecorded = all(r is None for r in recorders)
-        fast = (self.compiled if unrecorded and self._faulty is None and self.compiled is not None
-                and self.compiled.stretches else None)  # (a stretch neither fails nodes nor silences them)
+        fast = (self.compiled if unrecorded and self.compiled is not None and self.compiled.stretches
+                else None)  # (with faults, only the steps before the first: _stretch)
         ids = np.array([run.index for run in active], dtype=np.int64)  # of the active runs
         unsettled = False  # every active run's books say "not settled" (the last step left them so)
         now_settled = self._settled_runs()
