@@ -205,7 +205,8 @@ def test_batched_runs_are_the_same_with_either_step(preset, overrides):
 
 
 @pytest.mark.parametrize("overrides", [
-    {"faults": [{"at": 5.0, "routers": 0.5}]},
+    {"algorithm.params.walk": "external"},
+    {"algorithm.params.stop_rule": "external"},
 ])
 def test_rules_it_does_not_compile_take_the_reference_path(overrides):
     sim = Simulation(load_scenario("self-spreading-6x6", {"sim.time_limit": 5, **overrides}), 1)

@@ -4,7 +4,8 @@ The controller (:class:`~amronet.algorithms.potential_field.controller.Potential
 and comes to rest in another; :class:`CompiledField` runs them with the range rings, the obstacle forces and the moves
 in one call (:func:`~amronet.algorithms.potential_field.kernels.field_step`), without random draws, and the steps
 between two records in one call (:func:`~amronet.algorithms.potential_field.kernels.field_stretch`, through
-:class:`~amronet.algorithms.common.swarm_stretch.SwarmStretch`). Bit for bit the reference's result.
+:class:`~amronet.algorithms.common.swarm_stretch.SwarmStretch`; in a run with faults, until the first node fails).
+Bit for bit the reference's result.
 """
 
 from __future__ import annotations
@@ -66,8 +67,12 @@ class CompiledField(FastStep):
 
     @staticmethod
     def applies(controller: FieldControls, context: StepContext) -> bool:
-        """Whether the loop runs the potential field without faults or agents, with one router model."""
-        if context.faults or context.agents:
+        """Whether the loop runs the potential field without agents, with one router model (faults or not).
+
+        A failed router (state ``failed``) is neither exploring nor resting: the kernels, as the controller's, never
+        sense, wake or move it (``tests/test_spreading_faults.py``).
+        """
+        if context.agents:
             return False
         return len(np.unique(context.swarm.model[controller.routers])) <= 1
 

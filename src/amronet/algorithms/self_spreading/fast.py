@@ -5,7 +5,7 @@ phase one after another, each a handful of NumPy calls and compiled kernels. For
 the work, is most of a step. :class:`CompiledSpreading` does the same three phases in compiled passes over the arrays
 (the kernels are in :mod:`amronet.algorithms.self_spreading.kernels`), for self-spreading with every walk rule
 (:mod:`~amronet.algorithms.self_spreading.walks`), both stop rules (``distance``, ``link-quality``), both triangle
-rules and every ``triangular`` mode; not with faults, agents or the rules a policy outside commands.
+rules and every ``triangular`` mode, with faults too; not with agents or the rules a policy outside commands.
 
 First every exploring router reads its row of the neighbour table (the reference tracking of
 :func:`~amronet.algorithms.common.references.track_row`) and, unless a triangular deployment may start this step (a
@@ -43,6 +43,15 @@ by the controller's link test (:meth:`~amronet.algorithms.common.goto.GoalSteeri
 router drives, and in a step in which a triangular deployment may start, the whole step is the loop's phases (the
 range rings, the controller's ``decide``, the move), as the agent-assisted fast step does; so is a step in which one
 may start under the ``link-quality`` stop rule.
+
+In a run with faults the loop fails nodes before it calls :meth:`CompiledSpreading.step` and offers stretches only
+until the first fails (:meth:`amronet.sim.loop.Loop.step`). A failed node (state ``failed``) is neither settling nor
+deployed, so the kernels do with it what the controller does, whatever it was doing when it failed (exploring,
+driving to a triangle goal, a reference, a base station): it moves no more (no mover, so no speed to zero), tracks
+and draws nothing, keeps its memory as it was and is nobody's reference (the table has no links of it either), but
+its body stays where it is for the rings and the moves (the table's geometric view, which both paths read). The
+steps the kernels leave to the phases (the controller's ``decide``) list no failed mover either: the same run
+bit for bit (``tests/test_spreading_faults.py``).
 """
 
 from __future__ import annotations
@@ -201,14 +210,14 @@ class CompiledSpreading(FastStep):
 
     @staticmethod
     def applies(controller: SpreadingControls, context: StepContext) -> bool:
-        """Whether the loop's phases are those this step compiles: no faults, no agents, one router model.
+        """Whether the loop's phases are those this step compiles: no agents, one router model (faults or not).
 
         Every walk rule of :data:`~amronet.algorithms.self_spreading.walks.WALKS` and the stop rules of
         :data:`STOP_RULES` are compiled, with either triangle rule (the steps the kernels leave to the controller go
         through it); a rule commanded from outside is not.
         """
         c, p, sw = controller, controller.params, context.swarm
-        if context.faults or context.agents or p.walk not in WALKS or p.stop_rule not in STOP_RULES:
+        if context.agents or p.walk not in WALKS or p.stop_rule not in STOP_RULES:
             return False
         return c.needs_range_readings and bool(np.all(sw.model[sw.role == Role.ROUTER] == c.router_model))
 
