@@ -106,7 +106,8 @@ class StepContext:
         dt: Step length, seconds.
         collisions: Whether robots' bodies collide (``sim.robot_collisions``).
         faults: Whether nodes may fail in the run (``faults``). The loop fails them before it calls
-            :meth:`FastStep.step`, and offers a stretch only while no node has failed and none will within it; a
+            :meth:`FastStep.step`, and offers a stretch only where no node fails within it, and once one has, only
+            to a fast step that :attr:`~FastStep.silences` failed nodes while every fault's damage is repaired; a
             fast step that takes such a run must never move a failed robot (the phases' move gives it speed 0).
         agents: Whether the run has agents (or agents releasing routers).
         radio_reach: The farthest the radio's table reaches, metres.
@@ -153,6 +154,9 @@ class Watch(NamedTuple):
     """Per run, whether it is settled now (the books after the last step)."""
     agents: AgentBooks | None
     """The single run's agents' connection books (``None``: a run without agents, or a batch)."""
+    silent: np.ndarray | None = None
+    """Nodes that send nothing (failed ones; ``None``: none has failed), offered only to a fast step that
+    :attr:`~FastStep.silences` them."""
 
 
 @dataclass
@@ -183,6 +187,9 @@ class FastStep:
 
     stretches: bool = False
     """Whether :meth:`stretch` may take steps in this loop at all (the loop then offers one before each step)."""
+    silences: bool = False
+    """Whether :meth:`stretch` may take steps once nodes have failed (:attr:`Watch.silent`): its kernels then read no
+    link of a failed node, and the loop silences them in the table it makes of the stretch's pairs."""
 
     def step(self, now: StepInput) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""

@@ -247,14 +247,12 @@ class RadioMedium:
         return margin
 
     def plain_table(self, xy: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray,
-                    groups: np.ndarray | None = None, margin: np.ndarray | None = None) -> NeighbourTable:
-        """:meth:`update`'s table of ``xy`` (runs ``groups``) from a compiled search within :attr:`reach`, none silent.
-
-        ``margin``: its pairs' margins (``None``: every pair is a link; :attr:`~RadioMedium.stretch_inputs`).
-        """
+                    groups: np.ndarray | None = None, margin: np.ndarray | None = None,
+                    silent: np.ndarray | None = None) -> NeighbourTable:
+        """:meth:`update`'s table of a compiled search's pairs, with their ``margin`` (``None``: all are links)."""
         if margin is not None:
             self._previous = (xy, indptr, indices, margin)  # as _margins leaves it
-        return self._links(xy, groups, indptr, indices, dist, margin, None)
+        return self._links(xy, groups, indptr, indices, dist, margin, silent)
 
     def _group_ids(self, groups: np.ndarray | None, n: int) -> GroupIds:
         """``groups`` checked for ``n`` points; kept while the same array (a loop's, for all its steps) comes back."""

@@ -234,9 +234,10 @@ class Loop:
             ValueError: A robot's position became non-finite (what the radio's table refuses).
         """
         run = self.runs[0]
-        if self._faulty is not None:  # (a stretch fails and silences nobody: only while none has, nor will in it)
-            schedule = self._faulty.faults
-            limit = 0 if self._failed or schedule is None else schedule.quiet_steps(self.steps, limit)
+        if self._faulty is not None:  # (a stretch fails nobody, nor keeps the faults' books: none due, none restoring)
+            schedule, book = self._faulty.faults, self._faulty.fault_book
+            quiet = schedule is not None and book is not None and not book.restoring
+            limit = schedule.quiet_steps(self.steps, limit) if quiet and (fast.silences or not self._failed) else 0
             if limit <= 0:
                 return 0
         books = None
@@ -245,7 +246,8 @@ class Loop:
             books = AgentBooks(run.bases, run.relay_mask,
                                (np.empty(len(run.agents), dtype=np.bool_), *arrays, counts, sums))
         t0 = time.perf_counter()
-        done = fast.stretch(limit, self._now(), Watch(active, settled, books))
+        silent = self._silent()
+        done = fast.stretch(limit, self._now(), Watch(active, settled, books, silent))
         if done is None:
             return 0
         if books is not None:
@@ -254,7 +256,7 @@ class Loop:
         if done.non_finite:
             raise ValueError("xy has non-finite coordinates")
         if done.csr is not None:
-            self.table = self.medium.plain_table(self.swarm.xy.copy(), *done.csr, self.groups, done.margin)
+            self.table = self.medium.plain_table(self.swarm.xy.copy(), *done.csr, self.groups, done.margin, silent)
         if done.finish is not None:
             done.finish(self._now())
         self.phase_seconds["sense+decide+move"] += time.perf_counter() - t0
