@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numba import uint64 as _u  # unsigned indices: numba then skips its negative-index wraparound code
 
 from amronet.engine.hearing import named_inputs, open_margin, path_loss_margin, wall_limit
 from amronet.engine.propagation import delivery_ratio
@@ -121,7 +122,8 @@ def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr,
 
     The same numbers bit for bit, by the law's own pieces: the inputs read once, not per pair, and a link shorter
     than the safe jump (:func:`~amronet.engine.walls.wall_grid`) of one end's cell crosses no wall (every cell the
-    walk would visit is free), so neither the box test nor the walk is asked.
+    walk would visit is free), so neither the box test nor the walk is asked. Whether a node stands where it stood
+    in the previous table is decided once per node, and indices are read unsigned (no wraparound code).
     """
     h = named_inputs(hearing)
     out = np.empty(indices.shape[0])
@@ -138,65 +140,75 @@ def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr,
     radius = np.empty(n if walled else 0)
     if walled:
         for i in range(n):
-            radius[i] = _open_radius(xy[i, 0], xy[i, 1], jump, ox, oy, res)
+            radius[_u(i)] = _open_radius(xy[_u(i), 0], xy[_u(i), 1], jump, ox, oy, res)
+    still = np.zeros(n, np.bool_)  # where the node stood in the previous table
+    for i in range(min(n, n_prev)):
+        still[_u(i)] = xy[_u(i), 0] == prev_xy[_u(i), 0] and xy[_u(i), 1] == prev_xy[_u(i), 1]
     for i in range(n):
-        xa = xy[i, 0]
-        ya = xy[i, 1]
-        still_i = i < n_prev and xa == prev_xy[i, 0] and ya == prev_xy[i, 1]
+        xa = xy[_u(i), 0]
+        ya = xy[_u(i), 1]
+        still_i = still[_u(i)]
         sa = _cell_value(values, x0, y0, cell, xa, ya) if shadowed else 0.0
-        ra = radius[i] if walled else 0.0
-        p = prev_indptr[i] if still_i else 0  # row i of the previous table, merged along this one (both sorted)
-        p_end = prev_indptr[i + 1] if still_i else 0
-        for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
+        ra = radius[_u(i)] if walled else 0.0
+        p = prev_indptr[_u(i)] if still_i else 0  # row i of the previous table, merged along this one (both sorted)
+        p_end = prev_indptr[_u(i + 1)] if still_i else 0
+        for e in range(indptr[_u(i)], indptr[_u(i + 1)]):
+            j = indices[_u(e)]
             if j < i:
                 continue
-            xb = xy[j, 0]
-            yb = xy[j, 1]
             f = -1
-            if still_i and j < n_prev and xb == prev_xy[j, 0] and yb == prev_xy[j, 1]:
-                while p < p_end and prev_indices[p] < j:
+            if still_i and still[_u(j)]:
+                while p < p_end and prev_indices[_u(p)] < j:
                     p += 1
-                if p < p_end and prev_indices[p] == j:
+                if p < p_end and prev_indices[_u(p)] == j:
                     f = p
             if f >= 0:
-                m = prev_margin[f]
+                m = prev_margin[_u(f)]
             else:
-                d = dist[e]
+                xb = xy[_u(j), 0]
+                yb = xy[_u(j), 1]
+                d = dist[_u(e)]
                 sb = _cell_value(values, x0, y0, cell, xb, yb) if shadowed else 0.0
                 m = open_margin(d, sa, sb, r_c, n10, corr, clip)
-                if walled and m >= 0.0 and not (d < ra or d < radius[j]) and not box_clear_bits(
+                if walled and m >= 0.0 and not (d < ra or d < radius[_u(j)]) and not box_clear_bits(
                         bits, cols, ox, oy, res, xa, ya, xb, yb):
                     m -= wall_db * count_walls_bits(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb,
                                                     wall_limit(m, 0.0, wall_db))
-            out[e] = m
-            f = cursor[j]
-            cursor[j] = f + 1
-            out[f] = m
+            out[_u(e)] = m
+            f = cursor[_u(j)]
+            cursor[_u(j)] = f + 1
+            out[_u(f)] = m
     return out
 
 
 @njit(cache=True)
 def keep_entries(indptr, indices, dist, margin, keep):  # pragma: no cover - numba
-    """The CSR arrays ``(indptr, indices, dist, margin)`` of the entries in ``keep``."""
+    """The CSR arrays ``(indptr, indices, dist, margin)`` of the entries in ``keep``.
+
+    Every entry up to the last one kept is written at the output's cursor, which moves on only past a kept one (a
+    dropped entry is overwritten by the next): no branch per entry, which a table dropping one link in five at
+    random would mispredict.
+    """
     n = indptr.shape[0] - 1
     m = 0
     for e in range(keep.shape[0]):
-        if keep[e]:
-            m += 1
-    out_ptr = np.zeros(n + 1, np.int64)
+        m += 1 if keep[_u(e)] else 0
+    stop = keep.shape[0]  # past the last entry kept: the cursor stays below m up to there
+    while stop > 0 and not keep[_u(stop - 1)]:
+        stop -= 1
+    out_ptr = np.empty(n + 1, np.int64)
     out_idx = np.empty(m, indices.dtype)
     out_dist = np.empty(m)
     out_margin = np.empty(m)
+    out_ptr[0] = 0
     k = 0
     for i in range(n):
-        for e in range(indptr[i], indptr[i + 1]):
-            if keep[e]:
-                out_idx[k] = indices[e]
-                out_dist[k] = dist[e]
-                out_margin[k] = margin[e]
-                k += 1
-        out_ptr[i + 1] = k
+        for e in range(indptr[_u(i)], min(indptr[_u(i + 1)], stop)):
+            out_idx[_u(k)] = indices[_u(e)]
+            out_dist[_u(k)] = dist[_u(e)]
+            out_margin[_u(k)] = margin[_u(e)]
+            k += 1 if keep[_u(e)] else 0
+        out_ptr[_u(i + 1)] = k
     return out_ptr, out_idx, out_dist, out_margin
 
 
