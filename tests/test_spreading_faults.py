@@ -1,12 +1,14 @@
-"""Self-spreading and potential-field runs with faults: the compiled step (and its stretches until the first fault)
-against the phases one by one (``step="reference"``), bit for bit."""
+"""Self-spreading and potential-field runs with faults: the compiled step (and its stretches, before the first fault
+and, for self-spreading, after it) against the phases one by one (``step="reference"``), bit for bit."""
 
 import json
 
 import numpy as np
 import pytest
 
+from amronet.algorithms.potential_field.fast import CompiledField
 from amronet.algorithms.self_spreading import fast as compiled_step
+from amronet.algorithms.self_spreading.fast import CompiledSpreading
 from amronet.engine.robots import State
 from amronet.experiments.failures import _scenario
 from amronet.experiments.walks import walk_scenario
@@ -45,6 +47,8 @@ CASES = {
     "office, multi-wall radio": ("self-spreading-office", 5, {
         **GO_ON, "sim.time_limit": 30, "radio.model": "multi-wall",
         "faults": [{"at": 10.0, "ids": [6, 9]}, {"at": 20.0, "routers": 0.5}]}),
+    "office: an explorer fails, then Poisson failures start": ("self-spreading-office", 3, {
+        **GO_ON, "sim.time_limit": 110, "faults": [{"at": 30.0, "ids": [4]}, {"rate_per_hour": 60.0, "at": 80.0}]}),
     "potential field": ("potential-field-obstacles-6x6", 2, {
         "sim.time_limit": 60, "faults": [{"at": 5.0, "ids": [3]}, {"at": 20.0, "routers": 0.3},
                                          {"rate_per_hour": 300.0, "at": 30.0}]}),
@@ -54,8 +58,14 @@ STRETCHED = {"office: a triangle router and an explorer fail, then a base statio
              "office, global rule: a triangle starts between two faults", "reproduce failures' autolab run, shortened",
              "reproduce failures' office run, shortened",
              "hospital floor plan: explorers fail, then a fraction and the base", "office, growth walk",
-             "potential field"}
+             "office: an explorer fails, then Poisson failures start", "potential field"}
 """The cases whose compiled step takes stretches until the first fault (the unit disk, the distance stop rule)."""
+SILENCED = STRETCHED - {"office: Poisson failures", "potential field"}
+"""Those whose compiled step takes stretches after the first fault too (self-spreading silences failed nodes): while
+every fault's damage is repaired and none is due (a Poisson rate may strike in any step once it has started; the
+potential field's forces count every neighbour, failed or not)."""
+NEVER_RESTORED = {"hospital floor plan: explorers fail, then a fraction and the base": 50.0}
+"""A base station fails at that time and the network never finds another: no stretch after it."""
 
 
 def _books(sim):
@@ -93,6 +103,23 @@ def struck(monkeypatch):
     return events
 
 
+@pytest.fixture
+def stretches(monkeypatch):
+    """``(t, steps, silent, ends)`` of every stretch the compiled steps were offered (``ends``: how it ended)."""
+    noted = []
+    for cls in (CompiledSpreading, CompiledField):
+        def noting(self, limit, now, watch, stretch=cls.stretch):
+            before = dict(self.stretcher.ends) if self.stretcher is not None else {}
+            out = stretch(self, limit, now, watch)
+            after = dict(self.stretcher.ends) if self.stretcher is not None else {}
+            ends = {k for k in after if after[k] != before[k]}
+            noted.append((now.t, 0 if out is None else out.steps, watch.silent is not None, ends))
+            return out
+
+        monkeypatch.setattr(cls, "stretch", noting)
+    return noted
+
+
 def _assert_same(fast, reference, a, b):
     for x, y in zip(_books(fast), _books(reference), strict=True):
         np.testing.assert_array_equal(x, y)
@@ -105,13 +132,14 @@ def _assert_same(fast, reference, a, b):
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_runs_with_faults_take_the_compiled_step_bit_for_bit(name, struck):
+def test_runs_with_faults_take_the_compiled_step_bit_for_bit(name, struck, stretches):
     preset, seed, overrides = CASES[name]
     sc = load_scenario(preset, overrides)
     fast, reference = Simulation(sc, seed), Simulation(sc, seed, step="reference")
     assert fast.compiled is not None and reference.compiled is None
     a = fast.run()
     compiled_events = list(struck)
+    taken = [(t, steps, silent, ends) for t, steps, silent, ends in stretches if steps]
     b = reference.run()
     assert compiled_events and struck[len(compiled_events):] == compiled_events  # the same faults struck
     assert (fast.swarm.state == State.FAILED).any()
@@ -119,6 +147,20 @@ def test_runs_with_faults_take_the_compiled_step_bit_for_bit(name, struck):
     stretcher = getattr(fast.compiled, "stretcher", None)
     if name in STRETCHED:  # until the first fault
         assert stretcher is not None and stretcher.steps > 0
+    first = compiled_events[0][0]
+    after = sum(steps for t, steps, _, _ in taken if t > first)
+    assert all(silent == (t > first) for t, _, silent, _ in taken)
+    if name in SILENCED:  # and after it, the failed nodes silent
+        assert after > 0 and after == stretcher.silent_steps
+    else:
+        assert after == 0
+    if name in NEVER_RESTORED:
+        assert not [t for t, *_ in taken if t >= NEVER_RESTORED[name]]
+        assert fast.books.fault_book.events[-1].restored_at is None
+    if "Poisson failures start" in name:  # between the ids fault and the rate's start, not after
+        assert {round(t) for t, *_ in taken if t > first} <= set(range(30, 80))
+    if "global" in name:  # a triangle may start: a stretch after a fault ends before that step
+        assert any(silent and ends == {"candidates"} for _, _, silent, ends in taken)
     if "triangle rout" in name:  # what the ids fault hit: an explorer and a triangle router
         assert any(e[1:] == ("ids", [State.EXPLORE, State.TRIANGLE]) for e in compiled_events)
     if name.startswith("hospital"):

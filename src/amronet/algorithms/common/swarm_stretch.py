@@ -14,6 +14,13 @@ A stretch runs only where its steps need nothing else: a radio that keeps every 
 disk), rings and moves that reach no farther than the table, one thread. It stops after a step that changed whether an
 active run is settled, and (self-spreading under the ``global`` triangle rule) before a step in which a triangular
 deployment may start.
+
+Once nodes have failed, the loop offers a stretch only to a fast step that
+:attr:`~amronet.algorithms.stepping.FastStep.silences` them, and the table it starts from has lost their links (its
+geometric view has every pair). The stretch starts from that geometric view, as its own searches find every pair
+within reach, failed nodes' too: its kernels must let no link of a failed node change anything (self-spreading's
+read links only through state lookups that exclude ``failed``; the potential field's forces count every neighbour,
+so it takes no stretch then).
 """
 
 from __future__ import annotations
@@ -56,6 +63,8 @@ class SwarmStretch:
         self.counts = np.zeros(self.n_runs, dtype=np.int64)
         self.steps = 0
         """Steps taken in stretches."""
+        self.silent_steps = 0
+        """Steps taken in stretches once nodes had failed (:attr:`~amronet.algorithms.stepping.Watch.silent`)."""
         self.ends = {"quiet": 0, "settling": 0, "candidates": 0}
         """How many stretches ended each way: all steps taken, a run's settled state changed, a triangle may start."""
 
@@ -72,13 +81,16 @@ class SwarmStretch:
         """
         a = self.around
         beyond = a.sense_reach > table.r or (a.collisions and a.drive_reach > table.r)
-        if table.candidates is not None or self.n < 2 or beyond:
+        if (table.candidates is not None and watch.silent is None) or self.n < 2 or beyond:
             return None
+        table = table.geometric  # every pair within reach: what the stretch's own searches give
         on = np.zeros(self.n_runs, dtype=np.bool_)
         on[watch.active] = True
         books = Books(*self.settling, self.groups, on, np.asarray(watch.settled, dtype=np.bool_), self.counts)
         done, how, csr = kernel(limit, Csr(table.indptr, table.indices, table.dist), self.radio, books)
         self.steps += done
+        if watch.silent is not None:
+            self.silent_steps += done
         if how == BAD_DRAW:
             raise AssertionError("the walkers were not listed in order")
         if how != NON_FINITE:

@@ -4,7 +4,8 @@ The controller (:class:`~amronet.algorithms.potential_field.controller.Potential
 and comes to rest in another; :class:`CompiledField` runs them with the range rings, the obstacle forces and the moves
 in one call (:func:`~amronet.algorithms.potential_field.kernels.field_step`), without random draws, and the steps
 between two records in one call (:func:`~amronet.algorithms.potential_field.kernels.field_stretch`, through
-:class:`~amronet.algorithms.common.swarm_stretch.SwarmStretch`; in a run with faults, until the first node fails).
+:class:`~amronet.algorithms.common.swarm_stretch.SwarmStretch`; in a run with faults, until the first node fails: a
+router's force counts every neighbour the stretch's search finds, a failed one too, where the table has silenced it).
 Bit for bit the reference's result.
 """
 

@@ -44,14 +44,19 @@ router drives, and in a step in which a triangular deployment may start, the who
 range rings, the controller's ``decide``, the move), as the agent-assisted fast step does; so is a step in which one
 may start under the ``link-quality`` stop rule.
 
-In a run with faults the loop fails nodes before it calls :meth:`CompiledSpreading.step` and offers stretches only
-until the first fails (:meth:`amronet.sim.loop.Loop.step`). A failed node (state ``failed``) is neither settling nor
+In a run with faults the loop fails nodes before it calls :meth:`CompiledSpreading.step`, and offers stretches
+where no fault is due within them and every fault's damage is repaired (:meth:`amronet.sim.loop.Loop.step`). A failed
+node (state ``failed``) is neither settling nor
 deployed, so the kernels do with it what the controller does, whatever it was doing when it failed (exploring,
 driving to a triangle goal, a reference, a base station): it moves no more (no mover, so no speed to zero), tracks
 and draws nothing, keeps its memory as it was and is nobody's reference (the table has no links of it either), but
 its body stays where it is for the rings and the moves (the table's geometric view, which both paths read). The
 steps the kernels leave to the phases (the controller's ``decide``) list no failed mover either: the same run
-bit for bit (``tests/test_spreading_faults.py``).
+bit for bit (``tests/test_spreading_faults.py``). A stretch after a fault starts from the table's geometric view
+and searches every pair within reach, failed nodes' links included, and the step :attr:`~CompiledSpreading.silences`
+them all the same: every reader of its links filters them by state (the tracking's references and the growth field
+are deployed nodes, a failed node's field is ``inf`` for the growth walks; the triangle kernels, the rings and moves
+read no links but bodies; the books' settling rule reads states), so a failed node's links change nothing.
 """
 
 from __future__ import annotations
@@ -199,6 +204,9 @@ class CompiledSpreading(FastStep):
         ``None`` (the walkers' draws go through numpy, the stop rule reads link margins the stretch's radio search
         does not give, or the stretch does not apply)."""
         self.stretches = self.stretcher is not None
+        self.silences = self.stretches
+        """Every stretch the step takes reads links only through its reference and growth lookups, which exclude a
+        failed node (see the module docstring): it may take steps after nodes failed."""
 
     def _tracking(self, c: SpreadingControls) -> Tracking:
         """The kernels' reference tracking: the controller's arrays (and its link-quality stop rule's smoother)."""
