@@ -221,10 +221,10 @@ def test_each_algorithm_gets_its_compiled_step_or_none():
                      "dssa-6x6": type(None), "agent-assisted-office": CompiledAgents}
 
 
-def test_agent_runs_with_repair_take_the_reference_path():
+def test_agent_runs_with_repair_take_the_compiled_step():  # (bit for bit: tests/test_compiled_repair.py)
     sc = load_scenario("agent-assisted-office", {"sim.time_limit": 5, "algorithm.params.repair": "relocate"})
     sim = Simulation(sc, 1)
-    assert sim.compiled is None and "sense" in sim.phase_seconds
+    assert isinstance(sim.compiled, CompiledAgents) and sim.compiled.repair is not None
 
 
 def test_an_unknown_step_kind_is_refused():

@@ -20,7 +20,9 @@ where an agent has to act, the controller's own Python takes over after the trac
 (:meth:`~amronet.algorithms.agent_assisted.controller.AgentAssisted.decide_tracked`) and the move phase follows as the
 loop runs it. Triangle and strip routers on their way are sensed with the agents (their rings as the sense phase
 casts them) and steered by the controller's Python (:meth:`CompiledAgents.finish`); only where such routers are of
-the agents' own model is the whole step the loop's phases. Every computation is the one the phases do, in the same
+the agents' own model is the whole step the loop's phases. Under ``repair: relocate`` or ``retrace`` the repair's
+part of a quiet step is :class:`~.repair_step.RepairStep`'s, and the steps in which routers relocate or agents back
+up are the loop's phases. Every computation is the one the phases do, in the same
 order, so the result is the same bit for bit (``tests/test_compiled_step.py`` and
 ``tests/test_compiled_drop_rules.py`` compare both paths).
 """
@@ -43,6 +45,7 @@ from amronet.algorithms.agent_assisted.kernels import (
     integrate_agents,
     sense_track_agents,
 )
+from amronet.algorithms.agent_assisted.repair_step import RepairStep
 from amronet.algorithms.agent_assisted.rule_check import RuleCheck
 from amronet.algorithms.agent_assisted.stretch_kernels import TRIANGLE_RULES, TRIANGLES_ACT, triangle_goes
 from amronet.algorithms.base import Command, Readings, StepInput
@@ -55,7 +58,7 @@ __all__ = ["AgentControls", "CompiledAgents"]
 
 _NO_ROBOTS = np.zeros(0, dtype=np.int64)
 _OTHER_MOVERS = (State.TRIANGLE, State.STRIP)
-"""The states of the released routers that move (no relocation: :meth:`CompiledAgents.applies`)."""
+"""The states of the released routers that move (relocating routers: :meth:`.repair_step.RepairStep.busy`)."""
 
 
 class AgentControls(Protocol):
@@ -141,6 +144,8 @@ class CompiledAgents(FastStep):
         self.triangle_rule = TRIANGLE_RULES.get(c.params.triangular, TRIANGLES_ACT)
         self._served: tuple[int, np.ndarray] = (0, c.served_pairs())
         """The triangles served so far, as the compiled check reads them, and how many were."""
+        self.repair = RepairStep(c, context) if c.relocator is not None else None
+        """The repair's part of the step (``repair: relocate`` or ``retrace``), or ``None``."""
         self.quiet: Any = None
         """Quiet steps in one compiled call (:class:`.stretch.QuietStretch`, set by the controller where it applies),
         or ``None``."""
@@ -149,19 +154,21 @@ class CompiledAgents(FastStep):
     def applies(controller: AgentControls, context: StepContext) -> bool:
         """Whether the loop is one agent-assisted run whose agents act by a drop rule the compiled check knows.
 
-        One run (no batch), agents that read range rings, no repair (``repair: relocate``), and the paper's drop rule
-        or one :class:`~.rule_check.RuleCheck` knows; faults, ``agents.when_empty``, ``drop_settle_s`` and
-        ``reverse_drop`` are all taken in. The steps where other robots than the agents move go phase by phase.
+        One run (no batch), agents that read range rings, and the paper's drop rule or one
+        :class:`~.rule_check.RuleCheck` knows; faults, ``agents.when_empty``, ``drop_settle_s``, ``reverse_drop``
+        and the repairs (:class:`~.repair_step.RepairStep`) are all taken in. The steps where other robots than the
+        agents move, routers relocating or agents backing up, go phase by phase.
         """
         c = controller
-        return (context.groups is None and c.relocator is None and c.needs_range_readings and len(c.agents) > 0
+        return (context.groups is None and c.needs_range_readings and len(c.agents) > 0
                 and (not c.general_path or RuleCheck.knows(c)))
 
     def step(self, now: StepInput) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
         c = self.controller
         others = self.other_movers()
-        if others is None:  # other robots move that the compiled step does not sense: the phases one by one
+        if others is None or (self.repair is not None and self.repair.busy()):
+            # other robots move that the compiled step does not sense (or relocate), agents back up: the phases
             self._phases(now)
             return
         if c.settle_at:  # (what decide does first, once the movers are known: the rings do not read states)
@@ -183,7 +190,7 @@ class CompiledAgents(FastStep):
             c._back_up(c._view(replace(now, readings=Readings({c.agent_model: (c.agents, scans)})),
                                c.current[c.agents]))
         if readings is None:
-            self.drive(now)
+            self.drive(now, None if self.repair is None else self.repair.quiet(now, scans))
         else:  # the triangle and strip routers steer in the controller's Python, then everybody moves
             self.finish(now, n_before, readings)
 
@@ -316,10 +323,17 @@ class CompiledAgents(FastStep):
         # (ndarray.max costs more on a few agents)
         return length, 2.0 * self.around.largest_radius() + 2.0 * max(length.tolist())
 
-    def drive(self, now: StepInput) -> None:
-        """The agents' moves (:func:`~.kernels.drive_movers`), as the move phase does them."""
+    def drive(self, now: StepInput, speed: np.ndarray | None = None) -> None:
+        """The agents' moves (:func:`~.kernels.drive_movers`), as the move phase does them.
+
+        ``speed``: their speeds, where the repair set them (default: the explorer's, :meth:`moves`).
+        """
         c, sw, a = self.controller, self.swarm, self.around
-        length, reach = self.moves()
+        if speed is None:
+            length, reach = self.moves()
+        else:
+            length = speed * c.dt
+            reach = 2.0 * a.largest_radius() + 2.0 * max(length.tolist())
         near = a.near(sw.xy, now.table, reach) if a.collisions else a.no_bodies(len(sw))
         drive_movers(self.grid, self.robots(), c.agents, length, a.collisions, near, reach, c.refused)
 

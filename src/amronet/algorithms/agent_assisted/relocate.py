@@ -105,6 +105,9 @@ class Relocator:
         self.steering.grow(n_new)
         self.n += n_new
 
+    def odometry(self, sw: Swarm) -> None:
+        """What :meth:`update` records of the robots' moves before it looks at the links (relocation: nothing)."""
+
     def update(self, t: float, table: NeighbourTable, sw: Swarm) -> tuple[np.ndarray, np.ndarray]:
         """Notice lost neighbours and start relocations; which routers start and which stop now.
 

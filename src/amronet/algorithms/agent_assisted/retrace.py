@@ -114,6 +114,28 @@ class Breadcrumbs:
         for m in np.flatnonzero(moved):  # (an agent every few steps: each path erases its own loops)
             self.extend(m, xy[m])
 
+    def replay(self, trail: np.ndarray) -> None:
+        """:meth:`record` of every agent at ``trail[s]`` ``(k, m, 2)``, for ``s`` in order (a quiet stretch's steps).
+
+        An agent's tip is the point it added last, where it stood, so each agent's points are found on its own; they
+        are added in the order :meth:`record` adds them, step by step, agent by agent (a few per stretch).
+        """
+        found = []
+        for m in range(trail.shape[1]):
+            tip = self.xy[self.tip[m]]
+            s = 0
+            while s < len(trail):
+                way = trail[s:, m]
+                hit = np.flatnonzero(np.hypot(way[:, 0] - tip[0], way[:, 1] - tip[1]) >= self.spacing)
+                if not len(hit):
+                    break
+                s += int(hit[0])
+                found.append((s, m))
+                tip = trail[s, m]
+                s += 1
+        for s, m in sorted(found):
+            self.extend(m, trail[s, m])
+
     def back(self, m: int, p: np.ndarray, reach: float) -> int:
         """The point agent ``m`` at ``p`` backs up to next, the points within ``reach`` forgotten (-1: none left)."""
         path = self.paths[m]
@@ -186,7 +208,12 @@ class Retracer(Relocator):
         self.node[router] = self.crumbs.extend(m, sw.xy[agent])
 
     def update(self, t: float, table: NeighbourTable, sw: Swarm) -> tuple[np.ndarray, np.ndarray]:
-        """Record the agents' and self-driven routers' odometry, then :meth:`.Relocator.update`."""
+        """Record the agents' and self-driven routers' odometry (:meth:`odometry`), then :meth:`.Relocator.update`."""
+        self.odometry(sw)
+        return super().update(t, table, sw)
+
+    def odometry(self, sw: Swarm) -> None:
+        """Record the agents' and self-driven routers' odometry: the agents not backing up, from where they are."""
         self.crumbs.record(sw.xy[self.agents], ~self.backing)
         driving = np.flatnonzero(_SELF_DRIVEN[sw.state])
         if len(driving):
@@ -195,7 +222,6 @@ class Retracer(Relocator):
             xy = sw.xy[driving]
             driving = driving[np.hypot(xy[:, 0] - at[:, 0], xy[:, 1] - at[:, 1]) > 1e-9]
             self.node[driving] = self.crumbs.add_many(sw.xy[driving], self.node[driving])
-        return super().update(t, table, sw)
 
     def _movable(self, routers: np.ndarray, sw: Swarm) -> np.ndarray:
         """Deployed routers (references and settled triangle routers) that know the way they came."""

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from amronet.algorithms.agent_assisted.rule_check import paper_rule_step
+from amronet.algorithms.agent_assisted.stretch_books import no_retracing
 from amronet.algorithms.agent_assisted.stretch_kernels import (
     ACTS,
     NON_FINITE,
@@ -80,6 +81,8 @@ class QuietStretch:
         """Steps taken in stretches with triangle routers driving to their goals."""
         self.paper = paper_rule_step(context.dt)
         """The drop rule's check under the paper's rule alone (none)."""
+        self.no_retracing = no_retracing(len(compiled.controller.agents))
+        """The kernel's :class:`~.stretch_books.Retracing` without ``repair: retrace``."""
 
     def _moving(self, length: np.ndarray, r: float) -> Moving | None:
         """The kernel's :class:`~.stretch_kernels.Moving`: the triangle routers driving to their goals, how they steer.
@@ -137,6 +140,9 @@ class QuietStretch:
         if (c.settle_at or n < 2 or use_threads(n) or (table.candidates is not None and not self.laws)
                 or (c.strips is not None and c.strips.moving)):
             return None
+        retracing = self.no_retracing if comp.repair is None else comp.repair.stretch_start(now, limit)
+        if retracing is None:  # (the repair is not idle, or an agent backs up now)
+            return None
         length, reach = comp.moves()
         if a.sensor_range + a.largest_radius() > table.r or (a.collisions and reach > table.r):
             return None
@@ -159,9 +165,11 @@ class QuietStretch:
         triangles = Triangles(comp.triangle_rule, float(c.r_c), c.disabled, c.served_pairs())
         rules = self.paper if comp.rules is None else comp.rules.in_stretch(now.index, now.dt)
         done, how, n_cand, n_losing, radio, scans, grid.stamp, explorer.steps, looked, idle = quiet_stretch(
-            comp.grid, comp.robots(), comp.ring, tuple(Moves(c.agents, length, reach, a.collisions)),
+            comp.grid, comp.robots(), comp.ring, tuple(Moves(c.agents, length, reach, a.collisions, tuple(retracing))),
             self._radio(table, comp.rules is not None and comp.rules.reads_margins), comp.tracking(is_ref),
             (tuple(triangles), tuple(rules)), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
+        if comp.repair is not None:
+            comp.repair.stretch_end(done, retracing)
         if how == NON_FINITE:
             return Stretched(done, non_finite=True)
         csr = (radio[5], radio[6], radio[7]) if done else None  # the pairs searched, and their margins

@@ -32,6 +32,7 @@ from numba import njit
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
 from amronet.algorithms.agent_assisted.rule_kernels import LINK, PAPER, rule_acts, rule_commit
+from amronet.algorithms.agent_assisted.stretch_books import Links
 from amronet.algorithms.agent_assisted.stretch_links import Radio, next_radio
 from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
 from amronet.engine.bitgen import next_double
@@ -75,6 +76,8 @@ class Moves(NamedTuple):
     """The reach of the moves' collision checks."""
     collisions: bool
     """Whether bodies stop moves."""
+    retracing: tuple
+    """``repair: retrace``'s books of the agents (:class:`~.stretch_books.Retracing`, a plain tuple)."""
 
 
 class Triangles(NamedTuple):
@@ -151,23 +154,6 @@ class Frontier(NamedTuple):
     """The plans' ``active``."""
 
 
-class Links(NamedTuple):
-    """The agents' connection books (:attr:`amronet.algorithms.stepping.AgentBooks.arrays`), kept step by step.
-
-    Per agent: whether it is linked (scratch), its connected steps, outages, longest outage and the outage going on.
-    """
-
-    linked: np.ndarray
-    connected_steps: np.ndarray
-    outages: np.ndarray
-    longest: np.ndarray
-    down_for: np.ndarray
-    counts: np.ndarray
-    """``[steps observed, steps all connected, outage going on, connected steps of the fraction]``."""
-    sums: np.ndarray
-    """``[sum of fractions, window minimum, minimum]``."""
-
-
 class StretchEnd(NamedTuple):
     """What :func:`quiet_stretch` did."""
 
@@ -210,14 +196,15 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     (:class:`~amronet.algorithms.agent_assisted.kernels.Knowledge`; the deployed nodes are fixed in a quiet stretch) and
     its state (:class:`Frontier`); the agents' connection books
     (:class:`~amronet.algorithms.stepping.AgentBooks`, its arrays a :class:`Links`,
-    :meth:`amronet.sim.run.Run.connection_books`). ``limit``: the most steps to do.
+    :meth:`amronet.sim.run.Run.connection_books`). ``limit``: the most steps to do. Under ``repair: retrace``
+    (:attr:`Moves.retracing`) it may stop between two steps.
 
     Returns:
         A :class:`StretchEnd`.
     """
     xy, heading, radius, _, _ = robots
     angles, _ = ring
-    agents, length, reach, collisions = moves
+    agents, length, reach, collisions, retracing = moves
     current, is_ref, _, left, _, nearest_d, other_ref, refused = tracking
     triangles, rules = who_acts
     (tri, t_angles, t_sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress,
@@ -227,6 +214,8 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     (now, stamp, avoid, bitgen, sigma, layer_robots, no_robots, covered, gap, visited, settings, plans, buffers,
      active) = frontier
     blocked, clear, ox, oy, res = grid
+    trail, contact_at, on_path, confirm, first, step_dt = retracing
+    linked = books[2][0]
     m = agents.shape[0]
     n = xy.shape[0]
     nt = tri.shape[0]
@@ -250,6 +239,17 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     looked = 0
     idle = 0
     while done < limit:
+        if trail.shape[0]:  # retrace: who was in contact, who would back up now; the agents' odometry
+            t = (first + done) * step_dt
+            for j in range(m if done else 0):
+                if linked[j]:
+                    contact_at[j] = t
+                elif not on_path[j] and t - contact_at[j] >= confirm - 1e-9:
+                    return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked,
+                                      idle)
+            for j in range(m):
+                trail[done, j, 0] = xy[agents[j], 0]
+                trail[done, j, 1] = xy[agents[j], 1]
         _, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, _, _, _ = radio
         scans = np.empty((m, angles.shape[0]))
         near = (near_indptr, near_indices, near_dist)  # the rings and the moves read every pair within r

@@ -1,0 +1,145 @@
+"""The repair's part of the compiled step and of quiet stretches (``repair: relocate`` and ``retrace``).
+
+Every step the controller's :meth:`~.movers.Movers.movers_command` lets the repair look (:meth:`.Relocator.update`):
+it compares the links among the *watched* nodes (base nodes, deployed and relocating routers) with the last ones,
+starts the moves of cut-off routers whose losses are due and stops those that have a path again. Under ``retrace``
+the agents' odometry is recorded, and agents out of contact for ``repair_confirm_s`` back up
+(:meth:`.Retracer.steer_agents`). :class:`RepairStep` does this part of a step where the compiled step
+(:class:`~.fast.CompiledAgents`) and its quiet stretches (:class:`~.stretch.QuietStretch`) take the rest:
+
+* A step in which routers relocate or agents back up goes phase by phase (:meth:`RepairStep.busy`).
+* The relocator is *idle* when nobody relocates, no loss waits whose router may move and is cut off, and the links
+  among the watched nodes are those it last saw. Deployed nodes do not move, so under a radio whose links are decided
+  by the positions (:attr:`~amronet.algorithms.stepping.StepContext.link_inputs`: the unit disk, the built-in
+  path-loss law without packet loss) it stays idle until a node is added, changes state (the controller's
+  ``_nodes_changed``) or fails; meanwhile its ``update`` would change nothing but its caches of the last table,
+  which are kept by value (the same links give the same answers), so it is not called (:meth:`RepairStep.quiet`).
+* ``retrace``'s agents are steered as the controller does it, in its own code, every compiled step; in a stretch the
+  kernel notes their contact and stops before one of them would back up, and their odometry is replayed from the
+  positions it hands back (:class:`~.stretch_books.Retracing`).
+
+Every other step of the controller's (an agent acts, triangle or strip routers drive) runs the controller's own
+``movers_command``, repair included.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from amronet.algorithms.agent_assisted.retrace import Retracer
+from amronet.algorithms.agent_assisted.stretch_books import Retracing, no_retracing
+from amronet.algorithms.base import StepInput
+from amronet.algorithms.stepping import StepContext
+from amronet.engine.network import agents_connected
+from amronet.engine.robots import State
+
+__all__ = ["RepairStep"]
+
+
+class RepairStep:
+    """The repair's part of a compiled agent-assisted step (see the module docstring).
+
+    Args:
+        controller: The loop's controller (with a relocator).
+        context: The loop's step context.
+    """
+
+    def __init__(self, controller: Any, context: StepContext) -> None:
+        self.controller = controller
+        self.relocator = controller.relocator
+        self.retracer: Retracer | None = self.relocator if isinstance(self.relocator, Retracer) else None
+        self.fixed_links = context.link_inputs is not None
+        """Whether the links among nodes that stand still stay as they are (no packet loss)."""
+        self._idle: tuple | None = None
+        """What the relocator was found idle with: the controller's deployed mask, the robots, the failed nodes."""
+        self.updates_skipped = 0
+        """Compiled steps in which the idle relocator's ``update`` was not called."""
+
+    def busy(self) -> bool:
+        """Whether routers relocate or agents back up: the step goes phase by phase."""
+        if (self.controller.swarm.state == State.RELOCATING).any():
+            return True
+        return self.retracer is not None and bool(self.retracer.backing.any())
+
+    def _token(self) -> tuple:
+        c = self.controller
+        sw = c.swarm
+        return c.deployed_nodes()[0], len(sw), int(np.count_nonzero(sw.state == State.FAILED))
+
+    def idle(self) -> bool:
+        """Whether the relocator was found idle and nothing it watches has changed since (the module docstring)."""
+        kept = self._idle
+        if kept is None:
+            return False
+        now = self._token()
+        return now[0] is kept[0] and now[1:] == kept[1:]
+
+    def _note_idle(self, table: Any) -> None:
+        """After the relocator's ``update``: keep what it is idle with, or forget it.
+
+        Only where ``table`` has every robot (a router put down since it was built has no links in it yet).
+        """
+        r, sw = self.relocator, self.controller.swarm
+        idle = self.fixed_links and len(table.indptr) - 1 == len(sw) and not (sw.state == State.RELOCATING).any()
+        if idle and len(r._li):
+            movable = r._movable(r._li, sw)
+            idle = not (movable.any() and r._cut_off(table, sw)[r._li[movable]].any())
+        self._idle = self._token() if idle else None
+
+    def quiet(self, now: StepInput, scans: np.ndarray) -> np.ndarray:
+        """The end of ``movers_command`` in a step in which only the agents move; their speeds.
+
+        ``retrace``'s agents are steered (:meth:`.Retracer.steer_agents`); the relocator looks, unless it is idle
+        (then only the odometry is recorded).
+        """
+        c, r = self.controller, self.relocator
+        sw = c.swarm
+        speed = c.explorer.speed(c.agent_speed)
+        if self.retracer is not None:
+            contact = agents_connected(now.table, c.agents, c.bases, sw.relaying)
+            speed = self.retracer.steer_agents(now.t, contact, sw, scans, sw.models[c.agent_model].sensor_range,
+                                               speed, c.dt)
+        if self.idle():
+            r.odometry(sw)
+            self.updates_skipped += 1
+            return speed
+        started, stopped = r.update(now.t, now.table, sw)
+        if len(started) or len(stopped):  # (as movers_command: those that start move from the next step)
+            sw.state[started] = State.RELOCATING
+            sw.state[stopped] = State.REFERENCE
+            c._nodes_changed()
+        self._note_idle(now.table)
+        return speed
+
+    def stretch_start(self, now: StepInput, limit: int) -> Retracing | None:
+        """What a stretch keeps of the repair from this step on (:class:`~.stretch_books.Retracing`).
+
+        ``None``: no stretch now (the relocator is not idle, or routers drive that ``retrace`` would record, or a
+        relocating router's loss might start; an agent starts to back up now). Under ``retrace`` this step's contact
+        is noted, as :meth:`.Retracer.steer_agents` notes it first.
+        """
+        c, r = self.controller, self.relocator
+        sw = c.swarm
+        if self.busy() or not self.idle():
+            return None
+        if c.moving_triangles and (self.retracer is not None or (len(r._li) and r._movable(r._li, sw).any())):
+            return None  # (triangle routers on their way add to their way, or may cut a router off)
+        m = len(c.agents)
+        if self.retracer is None:
+            return no_retracing(m)
+        b = self.retracer
+        contact = agents_connected(now.table, c.agents, c.bases, sw.relaying)
+        at = np.where(contact, now.t, b.contact_at)
+        if (~contact & ~b.on_path & (now.t - at >= b.confirm_s - 1e-9)).any():
+            return None
+        b.contact_at[:] = at
+        return Retracing(np.empty((limit, m, 2)), b.contact_at, b.on_path, float(b.confirm_s), int(now.index),
+                         float(now.dt))
+
+    def stretch_end(self, done: int, retracing: Retracing) -> None:
+        """After a stretch of ``done`` whole steps: ``retrace``'s odometry of them (the kernel noted the contact)."""
+        self.updates_skipped += done
+        if self.retracer is not None and done:
+            self.retracer.crumbs.replay(retracing.trail[:done])

@@ -1,0 +1,130 @@
+"""Runs that repair (``repair: relocate``, ``retrace``) take the compiled step and quiet stretches, bit for bit.
+
+Each case runs once with the compiled step (stretches before the fault, compiled steps after it, the controller's own
+code where the repair acts) and once phase by phase (``step="reference"``), and compares the robots, the controller's
+and the repair's arrays, the table, the summary (its ``faults`` and ``mission`` too), the time series and the records.
+The faults cut the network: routers relocate or back up their way, and under ``retrace`` agents back up theirs.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from amronet.algorithms.agent_assisted.fast import CompiledAgents
+from amronet.algorithms.agent_assisted.retrace import Breadcrumbs, Retracer
+from amronet.experiments.failures import _scenario
+from amronet.scenario import load_scenario
+from amronet.sim import Simulation
+from test_repair_retrace import DROPS, END, scenario, two_rooms
+
+FAULT_AT, AFTER, FRACTION, SEED = 100.0, 150.0, 0.3, 5
+
+CASES = {  # name: (scenario, seed, whether an agent backs up)
+    "relocate office unit-disk": (("agent-assisted-relocate", "office-32x32", "unit-disk"), SEED, False),
+    "retrace office unit-disk": (("agent-assisted-retrace", "office-32x32", "unit-disk"), SEED, True),
+    "relocate office multi-wall shadowing": (("agent-assisted-relocate", "office-32x32", "multi-wall-shadowing"),
+                                             SEED, False),
+    "relocate hospital multi-wall": (("agent-assisted-relocate", "hospital_section", "multi-wall"), SEED, False),
+    "retrace hospital multi-wall": (("agent-assisted-retrace", "hospital_section", "multi-wall"), SEED, True),
+    "retrace hospital multi-wall shadowing": (("agent-assisted-retrace", "hospital_section", "multi-wall-shadowing"),
+                                              SEED, True),
+    # no fault, agents that go on without routers: they lose contact and back up, in the steps a stretch would take
+    "retrace agents out of contact": ({"algorithm.params.explorer": "frontier", "algorithm.params.repair": "retrace",
+                                       "agents.routers_carried": 2, "agents.when_empty": "continue",
+                                       "sim.time_limit": 150, "sim.coverage_target": "off"}, 2, True),
+}
+
+
+def _load(source):
+    if isinstance(source, dict):
+        return load_scenario("agent-assisted-office", source)
+    return load_scenario(_scenario(source[0], source[1], FRACTION, FAULT_AT, AFTER, "frontier", source[2]))
+
+
+def _books(sim) -> dict[str, np.ndarray]:
+    sw, c = sim.swarm, sim.controller
+    r = c.relocator
+    out = {"xy": sw.xy, "heading": sw.heading, "state": sw.state, "status": sw.status, "distance": sw.distance,
+           "current": c.current, "left": c.left, "refused": c.refused, "released_by": c.released_by,
+           "nearest": c.nearest_d, "disabled": c.disabled,
+           "rng": np.frombuffer(json.dumps(c.rng.bit_generator.state).encode(), dtype=np.uint8),
+           "table": sim.table.indices, "table_dist": sim.table.dist, "table_indptr": sim.table.indptr,
+           "losses": r._li, "lost": r._lj, "since": r._since, "where": r._where, "pairs": r._pairs,
+           "goal": r.steering.goal, "blocked": r.steering.blocked_steps, "to_goal": r.steering.last_to_goal,
+           "numbers": np.array([sim.steps, r.moves, r.n])}
+    if hasattr(c.explorer, "grid"):
+        out["score"] = c.explorer.grid.score
+    if isinstance(r, Retracer):
+        k = r.crumbs.count
+        out.update({"node": r.node, "skips": r.skips, "backing": r.backing, "contact_at": r.contact_at,
+                    "crumbs": r.crumbs.xy[:k], "parents": r.crumbs.parent[:k], "tips": r.crumbs.tip,
+                    "paths": np.concatenate(r.crumbs.paths), "counts": np.array([r.skipped, r.agent_backs, k])})
+    return out
+
+
+def _summary(result) -> str:
+    return json.dumps({k: v for k, v in result.summary.items() if k != "wall_time_s"}, sort_keys=True, default=repr)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_repairing_runs_take_the_compiled_step_bit_for_bit(name):
+    source, seed, backs = CASES[name]
+    sc = _load(source)
+    fast, slow = Simulation(sc, seed), Simulation(sc, seed, step="reference")
+    assert isinstance(fast.compiled, CompiledAgents) and fast.compiled.repair is not None
+    a, b = fast.run(), slow.run()
+    for key, value in _books(slow).items():
+        np.testing.assert_array_equal(_books(fast)[key], value, err_msg=key)
+    assert _summary(a) == _summary(b)
+    assert a.timeseries.keys() == b.timeseries.keys()
+    for key, series in b.timeseries.items():
+        np.testing.assert_array_equal(a.timeseries[key], series, err_msg=key)
+    assert fast.rows == slow.rows and a.network == b.network
+    relocator = fast.controller.relocator
+    if isinstance(source, tuple):  # the fault cut routers off, and they moved
+        assert a.summary["faults"] and a.summary["mission"]["relocations"] > 0
+    assert (relocator.agent_backs > 0) == backs if isinstance(relocator, Retracer) else not backs
+    # stretches took steps, and the idle relocator's update was left out in them and in compiled steps
+    assert sum(fast.compiled.quiet.ends.values()) > 0
+    assert fast.compiled.repair.updates_skipped > fast.steps / 4
+
+
+def test_routers_put_down_between_steps_are_watched_from_the_next_table(tmp_path):
+    """Routers put down by hand between two steps (the two-room case): the step's table does not have them yet."""
+    sims = [Simulation(scenario(tmp_path, "retrace"), seed=1, omap=two_rooms(), step=step)
+            for step in ("compiled", "reference")]
+    for sim in sims:
+        placed: list[int] = []
+        while sim.t < END - 1e-9:
+            if any(abs(sim.t - t) < 1e-9 for t in DROPS):
+                placed.append(sim.controller._release_reference(int(sim.agents[0]),
+                                                                placed[-1] if placed else int(sim.bases[0]), sim.t))
+            sim.step()
+    fast, slow = sims
+    assert fast.controller.relocator.moves == 1 and fast.compiled.repair.updates_skipped > 0
+    for key, value in _books(slow).items():
+        np.testing.assert_array_equal(_books(fast)[key], value, err_msg=key)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 40), st.integers(1, 3))
+def test_breadcrumbs_replay_records_step_by_step(seed, steps, agents):
+    """A stretch's odometry, replayed from the positions it hands back, is what recording each step gives."""
+    rng = np.random.default_rng(seed)
+    start = rng.uniform(0, 5, (agents, 2))
+    trail = start + np.cumsum(rng.normal(0, 0.15, (steps, agents, 2)), axis=0)
+    one, other = Breadcrumbs(start, 0.3, 0.4), Breadcrumbs(start, 0.3, 0.4)
+    for s in range(steps):
+        one.record(trail[s], np.ones(agents, dtype=bool))
+    other.replay(trail)
+    assert one.count == other.count
+    np.testing.assert_array_equal(one.xy[:one.count], other.xy[:other.count])
+    np.testing.assert_array_equal(one.parent[:one.count], other.parent[:other.count])
+    np.testing.assert_array_equal(one.tip, other.tip)
+    for x, y in zip(one.paths, other.paths, strict=True):
+        np.testing.assert_array_equal(x, y)
