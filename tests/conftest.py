@@ -15,3 +15,20 @@ def shared_maps() -> Path:
     if not SHARED_MAPS.is_dir():
         pytest.skip("../shared/maps is not beside the project")
     return SHARED_MAPS
+
+
+@pytest.fixture
+def threaded_spreading_calls(monkeypatch) -> list:
+    """Self-spreading's compiled step on its threaded path (:mod:`amronet.threads`) at any size; one entry per call."""
+    from amronet.algorithms.self_spreading import fast as compiled_step
+
+    calls = []
+    threaded = compiled_step.sense_steer_plan_threaded
+
+    def counting(*args):
+        calls.append(1)
+        return threaded(*args)
+
+    monkeypatch.setattr(compiled_step, "use_threads", lambda n: True)
+    monkeypatch.setattr(compiled_step, "sense_steer_plan_threaded", counting)
+    return calls

@@ -242,17 +242,9 @@ THREADED_CASES = {
 
 
 @pytest.mark.parametrize("name", sorted(THREADED_CASES))
-def test_the_threaded_step_gives_the_reference_run_bit_for_bit(name, monkeypatch):
+def test_the_threaded_step_gives_the_reference_run_bit_for_bit(name, threaded_spreading_calls):
     """Large runs (amronet.threads) sense, decide and plan on several threads, then move one by one: the same run."""
-    calls = []
-    threaded = compiled_step.sense_steer_plan_threaded
-
-    def counting(*args):
-        calls.append(1)
-        return threaded(*args)
-
-    monkeypatch.setattr(compiled_step, "use_threads", lambda n: True)
-    monkeypatch.setattr(compiled_step, "sense_steer_plan_threaded", counting)
+    calls = threaded_spreading_calls
     preset, seed, overrides = THREADED_CASES[name]
     sc = load_scenario(preset, overrides)
     fast, reference = Simulation(sc, seed), Simulation(sc, seed, step="reference")

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from amronet.algorithms.potential_field.fast import CompiledField
-from amronet.algorithms.self_spreading import fast as compiled_step
 from amronet.algorithms.self_spreading.fast import CompiledSpreading
 from amronet.engine.robots import State
 from amronet.experiments.failures import _scenario
@@ -171,17 +170,9 @@ def test_runs_with_faults_take_the_compiled_step_bit_for_bit(name, struck, stret
 
 @pytest.mark.parametrize("name", ["office: a triangle router and an explorer fail, then a base station",
                                   "hospital floor plan: explorers fail, then a fraction and the base"])
-def test_the_threaded_step_takes_runs_with_faults_bit_for_bit(name, monkeypatch):
+def test_the_threaded_step_takes_runs_with_faults_bit_for_bit(name, threaded_spreading_calls):
     """Large runs (amronet.threads) sense, decide and plan on several threads: the same run with faults too."""
-    calls = []
-    threaded = compiled_step.sense_steer_plan_threaded
-
-    def counting(*args):
-        calls.append(1)
-        return threaded(*args)
-
-    monkeypatch.setattr(compiled_step, "use_threads", lambda n: True)
-    monkeypatch.setattr(compiled_step, "sense_steer_plan_threaded", counting)
+    calls = threaded_spreading_calls
     preset, seed, overrides = CASES[name]
     sc = load_scenario(preset, overrides)
     fast, reference = Simulation(sc, seed), Simulation(sc, seed, step="reference")
