@@ -164,6 +164,24 @@ def test_two_sets_asked_about_in_turn_keep_a_union_each():
     assert len(medium.kernels.heard_cells.signatures) == 1
 
 
+def test_a_second_set_of_nodes_starts_from_the_first_ones_union():
+    area, pool = _world()
+    medium = _medium(4.0)
+    work = _Work(medium.kernels.heard_cells, area.omap, medium.reach)
+    heard = HeardCells(medium.hearing, medium.kernels._replace(heard_cells=work))
+    every, linked = pool[:16], pool[:12]  # all the nodes, and those connected to a base
+    for xy in (every, linked):
+        np.testing.assert_array_equal(heard.covered(area, xy, medium.reach), _afresh(medium, area, xy))
+    built = work.take()
+    np.testing.assert_array_equal(heard.covered(area, every, medium.reach), _afresh(medium, area, every))
+    assert len(next(iter(heard.areas.values())).unions) == 2  # a union of its own
+    # it copied the connected nodes' union: only the four nodes it adds decide cells, not all sixteen afresh
+    assert 0 < work.take() < built // 3
+    for xy in (linked, every, linked):
+        np.testing.assert_array_equal(heard.covered(area, xy, medium.reach), _afresh(medium, area, xy))
+    assert work.take() == 0  # each set finds its own union as it left it
+
+
 def test_a_union_interrupted_half_way_is_dropped_not_kept_wrong():
     area, pool = _world()
     medium = _medium(0.0)

@@ -59,8 +59,8 @@ class HeardCells:
             to its nodes up to date (a node that left decides again only the cells it marked first, a new one
             marks only the cells still uncovered) and copies it. When a set of nodes asks again for positions it
             dropped from a union at its last call (two sets asked about in turn: a run's nodes and its connected
-            ones), it gets a union of its own. Cells depend on a node and a cell alone: the result is the same
-            with or without the unions.
+            ones), it gets a union of its own: a copy of that union, brought up to date. Cells depend on a node
+            and a cell alone: the result is the same with or without the unions.
     """
 
     def __init__(self, hearing: HearingInputs, kernels: MarginKernels, cache_bytes: int = _CACHE_BYTES) -> None:
@@ -106,7 +106,11 @@ class HeardCells:
         afresh = best is None or (len(gone) > _FEW and 2 * len(gone) > len(best.members))
         if afresh or any(key in best.dropped for key in new):  # a new union, if there is room for one
             spare = self._spare(memo)
-            if spare is not None:
+            if spare is not None and not afresh:  # a second set of nodes: it starts from the closest union
+                spare.become(best)
+                best = spare
+                gone, new = best.changes(positions)
+            elif spare is not None:
                 best, gone, new = spare, [], list(positions)
             elif best is None:
                 return None

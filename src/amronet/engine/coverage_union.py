@@ -79,6 +79,16 @@ class HeardUnion:
         self.dropped = set()
         self._free = list(range(len(self._xy) - 1, -1, -1))
 
+    def become(self, other: HeardUnion) -> None:
+        """Take ``other``'s members and grids (copies; its keeper's clock and last leavers are not taken)."""
+        np.copyto(self.union, other.union)
+        np.copyto(self.owner, other.owner)
+        self.members = dict(other.members)
+        self.dropped = set()
+        self._xy, self._box, self._joined = other._xy.copy(), other._box.copy(), other._joined.copy()
+        self._count = other._count
+        self._free = list(other._free)
+
     def changes(self, positions: dict[tuple[float, float], None]
                 ) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
         """The members not among ``positions`` (to leave) and the ``positions`` not members (to join)."""

@@ -31,6 +31,7 @@ import numpy as np
 from numba import njit
 
 from amronet.engine.kernel_data import Grid
+from amronet.engine.occlusion import BINS, NEAR, behind, shade
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.shadowing import FieldGrid, ShadowingField, _lookup, field_at, link_shadowing
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
@@ -179,6 +180,12 @@ model_margin = path_loss_margin
 :mod:`amronet.engine.margin_kernels`)."""
 model_bound = path_loss_bound
 """The margin bound the kernels below call."""
+SHADE_AFTER = 256
+"""A node's wall shadows (:mod:`amronet.engine.occlusion`) are drawn once this many walks met a wall that the
+budget did not allow: a node that would walk few such cells does not pay for them."""
+model_is_path_loss = True
+"""Whether ``model_margin`` is :func:`path_loss_margin`: then :func:`heard_cells` skips the wall walk of a cell
+whose budget allows no wall and that lies in a wall's shadow (:mod:`amronet.engine.occlusion`), the walk's answer."""
 
 BLOCK = 8
 """Cells per side of the blocks that the coverage and signal kernels cull as a whole (see :func:`cells_of`)."""
@@ -273,6 +280,10 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h):  # pragma:
         return 0
     sa = field_at(h.field, x, y) if shadowed else 0.0
     at_cell, at_block = cells.field, cells.block_field  # out of the loops (see candidate_margins)
+    walled = h.wall_db > 0.0
+    shadows = np.empty(BINS if model_is_path_loss and walled else 0)
+    blocked = 0  # cells walked that allowed no wall and met one: the shadows are drawn after SHADE_AFTER of them
+    near2 = (NEAR * h.walls.res) ** 2
     for bi in range(i0 // BLOCK, i1 // BLOCK + 1):
         for bj in range(j0 // BLOCK, j1 // BLOCK + 1):
             gap = _block_gap(x, y, cells, bi, bj, rows, cols)
@@ -290,7 +301,24 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h):  # pragma:
                     if d > reach:
                         continue
                     sb = at_cell[i, j] if shadowed else 0.0
-                    if model_margin(x, y, cx, cy, d, sa, sb, 0.0, h) >= 0.0:
+                    if model_is_path_loss:  # path_loss_margin written out, a shadowed cell's walk skipped
+                        m = open_margin(d, sa, sb, h.r_c, h.n10, h.corr, h.clip)
+                        if walled and m >= 0.0:
+                            dd = (cx - x) * (cx - x) + (cy - y) * (cy - y)
+                            lone = m < h.wall_db and dd > near2  # no wall allowed
+                            if lone and blocked >= SHADE_AFTER:  # in a wall's shadow: not heard
+                                if blocked == SHADE_AFTER:
+                                    shade(x, y, reach, h.wall_bits, h.walls.blocked.shape[1], h.walls.ox,
+                                          h.walls.oy, h.walls.res, shadows)
+                                    blocked += 1
+                                if behind(shadows, cx - x, cy - y, dd):
+                                    continue
+                            m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)
+                            if lone and m < 0.0 and blocked < SHADE_AFTER:
+                                blocked += 1
+                    else:
+                        m = model_margin(x, y, cx, cy, d, sa, sb, 0.0, h)
+                    if m >= 0.0:
                         out[i, j] = True
                         if owned:
                             owner[i, j] = key

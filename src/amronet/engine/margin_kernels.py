@@ -4,7 +4,8 @@ A model gives one margin kernel (and, optionally, a bound of it: :mod:`amronet.e
 apply it are written once, calling the path-loss law's (``model_margin`` and ``model_bound`` in
 :mod:`amronet.engine.hearing` and :mod:`amronet.engine.links`); for another model :func:`margin_kernels` compiles
 copies of them whose ``model_margin`` and ``model_bound`` are the model's (the same code, other globals), so the
-model's margin is inlined into every loop just like the built-in law. numba caches the copies on disk like any
+model's margin is inlined into every loop just like the built-in law (the copies' ``model_is_path_loss`` is false:
+the shortcuts of the built-in law's own pieces are not taken). numba caches the copies on disk like any
 kernel: each copy is named after the model's kernels and a digest of the files that define them, so editing a
 model's margin compiles its copies afresh.
 
@@ -65,7 +66,7 @@ def margin_kernels(margin: Callable, bound: Callable | None) -> MarginKernels:
     if key not in _COPIES:
         tag = _tag(margin, bound)
         swap = {"model_margin": margin, "model_bound": no_bound if bound is None else bound}
-        mark = _copy(hearing._mark_node, swap, tag)
+        mark = _copy(hearing._mark_node, {**swap, "model_is_path_loss": False}, tag)
         _COPIES[key] = MarginKernels(_copy(links.candidate_margins, swap, tag),
                                      _copy(hearing.heard_cells, {"_mark_node": mark}, tag),
                                      _copy(hearing.best_margin_grid, swap, tag))

@@ -1,0 +1,80 @@
+"""The wall shadows that let coverage skip wall walks: never a point the walk finds clear, most of those it does not."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from amronet.engine.occlusion import BINS, behind, shade
+from amronet.engine.wall_bits import wall_bits
+from amronet.engine.walls import count_walls_many, wall_grid
+from amronet.world.builtin import resolve_map
+
+REACH = 12.0
+
+
+@functools.cache
+def _office():
+    omap = resolve_map("office-32x32")
+    return omap, wall_grid(omap), wall_bits(omap)
+
+
+def _shadows(omap, bits, x: float, y: float) -> np.ndarray:
+    out = np.empty(BINS)
+    shade(x, y, REACH, bits, omap.shape[1], float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), out)
+    return out
+
+
+def _walls(omap, grid, node, ends) -> np.ndarray:
+    walls, jump = grid
+    return count_walls_many(walls, jump, float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution),
+                            np.tile(node, (len(ends), 1)), ends, np.full(len(ends), 10**6, np.int64))
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), where=st.sampled_from(["free", "face", "corner", "wall"]))
+def test_a_point_in_a_shadow_is_behind_a_wall_the_walk_counts(seed, where):
+    omap, grid, bits = _office()
+    rng = np.random.default_rng(seed)
+    res = float(omap.resolution)
+    rows, cols = np.nonzero(grid[0] == (1 if where == "wall" else 0))
+    k = rng.integers(len(rows))
+    node = omap.cell_centres(rows[k:k + 1], cols[k:k + 1])[0]
+    if where == "face":  # on a cell border (a wall's face when a wall cell is beside)
+        node = node + np.array([0.5 * res * rng.choice([-1.0, 1.0]), 0.0])
+    elif where == "corner":
+        node = node + 0.5 * res * rng.choice([-1.0, 1.0], 2)
+    shadows = _shadows(omap, bits, *node)
+    # points anywhere within reach (not only cell centres), some on cell borders
+    ends = node + rng.uniform(-REACH, REACH, (4000, 2))
+    ends[::4] = np.round(ends[::4] / res) * res
+    ends = ends[(ends >= 0.0).all(axis=1) & (ends < 32.0).all(axis=1)]
+    d = ends - node
+    dd = (d * d).sum(axis=1)
+    shaded = np.array([behind(shadows, dx, dy, s) for (dx, dy), s in zip(d, dd, strict=True)])
+    assert shaded.any()
+    assert (_walls(omap, grid, node, ends[shaded]) >= 1).all()
+
+
+def test_most_cells_behind_a_wall_are_found_in_its_shadow():
+    omap, grid, bits = _office()
+    rng = np.random.default_rng(7)
+    rows, cols = np.nonzero(grid[0] == 0)
+    found = blocked = 0
+    for k in rng.choice(len(rows), 6, replace=False):
+        node = omap.cell_centres(rows[k:k + 1], cols[k:k + 1])[0]
+        shadows = _shadows(omap, bits, *node)
+        pick = rng.choice(len(rows), 3000, replace=False)
+        ends = omap.cell_centres(rows[pick], cols[pick])
+        d = ends - node
+        dd = (d * d).sum(axis=1)
+        ends, d, dd = ends[dd < (0.9 * REACH) ** 2], d[dd < (0.9 * REACH) ** 2], dd[dd < (0.9 * REACH) ** 2]
+        walled = _walls(omap, grid, node, ends) >= 1
+        shaded = np.array([behind(shadows, dx, dy, s) for (dx, dy), s in zip(d, dd, strict=True)])
+        assert not (shaded & ~walled).any()
+        found += int(np.count_nonzero(shaded))
+        blocked += int(np.count_nonzero(walled))
+    assert found > 0.8 * blocked  # the walks coverage skips
