@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.algorithms.agent_assisted import kernels, rule_kernels, stretch_kernels, stretch_links
+from amronet.algorithms.agent_assisted import kernels, rule_kernels, stretch_books, stretch_kernels, stretch_links
 from amronet.algorithms.agent_assisted.controller import _pair_key
 from amronet.algorithms.agent_assisted.explorers.frontier import knowledge, planning
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
@@ -33,7 +33,7 @@ FAILURES = {k: v for k, v in _scenario("agent-assisted", "office-32x32", 0.2, 60
 """``reproduce failures``' agent-assisted run without its faults."""
 FAULTS = {"sim.time_limit": 260, "faults": [{"at": 100.0, "routers": 0.3}, {"at": 101.05, "ids": [3]},
                                              {"rate_per_hour": 30.0, "at": 200.0}]}
-"""Faults in the failures' run: stretches until the first, none once a node failed (the table silences it)."""
+"""Faults in the failures' run: stretches until the first, none after it (its damage is never repaired)."""
 CASES = {
     "office, r_c 4 m": ("agent-assisted-office", 2, {**FRONTIER, "sim.time_limit": 300, "radio.r_c": 4.0}),
     "open floor, four agents": ("agent-assisted-office", 3, {**FRONTIER, "sim.time_limit": 200, "map": "open-32x32",
@@ -170,7 +170,7 @@ UNPACKED = {  # (module, kernel): {tuple it unpacks: the named structure laid ou
     (R, "rule_quiet"): {"books": R.RuleBooks, "inputs": R.RuleInputs},
     (R, "rule_commit"): {"books": R.RuleBooks},
     (R, "rule_acts"): {"rules": R.RuleStep},
-    (S, "_observe"): {"books": AgentBooks, "arrays": S.Links},
+    (stretch_books, "observe_links"): {"books": AgentBooks, "arrays": stretch_books.Links},
     (stretch_links, "next_radio"): {"radio": stretch_links.Radio},
     (knowledge, "integrate_readings"): {"cells": knowledge.Cells},
     (planning, "search_target"): {"targets": planning.Targets, "claims": planning.Claims},
@@ -192,3 +192,30 @@ def test_the_kernels_unpack_their_named_structures_in_the_order_of_their_fields(
         assert len(names) == len(fields), source
         for got, field in zip(names, fields, strict=True):
             assert got in ("_", field) or got.endswith("_" + field), (source, got, field)
+
+
+def test_a_stretch_until_the_agents_are_linked_stops_after_the_first_step_they_all_are(monkeypatch):
+    # what the loop may ask while a fault's damage waits for the agents only: every stretch asked so, the same run
+    ended = []
+
+    def until_linked(self, limit, now, books, silent=None, take=QuietStretch.take):
+        before = int(books.arrays[5][1])  # (steps with every agent linked)
+        out = take(self, limit, now, books, silent, until_linked=True)
+        if out is not None:
+            ended.append((int(books.arrays[5][1]) - before, bool(books.arrays[0].all()), out.finish is None))
+        return out
+
+    monkeypatch.setattr(QuietStretch, "take", until_linked)
+    sc = load_scenario("agent-assisted-office", {**FRONTIER, "agents.routers_carried": 2, "sim.time_limit": 150,
+                                                 "agents.when_empty": "continue", "sim.coverage_target": "off"})
+    fast, slow = Simulation(sc, 2), Simulation(sc, 2)
+    slow.compiled.quiet = None
+    a, b = fast.run(), slow.run()
+    for key, value in _books(slow).items():
+        np.testing.assert_array_equal(_books(fast)[key], value, err_msg=key)
+    assert _summary(a) == _summary(b)
+    ends = fast.compiled.quiet.ends
+    assert ends["linked"] > 0 and ends["quiet"] > 0  # (and stretches with an agent out of contact all along)
+    linked = [e for e in ended if e[0]]
+    assert len(linked) == ends["linked"]  # a stretch stops at the first step after which every agent is linked
+    assert all(e == (1, True, True) for e in linked)

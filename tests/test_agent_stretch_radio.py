@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
+from amronet.algorithms.agent_assisted.stretch_links import NO_MARGIN, Radio, next_radio
 from amronet.engine.radio import make_medium
 from amronet.experiments.building_cells import BUILDINGS, RULES
 from amronet.experiments.common import agent_scenario
 from amronet.scenario import load_scenario
+from amronet.scenario.radio_spec import RadioSpec
 from amronet.sim import Simulation
 from amronet.world.builtin import resolve_map
 from test_agent_stretch import _books, _summary
@@ -78,3 +80,40 @@ def test_only_the_path_loss_law_without_packet_loss_builds_its_tables_in_a_stret
     assert make_medium("multi-wall", 4.0, omap, rng).stretch_inputs is not None
     assert make_medium("multi-wall", 4.0, omap, rng, packet_loss=True).stretch_inputs is None
     assert make_medium("unit-disk", 4.0, omap, rng, packet_loss=True).stretch_inputs is None
+
+
+@pytest.mark.parametrize("margins", [False, True])
+@pytest.mark.parametrize(("model", "db"), [("unit-disk", 0.0), ("multi-wall", 0.0), ("multi-wall", 4.0)])
+def test_the_stretchs_tables_drop_the_silent_nodes_links_as_the_radio_does(model, db, margins):
+    # step after step from one table, some robots moving, a few failed (or none): links, their margins and the
+    # geometric view as RadioMedium.update builds them with its silent
+    omap = resolve_map("office-32x32")
+    rng = np.random.default_rng(11)
+    n = 60
+    xy = rng.uniform(2.0, 30.0, (n, 2))
+    for silent in (np.zeros(n, dtype=bool), rng.random(n) < 0.15):
+        budget = RadioSpec(model=model, r_c=6.0, shadowing_db=db).link_budget()
+        medium = make_medium(model, budget, omap, np.random.default_rng(3))
+        laws = model != "unit-disk"
+        table = medium.update(xy, None, silent)
+        near = table.geometric
+        radio = tuple(Radio(medium.reach, table.indptr, table.indices, table.dist,
+                            table.margin if margins else NO_MARGIN, near.indptr, near.indices, near.dist, near.xy,
+                            near.link_margin if laws else NO_MARGIN, medium.stretch_inputs,
+                            silent if silent.any() else np.zeros(0, dtype=bool)))
+        here = xy.copy()
+        dropped = 0
+        for _ in range(6):
+            moving = rng.random(n) < 0.3
+            here[moving] += rng.normal(0.0, 0.6, (int(moving.sum()), 2))
+            ok, radio = next_radio(here, radio, np.zeros(n, dtype=np.int64), margins)
+            table = medium.update(here, None, silent)
+            assert ok
+            for k, got in ((1, table.indptr), (2, table.indices), (3, table.dist), (5, table.geometric.indptr),
+                           (6, table.geometric.indices), (7, table.geometric.dist)):
+                np.testing.assert_array_equal(radio[k], got, err_msg=str(k))
+            if margins:
+                np.testing.assert_array_equal(radio[4], table.margin)
+            dropped += len(table.indices) < len(table.geometric.indices)
+        if silent.any() or db:  # (links were dropped: the links are not the geometric table)
+            assert dropped == 6

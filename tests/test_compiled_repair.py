@@ -4,6 +4,7 @@ Each case runs once with the compiled step (stretches before the fault, compiled
 code where the repair acts) and once phase by phase (``step="reference"``), and compares the robots, the controller's
 and the repair's arrays, the table, the summary (its ``faults`` and ``mission`` too), the time series and the records.
 The faults cut the network: routers relocate or back up their way, and under ``retrace`` agents back up theirs.
+Once the damage is repaired, stretches go on with the failed nodes silent (``AFTER_FAULT``), with a repair or without.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from hypothesis import strategies as st
 
 from amronet.algorithms.agent_assisted.fast import CompiledAgents
 from amronet.algorithms.agent_assisted.retrace import Breadcrumbs, Retracer
+from amronet.algorithms.agent_assisted.stretch import QuietStretch
 from amronet.experiments.failures import _scenario
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
@@ -40,23 +42,56 @@ CASES = {  # name: (scenario, seed, whether an agent backs up)
 }
 
 
+
+def _failures(algorithm, map_name, radio, at=300.0, faults=None):
+    """The failures' run: a fifth of the deployed routers fail at ``at``, and as long again after (or ``faults``)."""
+    sc = _scenario(algorithm, map_name, 0.2, at, at, "frontier", radio)
+    return sc if faults is None else {**sc, "faults": faults}
+
+
+REFERENCE_FAILS = (300.0, 1, 30)
+"""At that time agent 1's current reference is router 30 (seed 3 of the office's run without repair)."""
+AFTER_FAULT = {  # name: (scenario, seed): the fault's damage is repaired, then stretches take steps, the failed silent
+    "no repair office multi-wall shadowing": (_failures("agent-assisted", "office-32x32", "multi-wall-shadowing"), 1),
+    "no repair office, an agent's reference fails, the agent is spared": (_failures(
+        "agent-assisted", "office-32x32", "unit-disk", faults=[{"at": REFERENCE_FAILS[0], "ids": [1, 30]}]), 3),
+    "no repair, four bases, triangles, a base station fails": (("agent-assisted-office-4bs", {
+        "algorithm.params.explorer": "frontier", "sim.time_limit": 300, "agents.per_base": 1,
+        "faults": [{"at": 100.0, "base_station": 1}]}), 4),
+    "relocate office unit-disk": (_failures("agent-assisted-relocate", "office-32x32", "unit-disk", 600.0), 2),
+    "relocate office multi-wall shadowing": (_failures("agent-assisted-relocate", "office-32x32",
+                                                       "multi-wall-shadowing"), 5),
+    "retrace office unit-disk": (_failures("agent-assisted-retrace", "office-32x32", "unit-disk"), 5),
+    "retrace hospital multi-wall": (_failures("agent-assisted-retrace", "hospital_section", "multi-wall", 600.0), 1),
+    "retrace hospital multi-wall shadowing": (_failures("agent-assisted-retrace", "hospital_section",
+                                                        "multi-wall-shadowing"), 2),
+}
+
+
 def _load(source):
+    if isinstance(source, dict) and "algorithm" in source:  # a whole scenario
+        return load_scenario(source)
     if isinstance(source, dict):
         return load_scenario("agent-assisted-office", source)
+    if isinstance(source[1], dict):  # a preset and its overrides
+        return load_scenario(*source)
     return load_scenario(_scenario(source[0], source[1], FRACTION, FAULT_AT, AFTER, "frontier", source[2]))
 
 
 def _books(sim) -> dict[str, np.ndarray]:
     sw, c = sim.swarm, sim.controller
-    r = c.relocator
+    r, links = c.relocator, sim.books.agent_links
     out = {"xy": sw.xy, "heading": sw.heading, "state": sw.state, "status": sw.status, "distance": sw.distance,
            "current": c.current, "left": c.left, "refused": c.refused, "released_by": c.released_by,
            "nearest": c.nearest_d, "disabled": c.disabled,
            "rng": np.frombuffer(json.dumps(c.rng.bit_generator.state).encode(), dtype=np.uint8),
            "table": sim.table.indices, "table_dist": sim.table.dist, "table_indptr": sim.table.indptr,
-           "losses": r._li, "lost": r._lj, "since": r._since, "where": r._where, "pairs": r._pairs,
-           "goal": r.steering.goal, "blocked": r.steering.blocked_steps, "to_goal": r.steering.last_to_goal,
-           "numbers": np.array([sim.steps, r.moves, r.n])}
+           "geometric": sim.table.geometric.indices, "connected": links.connected_steps, "outages": links.outages,
+           "longest": links.longest_outage_steps, "numbers": np.array([sim.steps, links.all_connected_steps])}
+    if r is not None:
+        out.update({"losses": r._li, "lost": r._lj, "since": r._since, "where": r._where, "pairs": r._pairs,
+                    "goal": r.steering.goal, "blocked": r.steering.blocked_steps, "to_goal": r.steering.last_to_goal,
+                    "repair": np.array([r.moves, r.n])})
     if hasattr(c.explorer, "grid"):
         out["score"] = c.explorer.grid.score
     if isinstance(r, Retracer):
@@ -71,13 +106,8 @@ def _summary(result) -> str:
     return json.dumps({k: v for k, v in result.summary.items() if k != "wall_time_s"}, sort_keys=True, default=repr)
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
-def test_repairing_runs_take_the_compiled_step_bit_for_bit(name):
-    source, seed, backs = CASES[name]
-    sc = _load(source)
-    fast, slow = Simulation(sc, seed), Simulation(sc, seed, step="reference")
-    assert isinstance(fast.compiled, CompiledAgents) and fast.compiled.repair is not None
-    a, b = fast.run(), slow.run()
+def _assert_same(fast, slow, a, b):
+    """The compiled run ``fast`` (result ``a``) and the reference ``slow`` (``b``) end the same, bit for bit."""
     for key, value in _books(slow).items():
         np.testing.assert_array_equal(_books(fast)[key], value, err_msg=key)
     assert _summary(a) == _summary(b)
@@ -85,6 +115,30 @@ def test_repairing_runs_take_the_compiled_step_bit_for_bit(name):
     for key, series in b.timeseries.items():
         np.testing.assert_array_equal(a.timeseries[key], series, err_msg=key)
     assert fast.rows == slow.rows and a.network == b.network
+
+
+@pytest.fixture
+def stretches(monkeypatch):
+    """``(t, steps, silent)`` of every stretch a quiet stretch was asked for (``silent``: failed nodes were given)."""
+    noted = []
+
+    def noting(self, limit, now, books, silent=None, take=QuietStretch.take):
+        out = take(self, limit, now, books, silent)
+        noted.append((now.t, 0 if out is None else out.steps, silent is not None))
+        return out
+
+    monkeypatch.setattr(QuietStretch, "take", noting)
+    return noted
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_repairing_runs_take_the_compiled_step_bit_for_bit(name):
+    source, seed, backs = CASES[name]
+    sc = _load(source)
+    fast, slow = Simulation(sc, seed), Simulation(sc, seed, step="reference")
+    assert isinstance(fast.compiled, CompiledAgents) and fast.compiled.repair is not None
+    a, b = fast.run(), slow.run()
+    _assert_same(fast, slow, a, b)
     relocator = fast.controller.relocator
     if isinstance(source, tuple):  # the fault cut routers off, and they moved
         assert a.summary["faults"] and a.summary["mission"]["relocations"] > 0
@@ -92,6 +146,33 @@ def test_repairing_runs_take_the_compiled_step_bit_for_bit(name):
     # stretches took steps, and the idle relocator's update was left out in them and in compiled steps
     assert sum(fast.compiled.quiet.ends.values()) > 0
     assert fast.compiled.repair.updates_skipped > fast.steps / 4
+
+
+@pytest.mark.parametrize("name", sorted(AFTER_FAULT))
+def test_stretches_go_on_after_the_fault_with_the_failed_nodes_silent(name, stretches):
+    """Stretches after the fault drop the failed nodes' links from every table their kernel builds, bit for bit."""
+    source, seed = AFTER_FAULT[name]
+    sc = _load(source)
+    if "reference fails" in name:  # the router that fails is the agent's reference then
+        probe = Simulation(sc, seed)
+        t, agent, router = REFERENCE_FAILS
+        while probe.t < t - 1e-9:
+            probe.step()
+        assert probe.controller.current[agent] == router
+    fast, slow = Simulation(sc, seed), Simulation(sc, seed, step="reference")
+    a = fast.run()
+    taken = [(t, steps, silent) for t, steps, silent in stretches if steps]
+    b = slow.run()
+    _assert_same(fast, slow, a, b)
+    events = a.summary["faults"]["events"]
+    first = events[0]["t"]
+    assert all(e["restored_after_s"] is not None for e in events)  # the damage was repaired: the loop offers stretches
+    assert all(silent == (t > first) for t, _, silent in taken)
+    assert sum(steps for t, steps, _ in taken if t > first) > 0  # (none before the failed nodes were silenced)
+    if "spared" in name:  # the agent named in the fault cannot fail: only its reference did
+        assert a.summary["faults"]["nodes_failed"] == 1 and a.summary["faults"]["skipped"]
+    if "base station" in name:
+        assert [e["kind"] for e in events] == ["base_station"]
 
 
 def test_routers_put_down_between_steps_are_watched_from_the_next_table(tmp_path):

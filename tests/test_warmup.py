@@ -119,7 +119,7 @@ def test_self_spreadings_walk_and_link_quality_warm_ups_take_its_compiled_step()
 def test_a_fast_step_missing_from_the_warm_up_is_found(monkeypatch):
     controller = ALGORITHMS["potential-field"]
     monkeypatch.setattr(controller, "warm_ups", classmethod(lambda cls: [
-        warmup.WarmUp("algorithm potential-field", "potential-field-6x6", {"faults": [{"at": 1.0, "routers": 0.5}]})]))
+        warmup.WarmUp("algorithm potential-field", "potential-field-6x6", step="reference")]))
     with pytest.raises(AssertionError, match="offers a fast step"):
         test_an_algorithm_with_a_fast_step_warms_it_up("potential-field")
 

@@ -226,9 +226,15 @@ class CompiledAgents(FastStep):
     def stretches(self) -> bool:  # noqa: D102
         return self.quiet is not None
 
+    @property
+    def silences(self) -> bool:  # noqa: D102
+        return self.quiet is not None  # (its kernel drops the failed nodes' links from the tables it builds)
+
     def stretch(self, limit: int, now: StepInput, watch: Watch) -> Stretched | None:
-        """Up to ``limit`` quiet steps in one call (:class:`.stretch.QuietStretch`)."""
-        return None if self.quiet is None or watch.agents is None else self.quiet.take(limit, now, watch.agents)
+        """Up to ``limit`` quiet steps in one call (:class:`.stretch.QuietStretch`), the failed nodes silent."""
+        if self.quiet is None or watch.agents is None:
+            return None
+        return self.quiet.take(limit, now, watch.agents, watch.silent)
 
     def robots(self) -> tuple:
         """The robots' arrays as the kernels take them (:class:`.kernels.Robots`, a plain tuple).

@@ -13,6 +13,12 @@ walk of the agents without a plan are drawn in the kernel from the run's generat
 the same bit for bit (``tests/test_agent_stretch.py``). The kernel builds the radio's tables itself, as the radio does
 (:mod:`.stretch_links`): under the unit disk and the built-in path-loss law, walls and shadowing too
 (``tests/test_agent_stretch_radio.py``).
+
+Once nodes have failed the loop offers stretches while every fault's damage is repaired and none is due, with the
+failed nodes (:attr:`~amronet.algorithms.stepping.Watch.silent`): the stretch starts from the table that has lost
+their links and its geometric view, and the kernel drops their links from every table it builds, as the radio does
+(:func:`~.stretch_links.next_radio`), so the agents' tracking, the drop rules, their connection books and the repair
+read the links the step-by-step path reads (``tests/test_compiled_repair.py``).
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from amronet.algorithms.agent_assisted.rule_check import paper_rule_step
 from amronet.algorithms.agent_assisted.stretch_books import no_retracing
 from amronet.algorithms.agent_assisted.stretch_kernels import (
     ACTS,
+    LINKED,
     NON_FINITE,
     TRIANGLES_END,
     Frontier,
@@ -50,6 +57,7 @@ __all__ = ["QuietStretch"]
 
 _NO_ROBOTS = np.zeros(0, dtype=np.int64)
 _NO_STEPS = np.zeros(0)
+_NONE_SILENT = np.zeros(0, dtype=np.bool_)
 
 
 
@@ -68,9 +76,9 @@ class QuietStretch:
         h = None if self.hearing is None else HearingInputs(*self.hearing)
         self.laws = h is not None and (h.wall_db > 0.0 or h.clip > 0.0)
         """Whether the links are decided by their margins (walls or shadowing)."""
-        self.ends = {"quiet": 0, "acts": 0, "triangle": 0}
+        self.ends = {"quiet": 0, "acts": 0, "triangle": 0, "linked": 0}
         """How many stretches ended each way: all steps quiet, an agent acting, a triangle router arriving or giving
-        up."""
+        up, every agent linked (``until_linked``)."""
         self.idle_steps = 0
         """Steps taken in stretches in which an agent without a plan walked at random."""
         self._bitgen: tuple[object, int] | None = None
@@ -123,7 +131,8 @@ class QuietStretch:
         return (bitgen.AVAILABLE and compiled.frontier and context.link_inputs is not None
                 and (rules is None or rules.stretches))
 
-    def take(self, limit: int, now: StepInput, agent_books: AgentBooks) -> Stretched | None:
+    def take(self, limit: int, now: StepInput, agent_books: AgentBooks, silent: np.ndarray | None = None,
+             until_linked: bool = False) -> Stretched | None:
         """Take up to ``limit`` steps (at least one), none of them recorded; ``None`` where none can be taken.
 
         A stretch starts only where a quiet step may: no router settling and no strip router driving, the agents' and
@@ -132,13 +141,16 @@ class QuietStretch:
         router arrives or gives up) is left for the loop to finish
         (:attr:`~amronet.algorithms.stepping.Stretched.finish`).
         The agents' connection books are kept in ``agent_books``'s arrays, step by step; the loop closes them.
+        ``silent``: the failed nodes (:attr:`~amronet.algorithms.stepping.Watch.silent`), whose links the kernel drops.
+        ``until_linked``: stop after a step at whose end every agent has a path to a base station (where a fault's
+        damage is repaired once they have, the faults' books must look then).
         """
         comp = self.compiled
         c, explorer, a = comp.controller, comp.explorer, comp.around
         sw, table = comp.swarm, now.table
         n = len(sw)
-        if (c.settle_at or n < 2 or use_threads(n) or (table.candidates is not None and not self.laws)
-                or (c.strips is not None and c.strips.moving)):
+        dropped = table.candidates is not None and not self.laws and silent is None  # (links lost at random)
+        if c.settle_at or n < 2 or use_threads(n) or dropped or (c.strips is not None and c.strips.moving):
             return None
         retracing = self.no_retracing if comp.repair is None else comp.repair.stretch_start(now, limit)
         if retracing is None:  # (the repair is not idle, or an agent backs up now)
@@ -164,9 +176,10 @@ class QuietStretch:
                             buffers, explorer.plans.active)
         triangles = Triangles(comp.triangle_rule, float(c.r_c), c.disabled, c.served_pairs())
         rules = self.paper if comp.rules is None else comp.rules.in_stretch(now.index, now.dt)
+        moves = Moves(c.agents, length, reach, a.collisions, tuple(retracing), until_linked)
         done, how, n_cand, n_losing, radio, scans, grid.stamp, explorer.steps, looked, idle = quiet_stretch(
-            comp.grid, comp.robots(), comp.ring, tuple(Moves(c.agents, length, reach, a.collisions, tuple(retracing))),
-            self._radio(table, comp.rules is not None and comp.rules.reads_margins), comp.tracking(is_ref),
+            comp.grid, comp.robots(), comp.ring, tuple(moves),
+            self._radio(table, comp.rules is not None and comp.rules.reads_margins, silent), comp.tracking(is_ref),
             (tuple(triangles), tuple(rules)), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
         if comp.repair is not None:
             comp.repair.stretch_end(done, retracing)
@@ -174,7 +187,7 @@ class QuietStretch:
             return Stretched(done, non_finite=True)
         csr = (radio[5], radio[6], radio[7]) if done else None  # the pairs searched, and their margins
         margin = radio[9] if done and self.laws else None
-        self.ends[{ACTS: "acts", TRIANGLES_END: "triangle"}.get(how, "quiet")] += 1
+        self.ends[{ACTS: "acts", TRIANGLES_END: "triangle", LINKED: "linked"}.get(how, "quiet")] += 1
         self.idle_steps += idle
         self.triangles_looked_at += looked
         self.triangle_steps += done if len(tri) else 0
@@ -200,10 +213,14 @@ class QuietStretch:
             self._bitgen = (rng, int(bitgen.addresses([rng])[0]))
         return self._bitgen[1]
 
-    def _radio(self, table: NeighbourTable, margins: bool) -> tuple:
-        """The kernel's :class:`~.stretch_links.Radio` of this step's ``table`` (``margins``: the rule reads them)."""
+    def _radio(self, table: NeighbourTable, margins: bool, silent: np.ndarray | None) -> tuple:
+        """The kernel's :class:`~.stretch_links.Radio` of this step's ``table`` (``margins``: the rule reads them).
+
+        ``table`` has lost the ``silent`` nodes' links (its geometric view has them).
+        """
         near = table.geometric
         assert self.hearing is not None  # (applies)
         return tuple(Radio(self.radio_reach, table.indptr, table.indices, table.dist,
                            table.margin if margins else NO_MARGIN, near.indptr, near.indices, near.dist, near.xy,
-                           near.link_margin if self.laws else NO_MARGIN, self.hearing))
+                           near.link_margin if self.laws else NO_MARGIN, self.hearing,
+                           _NONE_SILENT if silent is None else silent))

@@ -1,7 +1,7 @@
 """The books a quiet stretch keeps step by step (:func:`~.stretch_kernels.quiet_stretch`).
 
-The agents' connection, and under ``repair: retrace`` the agents' way and last contact
-(:class:`~.repair_step.RepairStep`).
+The agents' connection (:class:`Links`, kept by :func:`observe_links`), and under ``repair: retrace`` the agents'
+way and last contact (:class:`~.repair_step.RepairStep`).
 """
 
 from __future__ import annotations
@@ -9,8 +9,11 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
-__all__ = ["Links", "Retracing", "no_retracing"]
+from amronet.engine.network import agents_linked_kernel
+
+__all__ = ["Links", "Retracing", "no_retracing", "observe_links"]
 
 
 class Links(NamedTuple):
@@ -57,3 +60,47 @@ class Retracing(NamedTuple):
 def no_retracing(m: int) -> Retracing:
     """The :class:`Retracing` of a stretch without ``repair: retrace``, for ``m`` agents: it keeps nothing."""
     return Retracing(np.zeros((0, m, 2)), np.zeros(m), np.zeros(m, dtype=np.bool_), np.inf, 0, 1.0)
+
+
+@njit(cache=True)
+def observe_links(indptr, indices, agents, books):  # pragma: no cover - numba
+    """What :meth:`amronet.sim.run.Run.observe_agents` and its :class:`~amronet.sim.run.OutageTracker` do.
+
+    ``books``: the agents' connection books (:class:`~amronet.algorithms.stepping.AgentBooks`, its arrays a
+    :class:`Links`), updated in place. Returns whether every agent is linked.
+    """
+    bases, relay_mask, arrays = books
+    linked, connected_steps, outages, longest, down_for, counts, sums = arrays
+    agents_linked_kernel(indptr, indices, agents, bases, relay_mask, linked)
+    a = linked.shape[0]
+    up = 0
+    for j in range(a):
+        if linked[j]:
+            up += 1
+    counts[0] += 1
+    if up == a:
+        counts[1] += 1
+        for j in range(a):
+            connected_steps[j] += 1
+        if counts[2]:
+            for j in range(a):
+                down_for[j] = 0
+            counts[2] = 0
+    else:
+        for j in range(a):
+            if linked[j]:
+                connected_steps[j] += 1
+                down_for[j] = 0
+            else:
+                if down_for[j] == 0:
+                    outages[j] += 1
+                down_for[j] += 1
+                if down_for[j] > longest[j]:
+                    longest[j] = down_for[j]
+        counts[2] = 1
+    frac = up / a
+    counts[3] += 1
+    sums[0] += frac
+    sums[1] = min(sums[1], frac)
+    sums[2] = min(sums[2], frac)
+    return up == a

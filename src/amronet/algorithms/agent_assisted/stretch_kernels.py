@@ -32,17 +32,16 @@ from numba import njit
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
 from amronet.algorithms.agent_assisted.rule_kernels import LINK, PAPER, rule_acts, rule_commit
-from amronet.algorithms.agent_assisted.stretch_books import Links
+from amronet.algorithms.agent_assisted.stretch_books import Links, observe_links
 from amronet.algorithms.agent_assisted.stretch_links import Radio, next_radio
 from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
 from amronet.engine.bitgen import next_double
 from amronet.engine.motion import random_walk_drawing
-from amronet.engine.network import agents_linked_kernel
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
-__all__ = ["ACTS", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL", "TRIANGLES_NONE",
-           "TRIANGLE_RULES", "Frontier", "Links", "Moves", "Moving", "Radio", "StretchEnd", "Triangles",
-           "quiet_stretch", "triangle_goes"]
+__all__ = ["ACTS", "LINKED", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL",
+           "TRIANGLES_NONE", "TRIANGLE_RULES", "Frontier", "Links", "Moves", "Moving", "Radio", "StretchEnd",
+           "Triangles", "quiet_stretch", "triangle_goes"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -50,6 +49,8 @@ ACTS = 1
 """The step after the last one done: an agent must act. Sensed and tracked; nothing else done."""
 NON_FINITE = 3
 """A robot's position became non-finite in the last step done (its radio table was not built)."""
+LINKED = 5
+"""Every agent had a path to a base station after the last step done (:attr:`Moves.until_linked`)."""
 
 TRIANGLES_END = 4
 """The step after the last one done: a triangle router driving to its goal arrives or gives up. Sensed, tracked, in
@@ -78,6 +79,9 @@ class Moves(NamedTuple):
     """Whether bodies stop moves."""
     retracing: tuple
     """``repair: retrace``'s books of the agents (:class:`~.stretch_books.Retracing`, a plain tuple)."""
+    until_linked: bool
+    """Whether to stop after a step at whose end every agent has a path to a base station (a fault's damage may be
+    repaired then)."""
 
 
 class Triangles(NamedTuple):
@@ -160,7 +164,7 @@ class StretchEnd(NamedTuple):
     steps: int
     """Steps done whole."""
     how: int
-    """``QUIET``, ``ACTS``, ``TRIANGLES_END`` or ``NON_FINITE``."""
+    """``QUIET``, ``ACTS``, ``TRIANGLES_END``, ``NON_FINITE`` or ``LINKED``."""
     n_cand: int
     """After ``ACTS`` or ``TRIANGLES_END``: that step's triangle candidates, as its tracking counts them."""
     n_losing: int
@@ -204,7 +208,7 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     """
     xy, heading, radius, _, _ = robots
     angles, _ = ring
-    agents, length, reach, collisions, retracing = moves
+    agents, length, reach, collisions, retracing, until_linked = moves
     current, is_ref, _, left, _, nearest_d, other_ref, refused = tracking
     triangles, rules = who_acts
     (tri, t_angles, t_sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress,
@@ -250,7 +254,7 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
             for j in range(m):
                 trail[done, j, 0] = xy[agents[j], 0]
                 trail[done, j, 1] = xy[agents[j], 1]
-        _, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, _, _, _ = radio
+        _, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, _, _, _, _ = radio
         scans = np.empty((m, angles.shape[0]))
         near = (near_indptr, near_indices, near_dist)  # the rings and the moves read every pair within r
         n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, near, scans, tracking,
@@ -315,7 +319,8 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         idle += 1 if walked else 0
         if not ok:
             return StretchEnd(done, NON_FINITE, 0, 0, radio, scans, stamp, now, looked, idle)
-        _observe(radio[1], radio[2], agents, books)  # (the links)
+        if observe_links(radio[1], radio[2], agents, books) and until_linked:  # (the links)
+            return StretchEnd(done, LINKED, 0, 0, radio, scans, stamp, now, looked, idle)
     return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
 
 
@@ -350,46 +355,3 @@ def triangle_goes(triangles, agents, current, other, left, xy):  # pragma: no co
         if math.sqrt(dx * dx + dy * dy) > r_c and (rule == TRIANGLES_NONE or not (disabled[cur] and disabled[o])):
             return True
     return False
-
-
-@njit(cache=True)
-def _observe(indptr, indices, agents, books):  # pragma: no cover - numba
-    """What :meth:`amronet.sim.run.Run.observe_agents` and its :class:`~amronet.sim.run.OutageTracker` do.
-
-    ``books``: the agents' connection books (:class:`~amronet.algorithms.stepping.AgentBooks`, its arrays a
-    :class:`Links`), updated in place.
-    """
-    bases, relay_mask, arrays = books
-    linked, connected_steps, outages, longest, down_for, counts, sums = arrays
-    agents_linked_kernel(indptr, indices, agents, bases, relay_mask, linked)
-    a = linked.shape[0]
-    up = 0
-    for j in range(a):
-        if linked[j]:
-            up += 1
-    counts[0] += 1
-    if up == a:
-        counts[1] += 1
-        for j in range(a):
-            connected_steps[j] += 1
-        if counts[2]:
-            for j in range(a):
-                down_for[j] = 0
-            counts[2] = 0
-    else:
-        for j in range(a):
-            if linked[j]:
-                connected_steps[j] += 1
-                down_for[j] = 0
-            else:
-                if down_for[j] == 0:
-                    outages[j] += 1
-                down_for[j] += 1
-                if down_for[j] > longest[j]:
-                    longest[j] = down_for[j]
-        counts[2] = 1
-    frac = up / a
-    counts[3] += 1
-    sums[0] += frac
-    sums[1] = min(sums[1], frac)
-    sums[2] = min(sums[2], frac)

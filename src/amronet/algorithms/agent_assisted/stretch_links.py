@@ -13,7 +13,10 @@ A quiet stretch (:mod:`.stretch_kernels`) builds each step's neighbour table its
 * where the drop rule reads them (``link-quality``), the margins of the links: the path-loss law's, or by distance
   (:func:`~amronet.engine.links.distance_margins`, what :attr:`~amronet.engine.table.NeighbourTable.margin` gives).
 
-The links are what the agents' tracking, their connection books and the drop rules read.
+Once nodes have failed (:attr:`Radio.silent`), their pairs are dropped from the links as the radio drops them
+(:meth:`~amronet.engine.radio.RadioMedium.update`'s ``silent``): a link is a pair whose margin is ``>= 0`` and whose
+two ends send; the geometric table keeps every pair (their bodies stay where they are).
+The links are what the agents' tracking, their connection books, the drop rules and the repair read.
 """
 
 from __future__ import annotations
@@ -58,6 +61,8 @@ class Radio(NamedTuple):
     """The radio's :class:`~amronet.engine.hearing.HearingInputs` as a plain tuple
     (:attr:`~amronet.engine.radio.RadioMedium.stretch_inputs`): with ``wall_db`` and ``clip`` 0, every pair is a
     link."""
+    silent: np.ndarray
+    """Which robots send nothing ``(N,)`` (failed ones; no entries: none), a link of which is none."""
 
 
 @njit(cache=True)
@@ -67,23 +72,35 @@ def next_radio(xy, radio, group, margins):  # pragma: no cover - numba
     ``radio``: a :class:`Radio` (a plain tuple); ``group``: zeros, one per robot; ``margins``: whether the links'
     margins are read (see the module docstring).
     """
-    r, _, _, _, last_margin, last_near_indptr, last_near_indices, _, last_near_xy, last_near_margin, hearing = radio
+    (r, _, _, _, last_margin, last_near_indptr, last_near_indices, _, last_near_xy, last_near_margin, hearing,
+     silent) = radio
     h = named_inputs(hearing)
     here = xy.copy()
     ok, near_indptr, near_indices, near_dist = search_kernel(here, r, group, np.int64(1))
     if not ok:
         return False, radio
-    if h.wall_db == 0.0 and h.clip == 0.0:  # every pair is a link, its margin that of its length
-        # (the stand-ins passed on: a global array would be read-only, of another type)
+    laws = h.wall_db != 0.0 or h.clip != 0.0
+    if not laws and not silent.shape[0]:  # every pair is a link, its margin that of its length
         margin = distance_margins(near_dist, h.r_c, h.n10) if margins else last_margin
         return True, (r, near_indptr, near_indices, near_dist, margin, near_indptr, near_indices, near_dist, here,
-                      last_near_margin, hearing)
+                      last_near_margin, hearing, silent)
     # (the pairs of the last table whose two ends stand still keep their margins: the same numbers)
     near_margin = path_loss_candidate_margins(here, near_indptr, near_indices, near_dist, last_near_xy,
-                                              last_near_indptr, last_near_indices, last_near_margin, hearing)
-    keep = near_margin >= 0.0
-    if keep.all():
-        return True, (r, near_indptr, near_indices, near_dist, near_margin, near_indptr, near_indices, near_dist,
-                      here, near_margin, hearing)
-    indptr, indices, dist, margin = keep_entries(near_indptr, near_indices, near_dist, near_margin, keep)
-    return True, (r, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, here, near_margin, hearing)
+                                              last_near_indptr, last_near_indices, last_near_margin,
+                                              hearing) if laws else last_near_margin
+    keep = near_margin >= 0.0 if laws else np.ones(near_dist.shape[0], np.bool_)
+    if silent.shape[0]:  # (as RadioMedium._links: neither end silent)
+        for i in range(near_indptr.shape[0] - 1):
+            for e in range(near_indptr[i], near_indptr[i + 1]):
+                if silent[i] or silent[near_indices[e]]:
+                    keep[e] = False
+    if keep.all():  # every pair is a link (the stand-ins passed on: a global array would be read-only, of another type)
+        margin = near_margin if laws else (distance_margins(near_dist, h.r_c, h.n10) if margins else last_margin)
+        return True, (r, near_indptr, near_indices, near_dist, margin, near_indptr, near_indices, near_dist, here,
+                      near_margin, hearing, silent)
+    indptr, indices, dist, margin = keep_entries(near_indptr, near_indices, near_dist,
+                                                 near_margin if laws else near_dist, keep)
+    if not laws:  # the links' margins by their lengths
+        margin = distance_margins(dist, h.r_c, h.n10) if margins else last_margin
+    return True, (r, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, here, near_margin, hearing,
+                  silent)
