@@ -16,7 +16,7 @@ from amronet.algorithms.agent_assisted.explorers.frontier import knowledge, plan
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
 from amronet.algorithms.agent_assisted.stretch_kernels import TRIANGLES_LOCAL, TRIANGLES_NONE, triangle_goes
 from amronet.algorithms.common.triangular import select_triangles
-from amronet.algorithms.stepping import AgentBooks
+from amronet.algorithms.stepping import RESTORING_AGENTS, AgentBooks
 from amronet.engine.kernel_data import Csr, Grid
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.radio import NeighbourTable
@@ -198,9 +198,9 @@ def test_a_stretch_until_the_agents_are_linked_stops_after_the_first_step_they_a
     # what the loop may ask while a fault's damage waits for the agents only: every stretch asked so, the same run
     ended = []
 
-    def until_linked(self, limit, now, books, silent=None, take=QuietStretch.take):
+    def until_linked(self, limit, now, books, silent=None, restoring=0, take=QuietStretch.take):
         before = int(books.arrays[5][1])  # (steps with every agent linked)
-        out = take(self, limit, now, books, silent, until_linked=True)
+        out = take(self, limit, now, books, silent, RESTORING_AGENTS)
         if out is not None:
             ended.append((int(books.arrays[5][1]) - before, bool(books.arrays[0].all()), out.finish is None))
         return out

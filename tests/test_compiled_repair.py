@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from amronet.algorithms.agent_assisted.fast import CompiledAgents
 from amronet.algorithms.agent_assisted.retrace import Breadcrumbs, Retracer
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
+from amronet.algorithms.stepping import RESTORING_AGENTS, RESTORING_ROUTERS
 from amronet.experiments.failures import _scenario
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
@@ -119,12 +120,13 @@ def _assert_same(fast, slow, a, b):
 
 @pytest.fixture
 def stretches(monkeypatch):
-    """``(t, steps, silent)`` of every stretch a quiet stretch was asked for (``silent``: failed nodes were given)."""
+    """``(t, steps, silent, restoring)`` of every stretch a quiet stretch was asked for (``silent``: failed nodes
+    were given; ``restoring``: what it was told of a fault's damage not repaired yet)."""
     noted = []
 
-    def noting(self, limit, now, books, silent=None, take=QuietStretch.take):
-        out = take(self, limit, now, books, silent)
-        noted.append((now.t, 0 if out is None else out.steps, silent is not None))
+    def noting(self, limit, now, books, silent=None, restoring=0, take=QuietStretch.take):
+        out = take(self, limit, now, books, silent, restoring)
+        noted.append((now.t, 0 if out is None else out.steps, silent is not None, restoring))
         return out
 
     monkeypatch.setattr(QuietStretch, "take", noting)
@@ -161,7 +163,7 @@ def test_stretches_go_on_after_the_fault_with_the_failed_nodes_silent(name, stre
         assert probe.controller.current[agent] == router
     fast, slow = Simulation(sc, seed), Simulation(sc, seed, step="reference")
     a = fast.run()
-    taken = [(t, steps, silent) for t, steps, silent in stretches if steps]
+    taken = [(t, steps, silent) for t, steps, silent, _ in stretches if steps]
     b = slow.run()
     _assert_same(fast, slow, a, b)
     events = a.summary["faults"]["events"]
@@ -173,6 +175,30 @@ def test_stretches_go_on_after_the_fault_with_the_failed_nodes_silent(name, stre
         assert a.summary["faults"]["nodes_failed"] == 1 and a.summary["faults"]["skipped"]
     if "base station" in name:
         assert [e["kind"] for e in events] == ["base_station"]
+
+
+WAITING = {  # name: (scenario, seed, what the stretches are told of the damage while it waits to be repaired)
+    "no repair office, repaired late": (("agent-assisted", "office-32x32", "unit-disk"), 1, RESTORING_ROUTERS),
+    "no repair hospital, repaired by a router put down": (("agent-assisted", "hospital_section", "unit-disk"), 2,
+                                                          RESTORING_ROUTERS),
+    "relocate office, the agents reconnect last": (("agent-assisted-relocate", "office-32x32", "unit-disk"), 3,
+                                                   RESTORING_AGENTS),
+}
+
+
+@pytest.mark.parametrize("name", sorted(WAITING))
+def test_stretches_go_on_while_the_damage_waits_to_be_repaired(name, stretches):
+    """A cut-off router with no relay moving cannot get its path back in a stretch; cut-off agents stop it once
+    they all have one: the faults' books see every step they would see step by step."""
+    source, seed, restoring = WAITING[name]
+    sc = _load(source)
+    fast, slow = Simulation(sc, seed), Simulation(sc, seed, step="reference")
+    a, b = fast.run(), slow.run()
+    _assert_same(fast, slow, a, b)
+    assert a.summary["faults"]["events"][0]["restored_after_s"] > 0  # (restored in a step the books saw)
+    assert sum(steps for _, steps, _, told in stretches if told == restoring) > 0
+    if restoring == RESTORING_AGENTS:  # a stretch stopped after the step at whose end the agents all had a path
+        assert fast.compiled.quiet.ends["linked"] > 0
 
 
 def test_routers_put_down_between_steps_are_watched_from_the_next_table(tmp_path):

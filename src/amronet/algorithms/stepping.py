@@ -33,6 +33,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CSR",
+    "RESTORING_AGENTS",
+    "RESTORING_ROUTERS",
     "AgentBooks",
     "Command",
     "FastStep",
@@ -107,8 +109,9 @@ class StepContext:
         collisions: Whether robots' bodies collide (``sim.robot_collisions``).
         faults: Whether nodes may fail in the run (``faults``). The loop fails them before it calls
             :meth:`FastStep.step`, and offers a stretch only where no node fails within it, and once one has, only
-            to a fast step that :attr:`~FastStep.silences` failed nodes while every fault's damage is repaired; a
-            fast step that takes such a run must never move a failed robot (the phases' move gives it speed 0).
+            to a fast step that :attr:`~FastStep.silences` failed nodes, and while a fault's damage is not repaired
+            only to one that :attr:`~FastStep.restores`; a fast step that takes such a run must never move a failed
+            robot (the phases' move gives it speed 0).
         agents: Whether the run has agents (or agents releasing routers).
         radio_reach: The farthest the radio's table reaches, metres.
         keeps_every_pair: Whether the radio's table lists every pair within ``radio_reach`` (the unit disk): what a
@@ -157,6 +160,16 @@ class Watch(NamedTuple):
     silent: np.ndarray | None = None
     """Nodes that send nothing (failed ones; ``None``: none has failed), offered only to a fast step that
     :attr:`~FastStep.silences` them."""
+    restoring: int = 0
+    """0, or a fault's damage is not repaired yet (offered only to a fast step that :attr:`~FastStep.restores`):
+    :data:`RESTORING_AGENTS` or :data:`RESTORING_ROUTERS`."""
+
+
+RESTORING_AGENTS = 1
+"""Every deployed router has a path to a base station, an agent has none: move no relay (base nodes, routers), and
+stop after the first step at whose end every agent has one (the faults' books look there)."""
+RESTORING_ROUTERS = 2
+"""A deployed router has no path to a base station: move no relay, so that none can get one back in the stretch."""
 
 
 @dataclass
@@ -187,6 +200,8 @@ class FastStep:
 
     stretches: bool = False
     """Whether :meth:`stretch` may take steps in this loop at all (the loop then offers one before each step)."""
+    restores: bool = False
+    """Whether :meth:`stretch` may take steps while a fault's damage is not repaired (:attr:`Watch.restoring`)."""
     silences: bool = False
     """Whether :meth:`stretch` may take steps once nodes have failed (:attr:`Watch.silent`): its kernels then read no
     link of a failed node, and the loop silences them in the table it makes of the stretch's pairs."""

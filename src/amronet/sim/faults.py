@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from amronet.algorithms.stepping import RESTORING_AGENTS, RESTORING_ROUTERS
 from amronet.engine.network import agents_connected, connected_to
 from amronet.engine.robots import Role, State
 
@@ -39,6 +40,7 @@ class FaultedRun(Protocol):
     """What the faults' books read of a run (:class:`~amronet.sim.run.Run`)."""
 
     agents: np.ndarray
+    faults: FaultSchedule | None
     live_bases: np.ndarray
     swarm: Swarm
     t: float
@@ -188,22 +190,44 @@ class FaultBook:
             if ev.restored_at is None:
                 ev.restored_at = run.t
 
+    @classmethod
+    def _all_linked(cls, run: FaultedRun) -> bool:
+        """Whether every surviving agent and deployed router has a path to a base station that has not failed."""
+        if not cls.routers_linked(run):
+            return False
+        live_bases = run.live_bases
+        return not len(run.agents) or bool(
+            len(live_bases) and agents_connected(run.table, run.agents, live_bases, run.swarm.relaying).all())
+
     @staticmethod
-    def _all_linked(run: FaultedRun) -> bool:
-        """Whether every surviving agent and deployed router has a path to a base station that has not failed.
+    def routers_linked(run: FaultedRun) -> bool:
+        """Whether every deployed router has a path to a base station that has not failed.
 
         A router that a repair moves (state ``relocating``) counts: it was deployed, and its move is over only when
         it has a path again or has given up.
         """
-        sw, table = run.swarm, run.table
-        live_bases = run.live_bases
-        relays = sw.relaying
+        sw, live_bases = run.swarm, run.live_bases
         routers = (sw.deployed | (sw.state == State.RELOCATING)) & (sw.role == Role.ROUTER)  # moving ones too
         if len(live_bases) == 0:
-            return not routers.any() and not len(run.agents)
-        if not connected_to(table, live_bases, relays)[routers].all():
-            return False
-        return not len(run.agents) or bool(agents_connected(table, run.agents, live_bases, relays).all())
+            return not routers.any()
+        return bool(connected_to(run.table, live_bases, sw.relaying)[routers].all())
+
+    def stretch_terms(self, run: FaultedRun, step: int, limit: int, failed: bool, silences: bool, restores: bool
+                      ) -> tuple[int, int]:
+        """How many steps from ``step`` on a stretch may take, and what it is told of the damage.
+
+        Returns:
+            ``(steps, restoring)``: at most ``limit`` steps in which no fault is due (0 where the fast step does not
+            silence the nodes that ``failed`` already, or cannot watch a repair that is not over), and
+            :attr:`~amronet.algorithms.stepping.Watch.restoring`: what the stretch must do so that the books need
+            no step of it but its last (:meth:`observe`).
+        """
+        restoring = 0
+        if self.restoring:
+            restoring = RESTORING_AGENTS if self.routers_linked(run) else RESTORING_ROUTERS
+        if (failed and not silences) or (restoring and not restores) or run.faults is None:
+            return 0, restoring
+        return run.faults.quiet_steps(step, limit), restoring
 
     def summary(self, run: FaultedRun, schedule: FaultSchedule | None) -> dict[str, Any]:
         """The ``faults`` section of ``summary.json``."""

@@ -228,16 +228,13 @@ class Loop:
     def _stretch(self, fast: FastStep, limit: int, active: np.ndarray, settled: np.ndarray) -> int:
         """Offer ``fast`` a stretch of up to ``limit`` steps; advance the clock, the table and the books by what it did.
 
-        Returns how many steps were taken (0: none could be; the loop then takes the next step itself).
-
-        Raises:
-            ValueError: A robot's position became non-finite (what the radio's table refuses).
+        Returns how many steps were taken (0: none could be; the loop then takes the next step itself). Raises
+        ``ValueError`` where a robot's position became non-finite (what the radio's table refuses).
         """
         run = self.runs[0]
-        if self._faulty is not None:  # (a stretch fails nobody, nor keeps the faults' books: none due, none restoring)
-            schedule, book = self._faulty.faults, self._faulty.fault_book
-            quiet = schedule is not None and book is not None and not book.restoring
-            limit = schedule.quiet_steps(self.steps, limit) if quiet and (fast.silences or not self._failed) else 0
+        restoring, book = 0, run.fault_book
+        if book is not None:  # faults (a stretch fails nobody: no fault due in it; the books: Watch.restoring)
+            limit, restoring = book.stretch_terms(run, self.steps, limit, self._failed, fast.silences, fast.restores)
             if limit <= 0:
                 return 0
         books = None
@@ -247,7 +244,7 @@ class Loop:
                                (np.empty(len(run.agents), dtype=np.bool_), *arrays, counts, sums))
         t0 = time.perf_counter()
         silent = self._silent()
-        done = fast.stretch(limit, self._now(), Watch(active, settled, books, silent))
+        done = fast.stretch(limit, self._now(), Watch(active, settled, books, silent, restoring))
         if done is None:
             return 0
         if books is not None:
@@ -261,6 +258,8 @@ class Loop:
             done.finish(self._now())
         self.phase_seconds["sense+decide+move"] += time.perf_counter() - t0
         if done.finish is None:
+            if restoring:  # (the stretch's other steps repaired nothing: Watch.restoring)
+                book.observe(run)
             return done.steps
         self.after_compiled_step()
         return done.steps + 1

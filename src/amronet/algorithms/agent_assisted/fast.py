@@ -230,11 +230,15 @@ class CompiledAgents(FastStep):
     def silences(self) -> bool:  # noqa: D102
         return self.quiet is not None  # (its kernel drops the failed nodes' links from the tables it builds)
 
+    @property
+    def restores(self) -> bool:  # noqa: D102
+        return self.quiet is not None  # (QuietStretch.take: Watch.restoring)
+
     def stretch(self, limit: int, now: StepInput, watch: Watch) -> Stretched | None:
         """Up to ``limit`` quiet steps in one call (:class:`.stretch.QuietStretch`), the failed nodes silent."""
         if self.quiet is None or watch.agents is None:
             return None
-        return self.quiet.take(limit, now, watch.agents, watch.silent)
+        return self.quiet.take(limit, now, watch.agents, watch.silent, watch.restoring)
 
     def robots(self) -> tuple:
         """The robots' arrays as the kernels take them (:class:`.kernels.Robots`, a plain tuple).

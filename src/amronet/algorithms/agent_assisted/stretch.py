@@ -41,7 +41,7 @@ from amronet.algorithms.agent_assisted.stretch_kernels import (
     quiet_stretch,
 )
 from amronet.algorithms.agent_assisted.stretch_links import NO_MARGIN, Radio
-from amronet.algorithms.stepping import AgentBooks, StepContext, Stretched
+from amronet.algorithms.stepping import RESTORING_AGENTS, AgentBooks, StepContext, Stretched
 from amronet.engine import bitgen
 from amronet.engine.hearing import HearingInputs
 from amronet.engine.robots import State
@@ -78,7 +78,7 @@ class QuietStretch:
         """Whether the links are decided by their margins (walls or shadowing)."""
         self.ends = {"quiet": 0, "acts": 0, "triangle": 0, "linked": 0}
         """How many stretches ended each way: all steps quiet, an agent acting, a triangle router arriving or giving
-        up, every agent linked (``until_linked``)."""
+        up, every agent linked (a fault's damage repaired, :data:`~amronet.algorithms.stepping.RESTORING_AGENTS`)."""
         self.idle_steps = 0
         """Steps taken in stretches in which an agent without a plan walked at random."""
         self._bitgen: tuple[object, int] | None = None
@@ -132,7 +132,7 @@ class QuietStretch:
                 and (rules is None or rules.stretches))
 
     def take(self, limit: int, now: StepInput, agent_books: AgentBooks, silent: np.ndarray | None = None,
-             until_linked: bool = False) -> Stretched | None:
+             restoring: int = 0) -> Stretched | None:
         """Take up to ``limit`` steps (at least one), none of them recorded; ``None`` where none can be taken.
 
         A stretch starts only where a quiet step may: no router settling and no strip router driving, the agents' and
@@ -142,8 +142,9 @@ class QuietStretch:
         (:attr:`~amronet.algorithms.stepping.Stretched.finish`).
         The agents' connection books are kept in ``agent_books``'s arrays, step by step; the loop closes them.
         ``silent``: the failed nodes (:attr:`~amronet.algorithms.stepping.Watch.silent`), whose links the kernel drops.
-        ``until_linked``: stop after a step at whose end every agent has a path to a base station (where a fault's
-        damage is repaired once they have, the faults' books must look then).
+        ``restoring``: a fault's damage is not repaired yet (:attr:`~amronet.algorithms.stepping.Watch.restoring`):
+        no triangle router may drive, and under ``RESTORING_AGENTS`` the kernel stops after the first step at whose
+        end every agent has a path to a base station (the faults' books look then).
         """
         comp = self.compiled
         c, explorer, a = comp.controller, comp.explorer, comp.around
@@ -162,6 +163,8 @@ class QuietStretch:
         if moving is None:
             return None
         tri = moving.tri
+        if restoring and len(tri):  # (a relay on its way could give a cut-off router its path back, or take it)
+            return None
         m = len(c.agents)
         is_ref, deployed_xy = c.deployed_nodes()
         inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)
@@ -176,7 +179,7 @@ class QuietStretch:
                             buffers, explorer.plans.active)
         triangles = Triangles(comp.triangle_rule, float(c.r_c), c.disabled, c.served_pairs())
         rules = self.paper if comp.rules is None else comp.rules.in_stretch(now.index, now.dt)
-        moves = Moves(c.agents, length, reach, a.collisions, tuple(retracing), until_linked)
+        moves = Moves(c.agents, length, reach, a.collisions, tuple(retracing), restoring == RESTORING_AGENTS)
         done, how, n_cand, n_losing, radio, scans, grid.stamp, explorer.steps, looked, idle = quiet_stretch(
             comp.grid, comp.robots(), comp.ring, tuple(moves),
             self._radio(table, comp.rules is not None and comp.rules.reads_margins, silent), comp.tracking(is_ref),
