@@ -179,6 +179,15 @@ class Relocator:
         self.moves += len(started)
         return started
 
+    def waiting_movable(self, sw: Swarm) -> np.ndarray:
+        """Per loss waiting, whether its router may move (:meth:`_movable`)."""
+        return self._movable(self._li, sw) if len(self._li) else np.zeros(0, dtype=bool)
+
+    def may_start(self, table: NeighbourTable, sw: Swarm) -> bool:
+        """Whether a loss waits whose router may move and is cut off: a move may start once it is due."""
+        movable = self.waiting_movable(sw)
+        return bool(movable.any() and self._cut_off(table, sw)[self._li[movable]].any())
+
     def _movable(self, routers: np.ndarray, sw: Swarm) -> np.ndarray:
         """Which of ``routers``, cut off and having lost a neighbour, may start to move: deployed reference routers."""
         return (sw.role[routers] == Role.ROUTER) & (sw.state[routers] == State.REFERENCE)

@@ -83,9 +83,8 @@ class RepairStep:
         """
         r, sw = self.relocator, self.controller.swarm
         idle = self.fixed_links and len(table.indptr) - 1 == len(sw) and not (sw.state == State.RELOCATING).any()
-        if idle and len(r._li):
-            movable = r._movable(r._li, sw)
-            idle = not (movable.any() and r._cut_off(table, sw)[r._li[movable]].any())
+        if idle:
+            idle = not r.may_start(table, sw)
         self._idle = self._token() if idle else None
 
     def quiet(self, now: StepInput, scans: np.ndarray) -> np.ndarray:
@@ -124,7 +123,7 @@ class RepairStep:
         sw = c.swarm
         if self.busy() or not self.idle():
             return None
-        if c.moving_triangles and (self.retracer is not None or (len(r._li) and r._movable(r._li, sw).any())):
+        if c.moving_triangles and (self.retracer is not None or r.waiting_movable(sw).any()):
             return None  # (triangle routers on their way add to their way, or may cut a router off)
         m = len(c.agents)
         if self.retracer is None:
