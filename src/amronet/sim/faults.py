@@ -222,11 +222,10 @@ class FaultBook:
             :attr:`~amronet.algorithms.stepping.Watch.restoring`: what the stretch must do so that the books need
             no step of it but its last (:meth:`observe`).
         """
-        restoring = 0
-        if self.restoring:
-            restoring = RESTORING_AGENTS if self.routers_linked(run) else RESTORING_ROUTERS
-        if (failed and not silences) or (restoring and not restores) or run.faults is None:
-            return 0, restoring
+        waiting = self.restoring
+        if (failed and not silences) or (waiting and not restores) or run.faults is None:
+            return 0, 0
+        restoring = (RESTORING_AGENTS if self.routers_linked(run) else RESTORING_ROUTERS) if waiting else 0
         return run.faults.quiet_steps(step, limit), restoring
 
     def summary(self, run: FaultedRun, schedule: FaultSchedule | None) -> dict[str, Any]:
