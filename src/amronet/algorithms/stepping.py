@@ -203,8 +203,9 @@ class FastStep:
     restores: bool = False
     """Whether :meth:`stretch` may take steps while a fault's damage is not repaired (:attr:`Watch.restoring`)."""
     silences: bool = False
-    """Whether :meth:`stretch` may take steps once nodes have failed (:attr:`Watch.silent`): its kernels then read no
-    link of a failed node, and the loop silences them in the table it makes of the stretch's pairs."""
+    """Whether :meth:`stretch` may take steps once nodes have failed (:attr:`Watch.silent`): its kernels then let no
+    link of a failed node count (none is read, or all are dropped as the radio drops them), and the loop silences
+    them in the table it makes of the stretch's pairs."""
 
     def step(self, now: StepInput) -> None:
         """Sense, decide and move once: what the loop's three phases and the controller do, bit for bit."""
