@@ -117,11 +117,16 @@ class _Work:
         return pairs
 
 
-def test_a_node_decides_only_the_cells_it_changes():
+def _counted(shadowing_db: float) -> tuple[CoverageArea, np.ndarray, RadioMedium, _Work, HeardCells]:
+    """The world, a medium, and coverage whose kernel counts the work it is asked to do."""
     area, pool = _world()
-    medium = _medium(0.0)
+    medium = _medium(shadowing_db)
     work = _Work(medium.kernels.heard_cells, area.omap, medium.reach)
-    heard = HeardCells(medium.hearing, medium.kernels._replace(heard_cells=work))
+    return area, pool, medium, work, HeardCells(medium.hearing, medium.kernels._replace(heard_cells=work))
+
+
+def test_a_node_decides_only_the_cells_it_changes():
+    area, pool, medium, work, heard = _counted(0.0)
     routers = pool[:12]
     heard.covered(area, routers, medium.reach)
     built = work.take()
@@ -146,10 +151,7 @@ def test_a_node_decides_only_the_cells_it_changes():
 
 
 def test_two_sets_asked_about_in_turn_keep_a_union_each():
-    area, pool = _world()
-    medium = _medium(0.0)
-    work = _Work(medium.kernels.heard_cells, area.omap, medium.reach)
-    heard = HeardCells(medium.hearing, medium.kernels._replace(heard_cells=work))
+    area, pool, medium, work, heard = _counted(0.0)
     every, linked = pool[:14], pool[:9]  # all the nodes, and those connected to a base
     for _ in range(4):
         for xy in (every, linked):
@@ -165,10 +167,7 @@ def test_two_sets_asked_about_in_turn_keep_a_union_each():
 
 
 def test_a_second_set_of_nodes_starts_from_the_first_ones_union():
-    area, pool = _world()
-    medium = _medium(4.0)
-    work = _Work(medium.kernels.heard_cells, area.omap, medium.reach)
-    heard = HeardCells(medium.hearing, medium.kernels._replace(heard_cells=work))
+    area, pool, medium, work, heard = _counted(4.0)
     every, linked = pool[:16], pool[:12]  # all the nodes, and those connected to a base
     for xy in (every, linked):
         np.testing.assert_array_equal(heard.covered(area, xy, medium.reach), _afresh(medium, area, xy))
