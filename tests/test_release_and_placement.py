@@ -156,3 +156,17 @@ def test_a_region_too_small_by_its_floor_area_says_which_region_holds_them():
     check_scenario(fitted, r_start=5.7)
     swarm = build_swarm(fitted, build_world(fitted), np.random.default_rng(1), r_start=5.7)
     assert (swarm.role == Role.AGENT).sum() == 9
+
+
+def test_served_pairs_follow_every_triangle_served():
+    """The served triangles' rows are kept between calls and built again once another triangle is served."""
+    sim = Simulation(load_scenario("agent-assisted-office", overrides={"sim.time_limit": 1.0}), 1)
+    ctl = sim.controller
+    first = ctl.served_pairs()
+    assert first.shape == (0, 3) and first.dtype == np.int64
+    assert ctl.served_pairs() is first  # unchanged: not built again
+    ctl._served.add((4, 1, 2))
+    ctl._served.add((3, 5, 6))
+    assert ctl.served_pairs().tolist() == [[3, 5, 6], [4, 1, 2]]
+    ctl._served.add((3, 0, 9))
+    assert ctl.served_pairs().tolist() == [[3, 0, 9], [3, 5, 6], [4, 1, 2]]

@@ -52,8 +52,7 @@ class DropSwitches:
         """What the agents know this step (:class:`~amronet.algorithms.agent_assisted.drops.AgentView`)."""
         sw, agents, rule = self.swarm, self.agents, self.drop_rule
         is_ref, ref_xy = self.deployed_nodes()
-        settling = sw.state == State.DROPPED
-        relay_xy = np.concatenate([ref_xy, sw.xy[settling]]) if self.settle_at else ref_xy
+        relay_xy = np.concatenate([ref_xy, sw.xy[sw.state == State.DROPPED]]) if self.settle_at else ref_xy
         contact = None
         if rule.needs_contact or self.reverse_after_s is not None:
             contact = agents_connected(step.table, agents, self.bases, sw.relaying)

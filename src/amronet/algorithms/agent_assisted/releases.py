@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amronet.algorithms.agent_assisted.release_kernels import first_free_spot
 from amronet.algorithms.common.triangular import triangle_goal
 from amronet.engine.robots import Role, State
 
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
     from amronet.algorithms.common.goto import GoalSteering
     from amronet.engine.robots import RobotModel, Swarm
 
-__all__ = ["Releasing"]
+__all__ = ["Releasing", "release_spot"]
 
 
 def _pair_key(agent: int, ref_i: int, ref_j: int) -> tuple[int, int, int]:
@@ -31,15 +32,37 @@ def _pair_key(agent: int, ref_i: int, ref_j: int) -> tuple[int, int, int]:
     return (agent, min(ref_i, ref_j), max(ref_i, ref_j))
 
 
-def _segments_clear(p: np.ndarray, ends: np.ndarray, r: float, xy: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """Which segments ``p -> ends[m]`` a body of radius ``r`` can be carried along without touching a body."""
-    seg = ends - p
-    length2 = np.maximum(np.einsum("ij,ij->i", seg, seg), 1e-300)
-    rel = xy - p
-    t = np.clip((rel @ seg.T) / length2[None, :], 0.0, 1.0)
-    closest = p[None, None, :] + t[:, :, None] * seg[None, :, :]
-    d = np.linalg.norm(xy[:, None, :] - closest, axis=2)
-    return (d >= r + radius[:, None]).all(axis=0)
+_NEAR_TURNS = np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6]) * (np.pi / 6)
+"""The agent's own ring: 12 directions from the reference's, nearest first."""
+_FAR_TURNS = np.concatenate([[0.0], np.repeat(np.arange(1, 12), 2) * np.array([1.0, -1.0] * 11), [12.0]]) * (
+    np.pi / 12)
+"""The two farther rings: 24 directions from the reference's, nearest first."""
+_TURNS = np.concatenate([_NEAR_TURNS, _FAR_TURNS, _FAR_TURNS])
+"""Every candidate's direction from the reference's: the agent's ring, then the two farther rings."""
+_RINGS = np.repeat([0.0, 1.0, 2.0], [len(_NEAR_TURNS), len(_FAR_TURNS), len(_FAR_TURNS)])
+"""Every candidate's ring: its distance from the agent is ``gap + ring * step``."""
+
+
+def release_spot(p: np.ndarray, ref: np.ndarray, gap: float, step: float, r: float, within: float,
+                 path_clear: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray], xy: np.ndarray,
+                 radius: np.ndarray, agent: int) -> np.ndarray | None:
+    """Where the body at ``p`` puts a router down next to itself toward ``ref``; ``None`` when no spot is free.
+
+    First the ring at ``gap`` (12 directions, nearest to the reference's first), then the two rings at ``gap +
+    step`` and ``gap + 2 step`` (24 directions) whose straight line from the agent must also pass clear of every
+    body. A spot must be within ``within`` of ``ref``, clear of walls along the way (``path_clear``, the agent's
+    hand, asked once for every candidate) and clear of every body of ``xy``/``radius`` but ``agent``
+    (:func:`~amronet.algorithms.agent_assisted.release_kernels.first_free_spot`).
+    """
+    angles = np.arctan2(ref[1] - p[1], ref[0] - p[0]) + _TURNS
+    away = gap + _RINGS * step
+    cand = np.empty((len(_TURNS), 2))
+    cand[:, 0] = p[0] + away * np.cos(angles)
+    cand[:, 1] = p[1] + away * np.sin(angles)
+    clear = path_clear(np.repeat(p[None], len(cand), axis=0), cand, np.full(len(cand), r))
+    k = first_free_spot(cand, clear, len(_NEAR_TURNS), float(p[0]), float(p[1]), float(ref[0]), float(ref[1]),
+                        float(within), float(r), xy, radius, agent)
+    return cand[k] if k >= 0 else None
 
 
 class Releasing:
@@ -76,35 +99,11 @@ class Releasing:
         spot must be within ``r_c`` of the reference, clear of walls along the way and clear of every body.
         """
         sw = self.swarm
-        p = sw.xy[agent]
-        ref = sw.xy[toward]
         r = self.router_model.radius
-        gap = sw.radius[agent] + r + self.params.release_gap
-        base = np.arctan2(ref[1] - p[1], ref[0] - p[0])
-        others = np.delete(np.arange(len(sw)), agent)
-        turns = np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6]) * (np.pi / 6)
-        cand = p + gap * np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
-        within = self.r_c if self.drop_rule.near_reference else np.inf
-        ok = np.linalg.norm(cand - ref, axis=1) <= within
-        ok &= self.path_clear(np.repeat(p[None], len(cand), axis=0), cand, np.full(len(cand), r))
-        if len(others):
-            d = np.linalg.norm(cand[:, None, :] - sw.xy[None, others, :], axis=2)
-            ok &= (d >= r + sw.radius[others][None, :]).all(axis=1)
-        hit = np.flatnonzero(ok)
-        if len(hit):
-            return cand[hit[0]]
-        # farther out: the agent's own ring is full (other bodies, walls)
-        turns = np.concatenate([[0.0], np.repeat(np.arange(1, 12), 2) * np.array([1.0, -1.0] * 11), [12.0]]) * (
-            np.pi / 12)
-        step = 2.0 * r + self.params.release_gap
-        dirs = np.stack([np.cos(base + turns), np.sin(base + turns)], axis=1)
-        cand = np.concatenate([p + (gap + k * step) * dirs for k in (1, 2)])
-        ok = np.linalg.norm(cand - ref, axis=1) <= within
-        ok[ok] &= self.path_clear(np.repeat(p[None], int(ok.sum()), axis=0), cand[ok], np.full(int(ok.sum()), r))
-        if len(others) and ok.any():
-            ok[ok] &= _segments_clear(p, cand[ok], r, sw.xy[others], sw.radius[others])
-        hit = np.flatnonzero(ok)
-        return cand[hit[0]] if len(hit) else None
+        return release_spot(sw.xy[agent], sw.xy[toward], sw.radius[agent] + r + self.params.release_gap,
+                            2.0 * r + self.params.release_gap, r,
+                            self.r_c if self.drop_rule.near_reference else np.inf, self.path_clear, sw.xy,
+                            sw.radius, agent)
 
     def _add_router(self, agent: int, toward: int, state: int) -> int | None:
         """Release a router from ``agent`` next to itself toward ``toward``; its index, or ``None`` (no free spot)."""
