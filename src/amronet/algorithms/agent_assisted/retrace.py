@@ -5,12 +5,12 @@ Behind walls that spot may hear nobody, and the straight way there may lead into
 move was meant to make. This rule moves the same routers at the same moment, but along a way that is known to be
 drivable and known to have been in contact with the network: the way the router came in.
 
-* **The way in** (odometry breadcrumbs). Every agent keeps its own path as points sampled from its odometry, with
-  loops erased: a point that comes within :attr:`Breadcrumbs.erase` of an earlier point of the path cuts the path
-  back to that earlier point (a loop-erased walk). When an agent puts a router down it hands it its path (the
-  router was carried along it); a router that then drives on (a triangle router, a strip router) adds its own
-  steps. The points are one tree shared by all (a point keeps its predecessor), so a router holds only the point it
-  came from.
+* **The way in** (odometry breadcrumbs, :mod:`.breadcrumbs`). Every agent keeps its own path as points sampled from
+  its odometry, with loops erased: a point that comes within :attr:`Breadcrumbs.erase` of an earlier point of the
+  path cuts the path back to that earlier point (a loop-erased walk). When an agent puts a router down it hands it
+  its path (the router was carried along it); a router that then drives on (a triangle router, a strip router) adds
+  its own steps. The points are one tree shared by all (a point keeps its predecessor), so a router holds only the
+  point it came from.
 * **Drivable**: the agent's body was free at every point, and two points of the path are at most
   ``2 (r_agent - r_router)`` apart (the sampling, and the erasing radius), so a router, smaller than the agent, can
   drive straight from one to the next: every point of that segment is within ``r_agent - r_router`` of an end.
@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from amronet.algorithms.agent_assisted.breadcrumbs import Breadcrumbs
 from amronet.algorithms.agent_assisted.relocate import Relocator
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.robots import Role, State, Swarm, state_lookup
@@ -56,105 +57,6 @@ MAX_SKIPS = 5
 _SELF_DRIVEN = state_lookup((State.TRIANGLE, State.STRIP))
 """States of routers that drive on their own after release (their steps are added to their way)."""
 _MOVABLE = state_lookup((State.REFERENCE, State.TRIANGLE_SETTLED))
-
-
-class Breadcrumbs:
-    """Sampled, loop-erased paths of the agents, and the routers' ways, as one tree of points.
-
-    Args:
-        xy: The agents' start positions ``(m, 2)`` (the roots of their paths).
-        spacing: An agent's path gains a point once it is this far from the path's newest point, metres.
-        erase: A new point within this distance of an earlier point of the path cuts the path back to it, metres.
-    """
-
-    def __init__(self, xy: np.ndarray, spacing: float, erase: float) -> None:
-        self.spacing = spacing
-        self.erase = erase
-        self.xy = np.zeros((max(64, 4 * len(xy)), 2))
-        self.parent = np.full(len(self.xy), -1, dtype=np.int64)
-        self.count = 0
-        self.paths = [np.array([self.add(p, -1)], dtype=np.int64) for p in np.asarray(xy, dtype=float)]
-        """Per agent, the points of its loop-erased path, from its start."""
-        self.tip = np.array([path[-1] for path in self.paths], dtype=np.int64)
-        """Per agent, the newest point of its path."""
-
-    def _room(self, k: int) -> None:
-        """Make room for ``k`` more points."""
-        while self.count + k > len(self.xy):
-            self.xy = np.concatenate([self.xy, np.zeros_like(self.xy)])
-            self.parent = np.concatenate([self.parent, np.full(len(self.parent), -1, dtype=np.int64)])
-
-    def add(self, p: np.ndarray, parent: int) -> int:
-        """A new point at ``p`` that follows ``parent`` (-1: none); its index."""
-        self._room(1)
-        k = self.count
-        self.xy[k] = p
-        self.parent[k] = parent
-        self.count += 1
-        return k
-
-    def add_many(self, p: np.ndarray, parent: np.ndarray) -> np.ndarray:
-        """New points at ``p`` ``(k, 2)`` that follow ``parent`` ``(k,)`` (-1: none); their indices."""
-        self._room(len(p))
-        k = np.arange(self.count, self.count + len(p), dtype=np.int64)
-        self.xy[k] = p
-        self.parent[k] = parent
-        self.count += len(p)
-        return k
-
-    def set_path(self, m: int, path: np.ndarray) -> None:
-        """Agent ``m``'s path is now ``path`` (points, from its start)."""
-        self.paths[m] = path
-        self.tip[m] = path[-1]
-
-    def record(self, xy: np.ndarray, who: np.ndarray) -> None:
-        """The agents at ``xy`` ``(m, 2)`` now: those of ``who`` (a mask) that have moved ``spacing`` add a point."""
-        tip = self.xy[self.tip]
-        moved = who & (np.hypot(xy[:, 0] - tip[:, 0], xy[:, 1] - tip[:, 1]) >= self.spacing)
-        for m in np.flatnonzero(moved):  # (an agent every few steps: each path erases its own loops)
-            self.extend(m, xy[m])
-
-    def replay(self, trail: np.ndarray) -> None:
-        """:meth:`record` of every agent at ``trail[s]`` ``(k, m, 2)``, for ``s`` in order (a quiet stretch's steps).
-
-        An agent's tip is the point it added last, where it stood, so each agent's points are found on its own; they
-        are added in the order :meth:`record` adds them, step by step, agent by agent (a few per stretch).
-        """
-        found = []
-        for m in range(trail.shape[1]):
-            tip = self.xy[self.tip[m]]
-            s = 0
-            while s < len(trail):
-                way = trail[s:, m]
-                hit = np.flatnonzero(np.hypot(way[:, 0] - tip[0], way[:, 1] - tip[1]) >= self.spacing)
-                if not len(hit):
-                    break
-                s += int(hit[0])
-                found.append((s, m))
-                tip = trail[s, m]
-                s += 1
-        for s, m in sorted(found):
-            self.extend(m, trail[s, m])
-
-    def back(self, m: int, p: np.ndarray, reach: float) -> int:
-        """The point agent ``m`` at ``p`` backs up to next, the points within ``reach`` forgotten (-1: none left)."""
-        path = self.paths[m]
-        k = len(path)
-        while k > 1 and np.hypot(*(self.xy[path[k - 1]] - p)) <= reach:
-            k -= 1
-        self.set_path(m, path[:k])
-        return -1 if k == 1 and np.hypot(*(self.xy[path[0]] - p)) <= reach else int(path[k - 1])
-
-    def extend(self, m: int, p: np.ndarray) -> int:
-        """Agent ``m``'s path goes on to ``p``, loops erased; the new point."""
-        path = self.paths[m]
-        d = np.hypot(*(self.xy[path] - p).T)
-        close = np.flatnonzero(d < self.erase)
-        if len(close):
-            path = path[:close[0] + 1]
-        k = self.add(p, int(path[-1]))
-        self.set_path(m, np.append(path, k))
-        return k
 
 
 class Retracer(Relocator):

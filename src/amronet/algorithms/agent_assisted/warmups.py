@@ -25,7 +25,7 @@ def driven_inside(registry: Mapping[str, type]) -> list[str]:
 
 
 def warm_ups() -> list[WarmUp]:
-    """Its defaults, every explorer, drop rule, radio model (frontier explorer), switch, faults and repair.
+    """Its defaults, every explorer, drop rule, radio model (frontier explorer), switch, faults and repairs.
 
     The agents' switches and triangle routers driving in the compiled step have a case each.
 
@@ -47,5 +47,8 @@ def warm_ups() -> list[WarmUp]:
                {"agents.per_base": 1, "radio.model": "multi-wall", **frontier}, seconds=40.0),
         WarmUp("faults and relocation", PRESET,
                {"faults": [{"at": 1.0, "routers": 0.5}], "algorithm.params.repair": "relocate", **frontier,
+                "sim.coverage_target": "off"}),
+        WarmUp("faults and retrace", PRESET,  # (the breadcrumbs' kernel)
+               {"faults": [{"at": 1.0, "routers": 0.5}], "algorithm.params.repair": "retrace", **frontier,
                 "sim.coverage_target": "off"}),
     ]
