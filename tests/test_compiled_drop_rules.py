@@ -7,6 +7,8 @@ from amronet.algorithms.agent_assisted.controller import AgentAssisted
 from amronet.algorithms.agent_assisted.drops.radius import Radius
 from amronet.algorithms.agent_assisted.fast import CompiledAgents
 from amronet.algorithms.agent_assisted.rule_check import RULE_CODES
+from amronet.algorithms.agent_assisted.stretch import QuietStretch
+from amronet.experiments.buildings import BUILDINGS, RADIOS
 from amronet.experiments.common import agent_scenario
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
@@ -43,6 +45,8 @@ CASES = {
         "faults": [{"rate_per_hour": 60.0, "at": 30.0}], "algorithm.params.drop_rule": "radius"}),
     "four bases, triangles, link-quality": ("agent-assisted-office-4bs", 3, {
         **FRONTIER, "agents.per_base": 1, "algorithm.params.drop_rule": "link-quality"}),
+    "four bases, triangles under walls (the link test at settling)": ("agent-assisted-office-4bs", 3, {
+        **FRONTIER, "agents.per_base": 1, "radio.model": "multi-wall"}),
     **{f"hospital, {rule}, {radio}": (_hospital(rule, {"model": "multi-wall", "shadowing_db": 4.0} if radio == "walls"
                                                 else None,
                                                 {"routers_carried": 6, "when_empty": "continue"}), 70_001, {})
@@ -101,6 +105,27 @@ def test_rules_the_kernel_checks_take_quiet_stretches(rule, stretches):
     assert (quiet is not None) is stretches
     if stretches:
         assert quiet.ends["quiet"] > 0
+
+
+def test_reverse_drops_take_quiet_stretches_and_give_the_reference_run():
+    """Agents out of contact for ``reverse_drop`` seconds back up: the stretch stops before, keeps their paths."""
+    b = BUILDINGS["depot"]  # (multi-wall: agents lose contact, and back up)
+    sc = load_scenario(agent_scenario(b.map, b.r_c, (b.base,), 3, "frontier", 100.0, radio=RADIOS["multi-wall"],
+                                      drop_rule="distance-junction", agents={"reverse_drop": 5.0}))
+    stretched, reference = Simulation(sc, 70_001), Simulation(sc, 70_001, step="reference")
+    quiet = stretched.compiled.quiet
+    assert isinstance(quiet, QuietStretch)
+    a, b = stretched.run(), reference.run()
+    assert quiet.ends["quiet"] > 0 and stretched.controller.reverse_drops > 0
+    mine, theirs = stretched.controller, reference.controller
+    np.testing.assert_array_equal(stretched.swarm.xy, reference.swarm.xy)
+    for attr in ("contact_since", "reversing", "left", "current"):
+        np.testing.assert_array_equal(getattr(mine, attr), getattr(theirs, attr))
+    np.testing.assert_array_equal(mine.trails._last, theirs.trails._last)
+    assert [np.array(p).tolist() for p in mine.trails.points] == [np.array(p).tolist() for p in theirs.trails.points]
+    assert stretched.rows == reference.rows and a.network == b.network
+    assert {k: v for k, v in a.summary.items() if k != "wall_time_s"} == \
+        {k: v for k, v in b.summary.items() if k != "wall_time_s"}
 
 
 def test_a_rule_the_check_does_not_know_takes_the_reference_path():

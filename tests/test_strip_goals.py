@@ -12,9 +12,12 @@ from hypothesis import strategies as st
 import amronet
 from amronet.algorithms.agent_assisted.drops import DROP_RULES, DropContext, validate_drop_params
 from amronet.algorithms.agent_assisted.drops.strip_goals import ROW_GAP, strip_goal_points
+from amronet.algorithms.agent_assisted.stretch import QuietStretch
 from amronet.engine.network import connected_to
 from amronet.engine.robots import State
 from amronet.errors import ScenarioError
+from amronet.experiments.buildings import BUILDINGS, RADIOS
+from amronet.experiments.common import agent_scenario
 from amronet.sim import Simulation
 
 R_C = 4.0
@@ -132,6 +135,40 @@ def test_strip_goals_with_settling_routers_drive_once_they_relay():
     assert sum(sim.controller.mission_report()["strip_goals"].values()) >= 1
     assert not sim.controller.strips.waiting or all(sim.swarm.state[i] == State.DROPPED
                                                    for i in sim.controller.strips.waiting)
+
+
+@pytest.mark.parametrize(("building", "radio"), [("hospital_section", "unit-disk"), ("depot", "multi-wall")])
+def test_stretches_go_on_while_strip_routers_drive_and_give_the_reference_run(building, radio, monkeypatch):
+    """Strip routers on their way are steered in the quiet stretch; one arriving or giving up ends it (Python)."""
+    b = BUILDINGS[building]  # (as ``amronet reproduce buildings`` runs it, stock 6)
+    sc = amronet.load_scenario(agent_scenario(b.map, b.r_c, (b.base,), 3, "frontier", 100.0, radio=RADIOS[radio],
+                                              drop_rule="strip-goals",
+                                              agents={"routers_carried": 6, "when_empty": "continue"}))
+    stretched, reference = Simulation(sc, 70_001), Simulation(sc, 70_001, step="reference")
+    quiet = stretched.compiled.quiet
+    assert isinstance(quiet, QuietStretch)
+    driving: list[int] = []  # steps taken in stretches that started with a strip router on its way
+    take = QuietStretch.take
+
+    def counting(self, *args, **kwargs):
+        moving = self.compiled.controller.strips.moving
+        out = take(self, *args, **kwargs)
+        if out is not None and moving:
+            driving.append(out.steps)
+        return out
+
+    monkeypatch.setattr(QuietStretch, "take", counting)
+    a, b = stretched.run(), reference.run()
+    assert sum(driving) > stretched.steps / 4 and quiet.strip_steps == sum(driving)
+    assert quiet.ends["triangle"] > 0  # (one base station: no triangle router; strip routers arrived or gave up)
+    sw, ref = stretched.swarm, reference.swarm
+    for x, y in ((sw.xy, ref.xy), (sw.heading, ref.heading), (sw.state, ref.state), (sw.distance, ref.distance)):
+        np.testing.assert_array_equal(x, y)
+    mine, theirs = stretched.controller.strips, reference.controller.strips
+    assert mine.counts == theirs.counts and mine.tries == theirs.tries and sum(mine.counts.values()) > 0
+    assert stretched.rows == reference.rows and a.network == b.network
+    assert {k: v for k, v in a.summary.items() if k != "wall_time_s"} == \
+        {k: v for k, v in b.summary.items() if k != "wall_time_s"}
 
 
 @pytest.mark.parametrize(("drop", "field"), [

@@ -82,6 +82,8 @@ class AgentControls(Protocol):
     relocator: Any
     strips: Any
     trails: Any
+    contact_since: np.ndarray
+    links_by_distance: bool
     settle_at: Any
     swarm: Any
     bases: np.ndarray

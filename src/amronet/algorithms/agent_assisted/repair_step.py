@@ -123,8 +123,9 @@ class RepairStep:
         sw = c.swarm
         if self.busy() or not self.idle():
             return None
-        if c.moving_triangles and (self.retracer is not None or r.waiting_movable(sw).any()):
-            return None  # (triangle routers on their way add to their way, or may cut a router off)
+        driving = c.moving_triangles or (c.strips is not None and c.strips.moving)
+        if driving and (self.retracer is not None or r.waiting_movable(sw).any()):
+            return None  # (triangle or strip routers on their way add to their way, or may cut a router off)
         m = len(c.agents)
         if self.retracer is None:
             return no_retracing(m)

@@ -91,8 +91,11 @@ class RuleCheck:
 
     @property
     def stretches(self) -> bool:
-        """Whether the check can be made inside a quiet stretch: not with reverse drops (paths kept in Python)."""
-        return self.controller.reverse_after_s is None
+        """Whether the check can be made inside a quiet stretch: always.
+
+        Reverse drops too: the stretch keeps their books (:class:`~.stretch_books.ReverseDrop`).
+        """
+        return True
 
     def in_stretch(self, first: int, dt: float) -> RuleStep:
         """The check as a quiet stretch makes it (:func:`~.rule_kernels.rule_acts`), from step ``first`` on.

@@ -23,12 +23,13 @@ read the links the step-by-step path reads (``tests/test_compiled_repair.py``).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amronet.algorithms.agent_assisted.rule_check import paper_rule_step
-from amronet.algorithms.agent_assisted.stretch_books import no_retracing
+from amronet.algorithms.agent_assisted.stretch_books import ReverseDrop, no_retracing, no_reverse_drop
 from amronet.algorithms.agent_assisted.stretch_kernels import (
     ACTS,
     LINKED,
@@ -58,6 +59,7 @@ __all__ = ["QuietStretch"]
 _NO_ROBOTS = np.zeros(0, dtype=np.int64)
 _NO_STEPS = np.zeros(0)
 _NONE_SILENT = np.zeros(0, dtype=np.bool_)
+_ONE_BEAM = beam_angles(1)  # (read-only)
 
 
 
@@ -77,8 +79,9 @@ class QuietStretch:
         self.laws = h is not None and (h.wall_db > 0.0 or h.clip > 0.0)
         """Whether the links are decided by their margins (walls or shadowing)."""
         self.ends = {"quiet": 0, "acts": 0, "triangle": 0, "linked": 0}
-        """How many stretches ended each way: all steps quiet, an agent acting, a triangle router arriving or giving
-        up, every agent linked (a fault's damage repaired, :data:`~amronet.algorithms.stepping.RESTORING_AGENTS`)."""
+        """How many stretches ended each way: all steps quiet, an agent acting, a triangle or strip router arriving or
+        giving up, every agent linked (a fault's damage repaired,
+        :data:`~amronet.algorithms.stepping.RESTORING_AGENTS`)."""
         self.idle_steps = 0
         """Steps taken in stretches in which an agent without a plan walked at random."""
         self._bitgen: tuple[object, int] | None = None
@@ -87,26 +90,46 @@ class QuietStretch:
         """Steps taken in stretches in which an agent heard another network's reference and no triangle went ahead."""
         self.triangle_steps = 0
         """Steps taken in stretches with triangle routers driving to their goals."""
+        self.strip_steps = 0
+        """Steps taken in stretches with strip routers driving to their goals (``strip-goals``)."""
         self.paper = paper_rule_step(context.dt)
         """The drop rule's check under the paper's rule alone (none)."""
         self.no_retracing = no_retracing(len(compiled.controller.agents))
         """The kernel's :class:`~.stretch_books.Retracing` without ``repair: retrace``."""
+        self.no_reverse_drop = no_reverse_drop(len(compiled.controller.agents))
+        """The kernel's :class:`~.stretch_books.ReverseDrop` without ``agents.reverse_drop``."""
 
     def _moving(self, length: np.ndarray, r: float) -> Moving | None:
-        """The kernel's :class:`~.stretch_kernels.Moving`: the triangle routers driving to their goals, how they steer.
+        """The kernel's :class:`~.stretch_kernels.Moving`: the triangle and strip routers driving to their goals.
 
+        The triangle routers, then the strip routers (the order in which ``movers_command`` moves them), each kind
+        with the ``r_keep`` it steers with (:meth:`.strip_driving.StripDrivers.drive`: the rule's keep radius).
         ``None`` when their steps cannot be taken in the stretch: routers of several models, or of the agents' model,
         or whose rings or moves reach beyond the radio's table (the sense and move phases would search anew).
         """
         comp = self.compiled
         c, sw, a = comp.controller, comp.swarm, comp.around
         steering = c.steering
-        tri = np.flatnonzero(sw.state == State.TRIANGLE) if c.moving_triangles else _NO_ROBOTS
+        strips_moving = c.strips is not None and c.strips.moving
         largest = a.largest_radius()
+        if not c.moving_triangles and not strips_moving:  # (most calls: no router drives, nothing to look up)
+            return Moving(_NO_ROBOTS, _ONE_BEAM, 0.0, _NO_STEPS, steering.goal, steering.anchors,
+                          steering.last_to_goal, steering.blocked_steps, int(steering.give_up_steps),
+                          float(steering.min_progress), _NO_STEPS, float(c.dt), largest, steering.refs,
+                          steering.heard_xy, 0)
+        tri = np.flatnonzero(sw.state == State.TRIANGLE) if c.moving_triangles else _NO_ROBOTS
+        keep = np.full(len(tri), float(c.r_eff))
+        tested = 0 if c.links_by_distance else len(tri)  # (the link test at settling: .movers)
+        if strips_moving:
+            assert c.strips is not None
+            strips = np.flatnonzero(sw.state == State.STRIP)
+            tri = np.concatenate([tri, strips])
+            keep = np.concatenate([keep, np.full(len(strips), float(c.strips.rule.keep_radius()))])
         steer = (steering.goal, steering.anchors, steering.last_to_goal, steering.blocked_steps,
-                 int(steering.give_up_steps), float(steering.min_progress), float(c.r_eff), float(c.dt), largest)
+                 int(steering.give_up_steps), float(steering.min_progress), keep, float(c.dt), largest,
+                 steering.refs, steering.heard_xy, tested)
         if len(tri) == 0:
-            return Moving(_NO_ROBOTS, beam_angles(1), 0.0, _NO_STEPS, *steer)
+            return Moving(_NO_ROBOTS, _ONE_BEAM, 0.0, _NO_STEPS, *steer)
         model = int(sw.model[tri[0]])
         if model == c.agent_model or (sw.model[tri] != model).any():
             return None
@@ -135,10 +158,10 @@ class QuietStretch:
              restoring: int = 0) -> Stretched | None:
         """Take up to ``limit`` steps (at least one), none of them recorded; ``None`` where none can be taken.
 
-        A stretch starts only where a quiet step may: no router settling and no strip router driving, the agents' and
-        the triangle routers' readings and moves within the radio's table, the explorer's deployed nodes painted.
-        Agents without a plan walk at random in it. The step at which the kernel stops (an agent acts, a triangle
-        router arrives or gives up) is left for the loop to finish
+        A stretch starts only where a quiet step may: no router settling, the agents' and the triangle and strip
+        routers' readings and moves within the radio's table, the explorer's deployed nodes painted.
+        Agents without a plan walk at random in it. The step at which the kernel stops (an agent acts, a triangle or
+        strip router arrives or gives up) is left for the loop to finish
         (:attr:`~amronet.algorithms.stepping.Stretched.finish`).
         The agents' connection books are kept in ``agent_books``'s arrays, step by step; the loop closes them.
         ``silent``: the failed nodes (:attr:`~amronet.algorithms.stepping.Watch.silent`), whose links the kernel drops.
@@ -151,7 +174,10 @@ class QuietStretch:
         sw, table = comp.swarm, now.table
         n = len(sw)
         dropped = table.candidates is not None and not self.laws and silent is None  # (links lost at random)
-        if c.settle_at or n < 2 or use_threads(n) or dropped or (c.strips is not None and c.strips.moving):
+        if c.settle_at or n < 2 or use_threads(n) or dropped:
+            return None
+        reverse = self._reverse_drop(limit)
+        if reverse is None:  # (an agent backs up)
             return None
         retracing = self.no_retracing if comp.repair is None else comp.repair.stretch_start(now, limit)
         if retracing is None:  # (the repair is not idle, or an agent backs up now)
@@ -174,18 +200,24 @@ class QuietStretch:
         grid = comp.knowledge
         knowledge = comp.knowledge_for(deployed_xy, a.sensor_range)
         # every structure as a plain tuple (see .kernels)
-        sigma = float(explorer.turn_noise * np.sqrt(explorer.dt))  # (its RandomExplorer's, as it scales the noise)
+        # (its RandomExplorer's, as it scales the noise; math.sqrt and np.sqrt both round correctly: the same number)
+        sigma = float(explorer.turn_noise * math.sqrt(explorer.dt))
         frontier = Frontier(explorer.steps, grid.stamp, avoid, self._address(c.rng), sigma, *layers, settings, plans,
                             buffers, explorer.plans.active)
         triangles = Triangles(comp.triangle_rule, float(c.r_c), c.disabled, c.served_pairs())
         rules = self.paper if comp.rules is None else comp.rules.in_stretch(now.index, now.dt)
-        moves = Moves(c.agents, length, reach, a.collisions, tuple(retracing), restoring == RESTORING_AGENTS)
+        moves = Moves(c.agents, length, reach, a.collisions, tuple(retracing), tuple(reverse),
+                      restoring == RESTORING_AGENTS)
         done, how, n_cand, n_losing, radio, scans, grid.stamp, explorer.steps, looked, idle = quiet_stretch(
             comp.grid, comp.robots(), comp.ring, tuple(moves),
             self._radio(table, comp.rules is not None and comp.rules.reads_margins, silent), comp.tracking(is_ref),
             (tuple(triangles), tuple(rules)), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
         if comp.repair is not None:
             comp.repair.stretch_end(done, retracing)
+        if c.trails is not None:  # the agents' paths: every step begun (the one it stopped in too, as _back_up does)
+            everyone = np.ones(m, dtype=np.bool_)
+            for k in range(done + (how in (ACTS, TRIANGLES_END))):
+                c.trails.update(reverse.trail[k], everyone)
         if how == NON_FINITE:
             return Stretched(done, non_finite=True)
         csr = (radio[5], radio[6], radio[7]) if done else None  # the pairs searched, and their margins
@@ -193,13 +225,16 @@ class QuietStretch:
         self.ends[{ACTS: "acts", TRIANGLES_END: "triangle", LINKED: "linked"}.get(how, "quiet")] += 1
         self.idle_steps += idle
         self.triangles_looked_at += looked
-        self.triangle_steps += done if len(tri) else 0
+        if len(tri):
+            driving = sw.state[tri]
+            self.triangle_steps += done if (driving == State.TRIANGLE).any() else 0
+            self.strip_steps += done if (driving == State.STRIP).any() else 0
         if how not in (ACTS, TRIANGLES_END):
             return Stretched(done, csr, margin=margin)
         # stopped part-way through a step, the generator as the step-by-step path leaves it there: the loop finishes it
 
         def finish(step: StepInput) -> None:
-            readings = comp.readings(step, scans, tri)
+            readings = comp.readings(step, scans, np.sort(tri))  # (ascending, as the sense phase has them)
             if how == ACTS:
                 comp.act(step, n, n_cand, n_losing, scans, readings)
                 return
@@ -209,6 +244,19 @@ class QuietStretch:
                 comp.drive(step)
 
         return Stretched(done, csr, finish=finish, margin=margin)
+
+    def _reverse_drop(self, limit: int) -> ReverseDrop | None:
+        """The kernel's :class:`~.stretch_books.ReverseDrop` for up to ``limit`` steps; ``None``: no stretch now.
+
+        None while an agent backs up, nor under ``repair: retrace`` too (its agents back up their own way).
+        """
+        comp = self.compiled
+        c = comp.controller
+        if c.trails is None:
+            return self.no_reverse_drop
+        if c.reversing.any() or (comp.repair is not None and comp.repair.retracer is not None):
+            return None
+        return ReverseDrop(np.empty((limit, len(c.agents), 2)), c.contact_since, float(c.reverse_after_s))
 
     def _address(self, rng: np.random.Generator) -> int:
         """The ``bitgen_t`` address of ``rng``'s bit generator (kept while it is the run's generator)."""

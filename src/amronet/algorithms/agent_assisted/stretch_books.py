@@ -1,7 +1,8 @@
 """The books a quiet stretch keeps step by step (:func:`~.stretch_kernels.quiet_stretch`).
 
-The agents' connection (:class:`Links`, kept by :func:`observe_links`), and under ``repair: retrace`` the agents'
-way and last contact (:class:`~.repair_step.RepairStep`).
+The agents' connection (:class:`Links`, kept by :func:`observe_links`), under ``repair: retrace`` the agents'
+way and last contact (:class:`~.repair_step.RepairStep`), and under ``agents.reverse_drop`` the agents' last contact
+and path (:class:`ReverseDrop`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from numba import njit
 
 from amronet.engine.network import agents_linked_kernel
 
-__all__ = ["Links", "Retracing", "no_retracing", "observe_links"]
+__all__ = ["Links", "Retracing", "ReverseDrop", "back_up_starts", "no_retracing", "no_reverse_drop", "observe_links"]
 
 
 class Links(NamedTuple):
@@ -55,6 +56,29 @@ class Retracing(NamedTuple):
     """The stretch's first step."""
     dt: float
     """Step length, seconds."""
+
+
+class ReverseDrop(NamedTuple):
+    """What a stretch keeps of MARBLE's reverse drop (``agents.reverse_drop``), step by step.
+
+    What :meth:`~.drop_switches.DropSwitches._back_up` does in a step in which no agent backs up: a stretch starts with
+    none backing up, and at the start of each step the agents in contact with a base station (on its table) get the
+    step's time in ``contact_since`` and every agent's position goes into ``trail`` (the caller puts them on the
+    agents' paths, :meth:`~.drops.trail.Trails.update`); the stretch stops before a step in which an agent that
+    carries a router would start to back up (out of contact for more than ``after_s`` seconds).
+    """
+
+    trail: np.ndarray
+    """Gets the agents' positions at the start of each step begun ``(limit, A, 2)`` (no rows: no reverse drop)."""
+    contact_since: np.ndarray
+    """When each agent was last in contact ``(A,)`` (the controller's), kept in place."""
+    after_s: float
+    """How long an agent is out of contact before it backs up, seconds."""
+
+
+def no_reverse_drop(m: int) -> ReverseDrop:
+    """The :class:`ReverseDrop` of a stretch without ``agents.reverse_drop``, for ``m`` agents: it keeps nothing."""
+    return ReverseDrop(np.zeros((0, m, 2)), np.zeros(m), np.inf)
 
 
 def no_retracing(m: int) -> Retracing:
@@ -104,3 +128,24 @@ def observe_links(indptr, indices, agents, books):  # pragma: no cover - numba
     sums[1] = min(sums[1], frac)
     sums[2] = min(sums[2], frac)
     return up == a
+
+
+@njit(cache=True, inline="always")
+def back_up_starts(reverse_drop, done, t, agents, xy, left, contact):  # pragma: no cover - numba
+    """The reverse drop's books at the start of step ``done`` of a stretch, at time ``t`` (:class:`ReverseDrop`).
+
+    ``contact``: whether each agent has a path to a base station on the step's table; ``left``: the routers each robot
+    carries ``(N,)``. Returns whether an agent that carries a router starts to back up in this step (then nothing is
+    noted: the stretch stops before it); otherwise notes who is in contact, and where the agents are.
+    """
+    back_trail, back_contact_since, back_after_s = reverse_drop
+    m = agents.shape[0]
+    for j in range(m):
+        if not contact[j] and left[agents[j]] >= 1 and t - back_contact_since[j] > back_after_s:
+            return True
+    for j in range(m):
+        if contact[j]:
+            back_contact_since[j] = t
+        back_trail[done, j, 0] = xy[agents[j], 0]
+        back_trail[done, j, 1] = xy[agents[j], 1]
+    return False

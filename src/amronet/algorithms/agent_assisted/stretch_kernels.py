@@ -14,8 +14,9 @@ A step in which an agent hears a reference of another network (a triangle candid
 would go ahead by the local rule or none (:func:`~amronet.algorithms.common.triangular.select_triangles`): the
 controller
 then does nothing but what a quiet step does. Under the global rule such a step ends the stretch. Triangle routers
-driving to their goals are steered and moved with the agents, as the controller and the move phase do it, in the
-steps before one of them arrives or gives up.
+driving to their goals, and ``strip-goals``' routers driving to theirs (the same steering, another keep radius), are
+steered and moved with the agents, as the controller and the move phase do it, in the steps before one of them arrives
+or gives up.
 
 It stops at the first step that is not quiet, part-way through it, and says where: the Python path finishes that
 step.
@@ -32,11 +33,12 @@ from numba import njit
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
 from amronet.algorithms.agent_assisted.rule_kernels import LINK, PAPER, rule_acts, rule_commit
-from amronet.algorithms.agent_assisted.stretch_books import Links, observe_links
+from amronet.algorithms.agent_assisted.stretch_books import Links, back_up_starts, observe_links
 from amronet.algorithms.agent_assisted.stretch_links import Radio, next_radio
 from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
 from amronet.engine.bitgen import next_double
 from amronet.engine.motion import random_walk_drawing
+from amronet.engine.network import agents_linked_kernel
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
 __all__ = ["ACTS", "LINKED", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL",
@@ -53,8 +55,8 @@ LINKED = 5
 """Every agent had a path to a base station after the last step done (:attr:`Moves.until_linked`)."""
 
 TRIANGLES_END = 4
-"""The step after the last one done: a triangle router driving to its goal arrives or gives up. Sensed, tracked, in
-the grid, the agents steered; the triangle routers' steering, the move and the radio are left."""
+"""The step after the last one done: a triangle or strip router driving to its goal arrives or gives up. Sensed,
+tracked, in the grid, the agents steered; the routers' steering, the move and the radio are left."""
 
 TRIANGLES_NONE = 0
 """Triangle rule ``none``: a candidate whose references are farther apart than ``r_c`` goes ahead."""
@@ -79,6 +81,8 @@ class Moves(NamedTuple):
     """Whether bodies stop moves."""
     retracing: tuple
     """``repair: retrace``'s books of the agents (:class:`~.stretch_books.Retracing`, a plain tuple)."""
+    reverse_drop: tuple
+    """``agents.reverse_drop``'s books of the agents (:class:`~.stretch_books.ReverseDrop`, a plain tuple)."""
     until_linked: bool
     """Whether to stop after a step at whose end every agent has a path to a base station (a fault's damage may be
     repaired then)."""
@@ -98,13 +102,15 @@ class Triangles(NamedTuple):
 
 
 class Moving(NamedTuple):
-    """The triangle routers driving to their goals, and how they steer.
+    """The triangle and strip routers driving to their goals, and how they steer.
 
-    ``goal`` to ``min_progress`` as :class:`~amronet.algorithms.common.goto.GoalSteering` keeps them.
+    ``goal`` to ``min_progress`` as :class:`~amronet.algorithms.common.goto.GoalSteering` keeps them (both kinds
+    steer with the controller's).
     """
 
     tri: np.ndarray
-    """The routers ``(T,)`` (empty: none)."""
+    """The routers ``(T,)``: the triangle routers, then the strip routers, as the controller moves them (empty:
+    none)."""
     angles: np.ndarray
     """Their ring's beam angles."""
     sensor_range: float
@@ -117,11 +123,19 @@ class Moving(NamedTuple):
     blocked_steps: np.ndarray
     give_up: int
     min_progress: float
-    r_keep: float
-    """A move may take a router no farther than this from an anchor (or than it is)."""
+    r_keep: np.ndarray
+    """A move may take each router no farther than this from an anchor (or than it is) ``(T,)``."""
     dt: float
     largest: float
     """The largest body radius."""
+    refs: np.ndarray
+    """``(N, n_anchors)``: the nodes each robot must hear where it settles (``GoalSteering.refs``)."""
+    heard_xy: np.ndarray
+    """``(N, 2)``: where each robot's table row last held one of them, kept in place (``GoalSteering.heard_xy``)."""
+    tested: int
+    """How many of the routers, the first (triangle routers), take the link test at settling: each step, one whose
+    row of the table holds one of its ``refs`` is noted where it is (``GoalSteering.check_links``; 0: none, links
+    decided by distance)."""
 
 
 class Frontier(NamedTuple):
@@ -208,17 +222,18 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     """
     xy, heading, radius, _, _ = robots
     angles, _ = ring
-    agents, length, reach, collisions, retracing, until_linked = moves
+    agents, length, reach, collisions, retracing, reverse_drop, until_linked = moves
     current, is_ref, _, left, _, nearest_d, other_ref, refused = tracking
     triangles, rules = who_acts
     (tri, t_angles, t_sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress,
-     r_keep, dt, largest) = moving
+     r_keep, dt, largest, refs, heard_xy, tested) = moving
     cells, _, _, _, _ = knowledge
     score, seen, _, _, _, row_stamp = cells
     (now, stamp, avoid, bitgen, sigma, layer_robots, no_robots, covered, gap, visited, settings, plans, buffers,
      active) = frontier
     blocked, clear, ox, oy, res = grid
     trail, contact_at, on_path, confirm, first, step_dt = retracing
+    _, _, _, rule_bases, rule_relaying, rule_first, rule_dt, rule_contact, _ = rules
     linked = books[2][0]
     m = agents.shape[0]
     n = xy.shape[0]
@@ -257,6 +272,10 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         _, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, _, _, _, _ = radio
         scans = np.empty((m, angles.shape[0]))
         near = (near_indptr, near_indices, near_dist)  # the rings and the moves read every pair within r
+        if reverse_drop[0].shape[0]:  # reverse drop: stop before a step in which an agent backs up
+            agents_linked_kernel(indptr, indices, agents, rule_bases, rule_relaying, rule_contact)
+            if back_up_starts(reverse_drop, done, (rule_first + done) * rule_dt, agents, xy, left, rule_contact):
+                return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
         n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, near, scans, tracking,
                                               (indptr, indices, dist), paper, knowledge, stamp + 1)
         if not paper:  # the drop rule decides who acts
@@ -290,7 +309,7 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         walked = random_walk_drawing(bitgen, heading, agents, active, avoided, angles, avoid, refused_m, sigma, normal,
                                      uniform)
         reach_now = reach
-        if nt:  # the triangle routers' rings, then their steering, unless one of them arrives or gives up now
+        if nt:  # the triangle and strip routers' rings, then their steering, unless one arrives or gives up now
             for q in range(nt):
                 if goal_ends(tri[q], xy, Steering(goal, anchors, last_to_goal, blocked_steps, give_up, min_progress),
                              max_step[q]):
@@ -308,9 +327,16 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
             for q in range(nt):
                 step, _ = steer_one(tri[q], xy, heading,
                                     Steering(goal, anchors, last_to_goal, blocked_steps, give_up, min_progress),
-                                    t_scans[q], t_angles, t_sensor_range, max_step[q], r_keep)
+                                    t_scans[q], t_angles, t_sensor_range, max_step[q], r_keep[q])
                 lengths[m + q] = (step / dt) * dt  # the command's speed times the step, as the move phase has it
                 farthest = max(farthest, lengths[m + q])
+            for q in range(tested):  # the link test's note of where each hears one of its references (this table)
+                i = tri[q]
+                for k in range(refs.shape[1]):
+                    if refs[i, k] >= 0 and _in_row(indptr, indices, i, refs[i, k]):
+                        heard_xy[i, 0] = xy[i, 0]
+                        heard_xy[i, 1] = xy[i, 1]
+                        break
             reach_now = 2.0 * largest + 2.0 * farthest  # the move phase's reach, over every mover
         # the move, then the radio's next table and the agents' connection
         drive_movers(grid, robots, movers, lengths, collisions, near if collisions else no_bodies, reach_now, refused)
@@ -322,6 +348,15 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         if observe_links(radio[1], radio[2], agents, books) and until_linked:  # (the links)
             return StretchEnd(done, LINKED, 0, 0, radio, scans, stamp, now, looked, idle)
     return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
+
+
+@njit(cache=True, inline="always")
+def _in_row(indptr, indices, i, a):  # pragma: no cover - numba
+    """Whether node ``a`` is in row ``i`` of a table (its links: every margin finite, distances being clamped)."""
+    for p in range(indptr[i], indptr[i + 1]):
+        if indices[p] == a:
+            return True
+    return False
 
 
 @njit(cache=True)
