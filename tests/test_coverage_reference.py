@@ -18,6 +18,7 @@ import pytest
 
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.coverage_heard import HeardCells
+from amronet.engine.hearing import node_reach, path_loss_bound
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.radio import RadioMedium, make_medium
 from amronet.engine.walls import count_walls_many, wall_grid
@@ -120,3 +121,16 @@ def test_coverage_is_the_law_cell_by_cell_on_real_maps(name, model, shadowing_db
         want = _reference(medium, omap, area.mask, xy)
         assert np.array_equal(got, want), f"{int(np.count_nonzero(got != want))} cells differ"
     _DONE.clear()
+
+
+@pytest.mark.parametrize("s", [-30.0, -4.0, 0.0, 6.0, 50.0])
+def test_a_node_reach_is_where_its_margin_bound_falls_below_zero(s):
+    budget = LinkBudget(r_c=3.0, exponent=2.0, wall_db=6.9, shadowing_db=4.0)
+    medium = make_medium("multi-wall", budget, _map("office-32x32"), rng=np.random.default_rng(11))
+    h, full = medium.hearing, float(medium.reach)
+    reach = node_reach(s, full, h)
+    if path_loss_bound(full, s, h) >= 0.0:  # the most shadowing: the medium's own reach
+        assert reach == full
+    else:  # no link that long or longer is heard, and one a little shorter may be
+        assert reach < full
+        assert path_loss_bound(reach, s, h) < 0.0 <= path_loss_bound(reach * (1.0 - 1e-6), s, h)

@@ -1,4 +1,4 @@
-"""The wall shadows that let coverage skip wall walks: never a point the walk finds clear, most of those it does not."""
+"""Wall shadows and clear lines that let coverage skip wall walks: each agrees with the walk and finds most cells."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from amronet.engine.occlusion import BINS, behind, shade
+from amronet.engine.occlusion import BINS, behind, clear, shade
 from amronet.engine.wall_bits import wall_bits
 from amronet.engine.walls import count_walls_many, wall_grid
 from amronet.world.builtin import resolve_map
@@ -22,10 +22,28 @@ def _office():
     return omap, wall_grid(omap), wall_bits(omap)
 
 
+def _shade(omap, bits, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+    out, lit = np.empty(BINS), np.empty(BINS)
+    shade(x, y, REACH, bits, omap.shape[1], float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), out,
+          lit)
+    return out, lit
+
+
 def _shadows(omap, bits, x: float, y: float) -> np.ndarray:
-    out = np.empty(BINS)
-    shade(x, y, REACH, bits, omap.shape[1], float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution), out)
-    return out
+    return _shade(omap, bits, x, y)[0]
+
+
+def _node(omap, grid, rng, where: str) -> np.ndarray:
+    """A point in a free cell, on a cell's face or corner, or in a wall cell."""
+    res = float(omap.resolution)
+    rows, cols = np.nonzero(grid[0] == (1 if where == "wall" else 0))
+    k = rng.integers(len(rows))
+    node = omap.cell_centres(rows[k:k + 1], cols[k:k + 1])[0]
+    if where == "face":  # on a cell border (a wall's face when a wall cell is beside)
+        node = node + np.array([0.5 * res * rng.choice([-1.0, 1.0]), 0.0])
+    elif where == "corner":
+        node = node + 0.5 * res * rng.choice([-1.0, 1.0], 2)
+    return node
 
 
 def _walls(omap, grid, node, ends) -> np.ndarray:
@@ -40,13 +58,7 @@ def test_a_point_in_a_shadow_is_behind_a_wall_the_walk_counts(seed, where):
     omap, grid, bits = _office()
     rng = np.random.default_rng(seed)
     res = float(omap.resolution)
-    rows, cols = np.nonzero(grid[0] == (1 if where == "wall" else 0))
-    k = rng.integers(len(rows))
-    node = omap.cell_centres(rows[k:k + 1], cols[k:k + 1])[0]
-    if where == "face":  # on a cell border (a wall's face when a wall cell is beside)
-        node = node + np.array([0.5 * res * rng.choice([-1.0, 1.0]), 0.0])
-    elif where == "corner":
-        node = node + 0.5 * res * rng.choice([-1.0, 1.0], 2)
+    node = _node(omap, grid, rng, where)
     shadows = _shadows(omap, bits, *node)
     # points anywhere within reach (not only cell centres), some on cell borders
     ends = node + rng.uniform(-REACH, REACH, (4000, 2))
@@ -78,3 +90,51 @@ def test_most_cells_behind_a_wall_are_found_in_its_shadow():
         found += int(np.count_nonzero(shaded))
         blocked += int(np.count_nonzero(walled))
     assert found > 0.8 * blocked  # the walks coverage skips
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), where=st.sampled_from(["free", "face", "corner", "wall"]))
+def test_a_point_on_a_clear_line_has_no_wall_the_walk_counts(seed, where):
+    omap, grid, bits = _office()
+    rng = np.random.default_rng(seed)
+    res = float(omap.resolution)
+    node = _node(omap, grid, rng, where)
+    lit = _shade(omap, bits, *node)[1]
+    # points anywhere within reach, many near the node, some on cell borders and along the axes
+    ends = node + rng.uniform(-1.0, 1.0, (4000, 2)) * rng.choice([0.5, 3.0, REACH], (4000, 1))
+    ends[::4] = np.round(ends[::4] / res) * res
+    ends[1::8, 0] = node[0]
+    ends[3::8, 1] = node[1]
+    ends = ends[(ends >= 0.0).all(axis=1) & (ends < 32.0).all(axis=1)]
+    d = ends - node
+    dd = (d * d).sum(axis=1)
+    keep = (dd > 0.0) & (dd <= REACH**2)
+    ends, d, dd = ends[keep], d[keep], dd[keep]
+    lit_up = np.array([clear(lit, dx, dy, s) for (dx, dy), s in zip(d, dd, strict=True)])
+    if where == "wall":
+        assert not lit_up.any()  # a node in a wall cell: no line is known clear
+    elif where == "free":  # (a face or corner may touch a wall cell: then none either)
+        assert lit_up.any()
+    assert (_walls(omap, grid, node, ends[lit_up]) == 0).all()
+
+
+def test_most_cells_in_sight_are_found_on_clear_lines():
+    omap, grid, bits = _office()
+    rng = np.random.default_rng(8)
+    rows, cols = np.nonzero(grid[0] == 0)
+    found = seen = 0
+    for k in rng.choice(len(rows), 6, replace=False):
+        node = omap.cell_centres(rows[k:k + 1], cols[k:k + 1])[0]
+        lit = _shade(omap, bits, *node)[1]
+        pick = rng.choice(len(rows), 3000, replace=False)
+        ends = omap.cell_centres(rows[pick], cols[pick])
+        d = ends - node
+        dd = (d * d).sum(axis=1)
+        keep = (dd > 0.0) & (dd < REACH**2)
+        ends, d, dd = ends[keep], d[keep], dd[keep]
+        open_ = _walls(omap, grid, node, ends) == 0
+        lit_up = np.array([clear(lit, dx, dy, s) for (dx, dy), s in zip(d, dd, strict=True)])
+        assert not (lit_up & ~open_).any()
+        found += int(np.count_nonzero(lit_up))
+        seen += int(np.count_nonzero(open_))
+    assert found > 0.8 * seen  # the walks and box tests coverage skips

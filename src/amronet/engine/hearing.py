@@ -30,8 +30,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from amronet.engine.cell_boxes import BLOCK, block_gap, node_box
 from amronet.engine.kernel_data import Grid
-from amronet.engine.occlusion import BINS, NEAR, behind, shade
+from amronet.engine.occlusion import BINS, NEAR, behind, clear, shade
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.shadowing import FieldGrid, ShadowingField, _lookup, field_at, link_shadowing
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
@@ -39,7 +40,8 @@ from amronet.engine.walls import wall_grid
 from amronet.world.occupancy import OccupancyMap
 
 __all__ = ["BLOCK", "Cells", "HearingInputs", "best_margin_grid", "cells_of", "heard_cells",
-           "named_inputs", "no_bound", "open_margin", "path_loss_bound", "path_loss_margin", "wall_limit"]
+           "named_inputs", "no_bound", "node_reach", "open_margin", "path_loss_bound", "path_loss_margin",
+           "wall_limit"]
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -181,14 +183,12 @@ model_margin = path_loss_margin
 model_bound = path_loss_bound
 """The margin bound the kernels below call."""
 SHADE_AFTER = 256
-"""A node's wall shadows (:mod:`amronet.engine.occlusion`) are drawn once this many walks met a wall that the
-budget did not allow: a node that would walk few such cells does not pay for them."""
+"""A node's wall shadows and clear lines (:mod:`amronet.engine.occlusion`) are drawn once it has asked this many
+cells about walls: a node that would walk few cells does not pay for them."""
 model_is_path_loss = True
-"""Whether ``model_margin`` is :func:`path_loss_margin`: then :func:`heard_cells` skips the wall walk of a cell
-whose budget allows no wall and that lies in a wall's shadow (:mod:`amronet.engine.occlusion`), the walk's answer."""
-
-BLOCK = 8
-"""Cells per side of the blocks that the coverage and signal kernels cull as a whole (see :func:`cells_of`)."""
+"""Whether ``model_margin`` is :func:`path_loss_margin`: then :func:`heard_cells` skips the wall walk of a cell on a
+clear line from the node (no wall) and of a cell whose budget allows no wall and that lies in a wall's shadow
+(:mod:`amronet.engine.occlusion`): the walk's answers."""
 
 
 class Cells(NamedTuple):
@@ -234,59 +234,60 @@ def _named_cells(t):  # pragma: no cover - numba
     return Cells(t[0], t[1], t[2], t[3], t[4])
 
 
-@njit(cache=True, inline="always")
-def _block_gap(x, y, cells, bi, bj, rows, cols):  # pragma: no cover - numba
-    """Distance from ``(x, y)`` to the nearest cell centre of block ``(bi, bj)`` (a lower bound)."""
-    i0 = bi * BLOCK
-    j0 = bj * BLOCK
-    i1 = min(i0 + BLOCK - 1, rows - 1)
-    j1 = min(j0 + BLOCK - 1, cols - 1)
-    ylo = cells.oy + (i0 + 0.5) * cells.res
-    yhi = cells.oy + (i1 + 0.5) * cells.res
-    xlo = cells.ox + (j0 + 0.5) * cells.res
-    xhi = cells.ox + (j1 + 0.5) * cells.res
-    dx = xlo - x if x < xlo else (x - xhi if x > xhi else 0.0)
-    dy = ylo - y if y < ylo else (y - yhi if y > yhi else 0.0)
-    return math.sqrt(dx * dx + dy * dy)
+@njit(cache=True)
+def node_reach(s, reach, h):  # pragma: no cover - numba
+    """A distance ``<= reach`` past which the margin bound of links whose ends' field values sum to ``<= s`` is below 0.
 
-
-@njit(cache=True, inline="always")
-def _node_box(x, y, reach, cells, rows, cols):  # pragma: no cover - numba
-    """The cells ``i0..i1, j0..j1`` within ``reach`` of ``(x, y)`` on the grid (empty when ``i0 > i1``).
-
-    ``reach`` may be infinite (the whole grid).
+    ``reach`` itself when the bound there is not below 0 (or there is no bound); else found by bisection: no cell
+    farther from a node is heard (the bound holds over every link at least that long).
     """
-    i0 = max(int(math.floor(max((y - reach - cells.oy) / cells.res, -1.0))), 0)
-    i1 = min(int(math.floor(min((y + reach - cells.oy) / cells.res, float(rows)))), rows - 1)
-    j0 = max(int(math.floor(max((x - reach - cells.ox) / cells.res, -1.0))), 0)
-    j1 = min(int(math.floor(min((x + reach - cells.ox) / cells.res, float(cols)))), cols - 1)
-    return i0, i1, j0, j1
+    if not model_bound(reach, s, h) < 0.0:
+        return reach
+    lo, hi = 0.0, reach
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        if model_bound(mid, s, h) < 0.0:
+            hi = mid
+        else:
+            lo = mid
+    return hi
 
 
 @njit(cache=True)
-def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h):  # pragma: no cover - numba
+def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field):  # pragma: no cover - numba
     """Mark ``out[i, j]`` for the ``mask`` cells ``(i, j)`` of ``window`` heard from the node at ``(x, y)``.
 
     Cells already marked are skipped; with an ``owner`` grid (not 0x0) a newly marked cell's owner is ``key``.
-    ``window``: the cells ``(i0, i1, j0, j1)`` looked at. Returns how many were newly marked.
+    ``window``: the cells ``(i0, i1, j0, j1)`` looked at; ``top_field``: the largest of ``cells.block_field``.
+    Returns how many were newly marked.
     """
     rows, cols = mask.shape
     total = 0
     owned = owner.shape[0] > 0
     shadowed = h.clip > 0.0
-    i0, i1, j0, j1 = _node_box(x, y, reach, cells, rows, cols)
+    i0, i1, j0, j1 = node_box(x, y, reach, cells, rows, cols)
     i0, i1, j0, j1 = max(i0, window[0]), min(i1, window[1]), max(j0, window[2]), min(j1, window[3])
     if i0 > i1 or j0 > j1:
         return 0
     sa = field_at(h.field, x, y) if shadowed else 0.0
+    far = math.sqrt(max(x - cells.ox, cells.ox + cols * cells.res - x) ** 2
+                    + max(y - cells.oy, cells.oy + rows * cells.res - y) ** 2) + cells.res  # past every cell
+    near_reach = node_reach(sa + top_field if shadowed else 0.0, min(reach, far), h)
+    if near_reach < reach:  # the node's own reach: a smaller box, fewer walls to shade
+        reach = near_reach
+        i0, i1, j0, j1 = node_box(x, y, reach, cells, rows, cols)
+        i0, i1, j0, j1 = max(i0, window[0]), min(i1, window[1]), max(j0, window[2]), min(j1, window[3])
+        if i0 > i1 or j0 > j1:
+            return 0
     at_cell, at_block = cells.field, cells.block_field  # out of the loops (see candidate_margins)
     walled = h.wall_db > 0.0
     shadows = np.empty(BINS if model_is_path_loss and walled else 0)
-    blocked = 0  # cells walked that allowed no wall and met one: the shadows are drawn after SHADE_AFTER of them
+    lit = np.empty(BINS if model_is_path_loss and walled else 0)
+    asked = 0  # cells asked about walls: the shadows and clear lines are drawn after SHADE_AFTER of them
     near2 = (NEAR * h.walls.res) ** 2
     for bi in range(i0 // BLOCK, i1 // BLOCK + 1):
         for bj in range(j0 // BLOCK, j1 // BLOCK + 1):
-            gap = _block_gap(x, y, cells, bi, bj, rows, cols)
+            gap = block_gap(x, y, cells, bi, bj, rows, cols)
             if gap > reach:
                 continue
             if model_bound(gap, sa + at_block[bi, bj] if shadowed else 0.0, h) < 0.0:
@@ -305,17 +306,18 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h):  # pragma:
                         m = open_margin(d, sa, sb, h.r_c, h.n10, h.corr, h.clip)
                         if walled and m >= 0.0:
                             dd = (cx - x) * (cx - x) + (cy - y) * (cy - y)
-                            lone = m < h.wall_db and dd > near2  # no wall allowed
-                            if lone and blocked >= SHADE_AFTER:  # in a wall's shadow: not heard
-                                if blocked == SHADE_AFTER:
+                            if asked < SHADE_AFTER:
+                                m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)
+                                asked += 1
+                                if asked == SHADE_AFTER:
                                     shade(x, y, reach, h.wall_bits, h.walls.blocked.shape[1], h.walls.ox,
-                                          h.walls.oy, h.walls.res, shadows)
-                                    blocked += 1
-                                if behind(shadows, cx - x, cy - y, dd):
-                                    continue
-                            m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)
-                            if lone and m < 0.0 and blocked < SHADE_AFTER:
-                                blocked += 1
+                                          h.walls.oy, h.walls.res, shadows, lit)
+                            elif dd > 0.0 and clear(lit, cx - x, cy - y, dd):  # no wall on the way
+                                pass
+                            elif m < h.wall_db and dd > near2 and behind(shadows, cx - x, cy - y, dd):
+                                continue  # no wall allowed, and in a wall's shadow: not heard
+                            else:
+                                m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)
                     else:
                         m = model_margin(x, y, cx, cy, d, sa, sb, 0.0, h)
                     if m >= 0.0:
@@ -340,9 +342,10 @@ def heard_cells(xy, keys, mask, grid, reach, covered, owner, window, hearing):  
     cells, h = _named_cells(grid), named_inputs(hearing)
     owned = owner.shape[0] > 0
     total = 0
+    top_field = cells.block_field.max()
     for k in range(xy.shape[0]):
         key = keys[k] if owned else np.int32(-1)
-        total += _mark_node(xy[k, 0], xy[k, 1], mask, cells, reach, covered, owner, key, window, h)
+        total += _mark_node(xy[k, 0], xy[k, 1], mask, cells, reach, covered, owner, key, window, h, top_field)
     return total
 
 
@@ -362,12 +365,12 @@ def best_margin_grid(xy, grid, out, floor_db, reach, hearing):  # pragma: no cov
         x = xy[k, 0]
         y = xy[k, 1]
         sa = field_at(h.field, x, y) if shadowed else 0.0
-        i0, i1, j0, j1 = _node_box(x, y, reach, cells, rows, cols)
+        i0, i1, j0, j1 = node_box(x, y, reach, cells, rows, cols)
         if i0 > i1 or j0 > j1:
             continue
         for bi in range(i0 // BLOCK, i1 // BLOCK + 1):
             for bj in range(j0 // BLOCK, j1 // BLOCK + 1):
-                gap = _block_gap(x, y, cells, bi, bj, rows, cols)
+                gap = block_gap(x, y, cells, bi, bj, rows, cols)
                 if model_bound(gap, sa + at_block[bi, bj] if shadowed else 0.0, h) < floor_db:
                     continue
                 for i in range(max(bi * BLOCK, i0), min(bi * BLOCK + BLOCK, i1 + 1)):

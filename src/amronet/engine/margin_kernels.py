@@ -66,7 +66,8 @@ def margin_kernels(margin: Callable, bound: Callable | None) -> MarginKernels:
     if key not in _COPIES:
         tag = _tag(margin, bound)
         swap = {"model_margin": margin, "model_bound": no_bound if bound is None else bound}
-        mark = _copy(hearing._mark_node, {**swap, "model_is_path_loss": False}, tag)
+        reach = _copy(hearing.node_reach, swap, tag)
+        mark = _copy(hearing._mark_node, {**swap, "model_is_path_loss": False, "node_reach": reach}, tag)
         _COPIES[key] = MarginKernels(_copy(links.candidate_margins, swap, tag),
                                      _copy(hearing.heard_cells, {"_mark_node": mark}, tag),
                                      _copy(hearing.best_margin_grid, swap, tag))

@@ -16,6 +16,13 @@ strictly inside the range of a convex square it does not start in passes through
 it no farther than its farthest corner. The rounding of these few operations (of the order of 1e-15) is far below
 the margins, and the walk itself visits every cell whose inside the segment crosses by a hundredth of a cell (its
 leaps cross free cells only). Wall cells less than :data:`NEAR` cells from the node cast no shadow.
+
+The same pass also draws where the node's lines are certainly **clear**: per bin, the squared distance to the nearest
+wall cell, grown by :data:`SHRINK` of a cell on every side, whose directions reach into the bin (with :data:`EPS` to
+spare). :func:`clear` tells whether a point is nearer than that (by a relative 1e-9): the segment to it then comes
+no nearer than a hundredth of a cell to any wall cell, so the walk, which visits only cells the segment passes
+through (rounding aside, of the order of 1e-12 of a cell), counts no wall. That answers the cells in sight of the
+node without a walk or a box test. A node in a grown wall cell has no clear line.
 """
 
 from __future__ import annotations
@@ -26,7 +33,7 @@ import numpy as np
 from numba import njit
 from numba import uint64 as _u
 
-__all__ = ["BINS", "behind", "pseudo_angle", "shade"]
+__all__ = ["BINS", "behind", "clear", "pseudo_angle", "shade"]
 
 BINS = 4096
 """Bins of directions around a node (a quarter turn is :data:`BINS` / 4 of them)."""
@@ -37,6 +44,10 @@ NEAR = 1.5
 """Wall cells nearer the node than this many cells cast no shadow."""
 EPS = 1e-9
 """Pseudo-angle to spare at both ends of a wall cell's range of directions."""
+_DE_BRUIJN = np.uint64(0x03F79D71B4CB0A89)
+_LOWEST = np.zeros(64, np.int64)  # the index of a word's lowest set bit, by its de Bruijn product's top six bits
+_LOWEST[[((1 << k) * 0x03F79D71B4CB0A89 % 2**64) >> 58 for k in range(64)]] = np.arange(64)
+_ONES = np.uint64(0xFFFFFFFFFFFFFFFF)
 
 
 @njit(cache=True, inline="always")
@@ -52,16 +63,19 @@ def pseudo_angle(dx, dy):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def shade(x, y, reach, bits, cols, ox, oy, res, out):  # pragma: no cover - numba
-    """Fill ``out`` (:data:`BINS` floats) with the shadows of the wall cells within ``reach`` of ``(x, y)``.
+def shade(x, y, reach, bits, cols, ox, oy, res, out, lit):  # pragma: no cover - numba
+    """Fill ``out`` and ``lit`` (:data:`BINS` floats each) with the shadows and the clear lines of ``(x, y)``.
 
     ``bits``: the map's bit grids (:func:`~amronet.engine.wall_bits.wall_bits`), ``cols`` its columns, ``(ox, oy)``
-    and ``res`` its origin and cell size. ``out[b]``: the squared distance beyond which the lines in bin ``b``'s
-    directions have crossed a wall cell (``inf``: none known).
+    and ``res`` its origin and cell size; the wall cells within ``reach`` count. ``out[b]``: the squared distance
+    beyond which the lines in bin ``b``'s directions have crossed a wall cell (``inf``: none known). ``lit[b]``:
+    the squared distance within which they are clear (see the module doc; read by :func:`clear` only).
     """
     out[:] = np.inf
+    lit[:] = np.inf
     rows = bits.shape[1]
     if rows == 0 or cols == 0 or not (abs(x) + abs(y) + reach < 1e15):
+        lit[:] = 0.0
         return
     r0 = max(int(math.floor((y - reach - oy) / res)), 0)
     r1 = min(int(math.floor((y + reach - oy) / res)), rows - 1)
@@ -77,18 +91,21 @@ def shade(x, y, reach, bits, cols, ox, oy, res, out):  # pragma: no cover - numb
         fy = max(dy0 * dy0, dy1 * dy1)
         for w in range(c0 >> 6, (c1 >> 6) + 1):
             word = bits[0, _u(r), _u(w)]
-            if word == 0:
-                continue
-            for k in range(64):
-                if not (word >> _u(k)) & _u(1):
-                    continue
-                c = w * 64 + k
-                if c < c0 or c > c1:
-                    continue
+            if w == c0 >> 6:
+                word &= _ONES << _u(c0 & 63)
+            if w == c1 >> 6:
+                word &= _ONES >> _u(63 - (c1 & 63))
+            while word != _u(0):  # the word's wall cells, lowest first
+                low = word & (~word + _u(1))
+                word ^= low
+                c = w * 64 + _LOWEST[(low * _DE_BRUIJN) >> _u(58)]
                 dx0 = ox + c * res + s - x
                 dx1 = ox + (c + 1) * res - s - x
                 gx = dx0 if dx0 > 0.0 else (-dx1 if dx1 < 0.0 else 0.0)
                 gap2 = gx * gx + gy * gy
+                if _light(dx0 - 2.0 * s, dx1 + 2.0 * s, dy0 - 2.0 * s, dy1 + 2.0 * s, far2, lit):
+                    lit[:] = 0.0  # the node is in a grown wall cell: no line known clear
+                    lit[0] = -1.0  # (and no more to draw)
                 if gap2 < near2 or gap2 > far2:
                     continue
                 f2 = max(dx0 * dx0, dx1 * dx1) + fy
@@ -111,6 +128,54 @@ def shade(x, y, reach, bits, cols, ox, oy, res, out):  # pragma: no cover - numb
                     i = b - BINS if b >= BINS else b
                     if f2 < out[i]:
                         out[i] = f2
+
+
+@njit(cache=True, inline="always")
+def _light(dx0, dx1, dy0, dy1, far2, lit):  # pragma: no cover - numba
+    """Lower ``lit`` to the square ``[dx0, dx1] x [dy0, dy1]``'s nearest point over its directions' bins.
+
+    Returns True when the square holds the node (``lit`` untouched). Nothing is drawn for a square farther than
+    ``sqrt(far2)`` (no segment within reach meets it), nor once ``lit[0] < 0``.
+    """
+    if lit[0] < 0.0:
+        return False
+    gx = dx0 if dx0 > 0.0 else (-dx1 if dx1 < 0.0 else 0.0)
+    gy = dy0 if dy0 > 0.0 else (-dy1 if dy1 < 0.0 else 0.0)
+    if gx == 0.0 and gy == 0.0:
+        return True
+    g2 = gx * gx + gy * gy
+    if g2 > far2:
+        return False
+    a0 = pseudo_angle(dx0, dy0)
+    a1 = pseudo_angle(dx1, dy0)
+    a2 = pseudo_angle(dx0, dy1)
+    a3 = pseudo_angle(dx1, dy1)
+    lo = min(min(a0, a1), min(a2, a3))
+    hi = max(max(a0, a1), max(a2, a3))
+    if hi - lo > 2.0:  # across +x (a square without the node spans less than a half turn)
+        a0 += 4.0 if a0 < 2.0 else 0.0
+        a1 += 4.0 if a1 < 2.0 else 0.0
+        a2 += 4.0 if a2 < 2.0 else 0.0
+        a3 += 4.0 if a3 < 2.0 else 0.0
+        lo = min(min(a0, a1), min(a2, a3))
+        hi = max(max(a0, a1), max(a2, a3))
+    for b in range(int(math.floor((lo - EPS) * _SCALE)), int(math.floor((hi + EPS) * _SCALE)) + 1):
+        i = b % BINS
+        if g2 < lit[i]:
+            lit[i] = g2
+    return False
+
+
+@njit(cache=True, inline="always")
+def clear(lit, dx, dy, dd):  # pragma: no cover - numba
+    """Whether the segment to ``(dx, dy) != (0, 0)`` from the node, ``dd`` its squared length, is clear of walls.
+
+    ``lit``: :func:`shade`'s clear lines. True: the wall walk counts no wall on it.
+    """
+    b = int(pseudo_angle(dx, dy) * _SCALE)
+    if b >= BINS:
+        b = BINS - 1
+    return dd < lit[b] * (1.0 - 1e-9)
 
 
 @njit(cache=True, inline="always")
