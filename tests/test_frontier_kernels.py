@@ -15,6 +15,7 @@ from amronet.algorithms.agent_assisted.explorers.frontier.knowledge import (
     update_passable,
 )
 from amronet.algorithms.agent_assisted.explorers.frontier.planning import (
+    FRONTIER,
     search_buffers,
     search_target,
     update_window_counts,
@@ -154,6 +155,50 @@ def test_the_search_leaves_its_scratch_buffers_as_it_found_them():
             assert fresh == reused
             assert (search[0] == -1).all() and (trav == kept).all()
 
+
+
+def test_a_search_with_no_cell_marked_finds_nothing_without_searching():
+    # everything seen and covered: no frontier and no uncovered cell is marked, so no cell anywhere is a target; the
+    # search answers at once, leaving even its scratch depths and queue as they were (a search would write them)
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        rows, cols = (int(v) for v in rng.integers(3, 20, size=2))
+        score, _, _ = random_grid(rng, rows, cols)
+        seen = np.ones((rows, cols), dtype=bool)
+        trav = traversable(score, seen, np.zeros((rows, cols), bool), *clearance_offsets(0.3, RES))
+        marks, counts = window_buffers((rows, cols))
+        every = np.ones(rows, dtype=bool)
+        update_window_counts(score, seen, np.ones((rows, cols), dtype=bool), 2, every, every, marks, counts)
+        assert not counts.any()
+        search = search_buffers(rows * cols)
+        search[1:] = -7
+        before, kept, path = search.copy(), trav.copy(), np.full(rows * cols, -5, np.int64)
+        sr, sc = int(rng.integers(rows)), int(rng.integers(cols))
+        got = search_target(score, seen, trav, (np.zeros((rows, cols), bool), counts, rng.random((rows, cols)), 2),
+                            (np.full((0, 2), -1, dtype=np.int64), 1.0), sr, sc, 3, search, path)
+        assert got == (0, -1, 0)
+        assert (search == before).all() and (trav == kept).all() and (path == -5).all()
+
+
+def test_a_search_stops_at_its_target_when_no_gap_farther_out_could_make_up_for_the_depth():
+    # all covered (every cell's gap the same, as gap_to_uncovered gives it then): the nearest target wins, and the
+    # search stops there instead of crossing the whole open floor to the depth of its score
+    rows = cols = 40
+    score = np.zeros((rows, cols), dtype=np.int16)
+    seen = np.ones((rows, cols), dtype=bool)
+    seen[5, 5] = False  # an unknown cell: its free neighbours are frontier cells
+    trav = traversable(score, seen, np.zeros((rows, cols), bool), *clearance_offsets(0.3, RES))
+    marks, counts = window_buffers((rows, cols))
+    every = np.ones(rows, dtype=bool)
+    update_window_counts(score, seen, np.ones((rows, cols), dtype=bool), 2, every, every, marks, counts)
+    search = search_buffers(rows * cols)
+    search[2] = -7
+    path = np.zeros(rows * cols, np.int64)
+    n, goal, kind = search_target(score, seen, trav, (np.zeros((rows, cols), bool), counts,
+                                                       np.full((rows, cols), float(rows + cols)), 2),
+                                  (np.full((0, 2), -1, dtype=np.int64), 1.0), 5, 12, 3, search, path)
+    assert kind == FRONTIER and goal == 5 * cols + 8 and n == 4 and path[n - 1] == goal
+    assert (search[2] != -7).sum() < 200  # queued: the cells a few steps from the start, not the whole floor
 
 def test_the_navigation_kernel_unpacks_its_named_inputs_in_the_order_of_their_fields():
     # navigate() hands the kernel its named tuples as plain tuples, which the kernel unpacks by position

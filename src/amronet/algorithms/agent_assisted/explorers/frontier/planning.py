@@ -246,11 +246,14 @@ def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, pa
         path: Gets the flat cells of the path, start excluded, goal last.
 
     Returns:
-        ``(n, goal, kind)``: path length, flat goal cell (-1: none) and its target kind.
+        ``(n, goal, kind)``: path length, flat goal cell (-1: none) and its target kind; ``(0, -1, 0)`` at once,
+        nothing searched, when no cell is marked in ``counts`` (an agent with nothing left to explore replans often).
     """
     visited, counts, gap, win = targets
     goals, claim_r2 = claims
     rows, cols = score.shape
+    if not (counts[:, :, cols] != 0).any():  # no cell marked (a row's last count is its total): no target anywhere
+        return 0, -1, 0
     parent = search[0]
     depth = search[1]
     queue = search[2]
@@ -272,6 +275,7 @@ def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, pa
     tail = 1
     best = -1
     best_score = np.inf
+    floor = 0.0  # once a target is found: no score below depth + max(0, least gap), so none beats it farther out
     best_kind = 0
     backup = -1
     backup_score = np.inf
@@ -280,7 +284,7 @@ def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, pa
         u = queue[head]
         head += 1
         d = depth[u]
-        if d >= best_score:
+        if d + floor >= best_score:
             break  # nothing farther out can score better
         r = u // cols
         c = u - r * cols
@@ -303,6 +307,8 @@ def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, pa
                 if s < backup_score:
                     backup, backup_score, backup_kind = u, s, kind
             elif s < best_score:
+                if best < 0:
+                    floor = max(0.0, gap.min())
                 best, best_score, best_kind = u, s, kind
         # neighbours in a fixed order: E, N, W, S, then NE, NW, SW, SE (no corner cutting)
         e = c + 1 < cols and trav[r, c + 1]
