@@ -37,7 +37,7 @@ import numpy as np
 from numba import njit, prange
 from numba import uint64 as _u  # unsigned indices: numba then skips its negative-index wraparound code
 
-__all__ = ["rows_threaded", "search_kernel", "sorted_table"]
+__all__ = ["candidate_rows", "filter_rows", "rows_threaded", "search_kernel", "sorted_table"]
 
 _EPS = 2.0**-52
 _MIN_CELL = 1e-150  # below this r * r is subnormal and loses relative precision; cells never get smaller
@@ -317,3 +317,49 @@ def sorted_table(xy, r, group, n_groups):  # pragma: no cover - numba
     ustart, pb = _upper_pairs(cs, sx, sy, r * r, nx, ny, n_groups)
     qp, qi = _sorted_point_table(ustart, pb, np.arange(sidx.shape[0], dtype=np.int32))
     return True, qp, qi, sidx, sx, sy
+
+
+@njit(cache=True)
+def candidate_rows(xy, r, group, n_groups):  # pragma: no cover - numba
+    """Steps 1 to 4 of :func:`search_kernel` without the distances: ``(ok, indptr, indices)``, the pairs within ``r``.
+
+    The candidates of :func:`filter_rows` (a skin table, :mod:`amronet.engine.skin_table`).
+    """
+    ok, xmin, ymin, inv_h, nx, ny = _grid(xy, r, n_groups)
+    if not ok:
+        return False, np.zeros(1, np.int64), np.empty(0, np.int32)
+    cs, sidx, sx, sy = _cell_sort(xy, group, n_groups, xmin, ymin, inv_h, nx, ny)
+    ustart, pb = _upper_pairs(cs, sx, sy, r * r, nx, ny, n_groups)
+    qp, qi = _sorted_point_table(ustart, pb, sidx)
+    indptr, indices = _transpose_by_index(qp, qi, sidx)
+    return True, indptr, indices
+
+
+@njit(cache=True)
+def filter_rows(xy, r, cand_indptr, cand_indices, indptr, indices, sq, dist):  # pragma: no cover - numba
+    """The table of :func:`search_kernel` at radius ``r`` from candidate rows holding every pair within ``r``.
+
+    Row by row, the candidates (ascending) linked by :func:`search_kernel`'s test ``dx * dx + dy * dy <= r * r``, with
+    its distances (the same operations on the same coordinates: the same table bit for bit). Written into
+    ``indptr`` ``(N + 1,)`` and the first entries of ``indices``, ``sq`` (scratch) and ``dist``, each as long as the
+    candidates; returns ``(indptr, indices, dist)``, the last two cut to the table's length.
+    """
+    n = cand_indptr.shape[0] - 1
+    r2 = r * r
+    indptr[0] = 0
+    cnt = 0
+    for i in range(n):
+        xi = xy[_u(i), 0]
+        yi = xy[_u(i), 1]
+        for k in range(cand_indptr[_u(i)], cand_indptr[_u(i + 1)]):  # branch-free append, as _upper_pairs
+            j = cand_indices[_u(k)]
+            dx = xy[_u(j), 0] - xi
+            dy = xy[_u(j), 1] - yi
+            d2 = dx * dx + dy * dy
+            indices[_u(cnt)] = j
+            sq[_u(cnt)] = d2
+            cnt += d2 <= r2
+        indptr[_u(i + 1)] = cnt
+    for k in range(cnt):
+        dist[_u(k)] = math.sqrt(sq[_u(k)])
+    return indptr, indices[:cnt], dist[:cnt]

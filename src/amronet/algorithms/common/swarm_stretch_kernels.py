@@ -20,9 +20,10 @@ from numba import njit
 
 from amronet.engine.kernel_data import Csr
 from amronet.engine.neighbours import search_kernel
+from amronet.engine.skin_table import skin_search
 
 __all__ = ["BAD_DRAW", "CANDIDATES", "NON_FINITE", "QUIET", "SETTLING", "Books", "Radio", "after_step",
-           "settling_changed"]
+           "after_step_skin", "settling_changed"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -94,3 +95,17 @@ def after_step(xy, state, radio, books):  # pragma: no cover - numba
     if settling_changed(state, books):
         return SETTLING, Csr(indptr, indices, dist)
     return QUIET, Csr(indptr, indices, dist)
+
+
+@njit(cache=True, inline="always")
+def after_step_skin(xy, state, radio, books, skin, reuse):  # pragma: no cover - numba
+    """:func:`after_step` with the radio's table kept through a skin: ``(how, table, skin)``, the same table.
+
+    ``skin`` and ``reuse``: as :func:`~amronet.engine.skin_table.skin_search` takes them.
+    """
+    ok, indptr, indices, dist, skin = skin_search(xy, radio.reach, radio.group_ids, radio.n_groups, skin, reuse)
+    if not ok:
+        return NON_FINITE, Csr(indptr, indices, dist), skin
+    if settling_changed(state, books):
+        return SETTLING, Csr(indptr, indices, dist), skin
+    return QUIET, Csr(indptr, indices, dist), skin
