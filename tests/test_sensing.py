@@ -77,13 +77,13 @@ def test_the_ring_in_one_pass_is_the_grid_then_the_bodies_bit_for_bit():
     from numba import njit
 
     from amronet.engine.kernel_data import grid_of
-    from amronet.engine.sensing import QuietRing, cast_ring_one, quiet_cells
+    from amronet.engine.sensing import QuietRing, cast_rings, quiet_cells
 
     @njit
     def rings(grid, ring, xy, heading, radius, csr, out):
         dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
-        for i in range(xy.shape[0]):
-            cast_ring_one(grid, ring, i, xy, heading, radius, radius.max(), True, csr, dirs, out[i])
+        who = np.arange(xy.shape[0])
+        cast_rings(grid, ring, who, xy, heading, radius, radius.max(), True, csr, dirs, out)
 
     omap, max_range = _cluttered_map(), 0.14
     rng = np.random.default_rng(1)

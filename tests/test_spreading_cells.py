@@ -2,10 +2,10 @@
 
 import numpy as np
 
-from amronet.algorithms.self_spreading.cells import QUIET_RING, ROOMY, Roomy, cell_flags, drive_roomy
+from amronet.algorithms.self_spreading.cells import QUIET_RING, ROOMY, Roomy, cell_flags, drive_rooms
 from amronet.engine.kernel_data import grid_of
 from amronet.engine.motion import drive_one
-from amronet.engine.sensing import QuietRing, beam_angles, cast_ring_one, quiet_cells
+from amronet.engine.sensing import QuietRing, beam_angles, cast_rings, quiet_cells
 from helpers import box_map
 
 SENSOR_RANGE = 0.14
@@ -44,8 +44,8 @@ def test_a_ring_reads_only_bit_0_of_its_quiet_cells():
     @njit
     def rings(grid, ring, xy, heading, radius, csr, out):
         dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
-        for i in range(xy.shape[0]):
-            cast_ring_one(grid, ring, i, xy, heading, radius, radius.max(), False, csr, dirs, out[i])
+        who = np.arange(xy.shape[0])
+        cast_rings(grid, ring, who, xy, heading, radius, radius.max(), False, csr, dirs, out)
 
     omap = _cluttered_map()
     grid = grid_of(omap)
@@ -81,12 +81,48 @@ def test_a_move_by_the_flags_is_the_move_by_the_clearance_bit_for_bit():
     for drive in ("flags", "clearance"):
         xy = start.copy()
         refused = np.empty(n, dtype=bool)
-        for i in range(n):
-            if drive == "flags":
-                refused[i], _ = drive_roomy(grid, flags, ROOM, i, heading[i], length[i], xy, radius, False, csr, 1.0)
-            else:
-                refused[i], _ = drive_one(grid, i, heading[i], length[i], xy, radius, False, csr, 1.0)
-        outcomes.append((xy, refused))
-    np.testing.assert_array_equal(outcomes[0][0], outcomes[1][0])
-    np.testing.assert_array_equal(outcomes[0][1], outcomes[1][1])
+        distance = np.zeros(n)
+        if drive == "flags":
+            drive_rooms(grid, flags, ROOM, np.arange(n), heading, length, xy, radius, False, csr, 1.0,
+                        (refused, distance))
+        else:
+            for i in range(n):
+                refused[i], distance[i] = drive_one(grid, i, heading[i], length[i], xy, radius, False, csr, 1.0)
+        outcomes.append((xy, refused, distance))
+    for got, want in zip(*outcomes, strict=True):
+        np.testing.assert_array_equal(got, want)
     assert 0.02 < outcomes[0][1].mean() < 0.9  # walls refuse some moves, not all
+
+
+def test_moves_among_bodies_by_the_flags_are_drive_one_in_turn_bit_for_bit():
+    """With bodies the moves go one after another, each against the others as they stand: drive_one's, in order."""
+    from amronet.engine.radio import UnitDisk
+
+    omap = _cluttered_map()
+    grid = grid_of(omap)
+    flags = cell_flags(omap, grid, SENSOR_RANGE, ROOM)
+    rng = np.random.default_rng(4)
+    n = 1000
+    start = _free_points(omap, rng, n)
+    heading = rng.uniform(-np.pi, np.pi, n)
+    radius = np.full(n, ROOM.radius)
+    table = UnitDisk(0.2).update(start)
+    csr = (table.indptr, table.indices, table.dist)
+    movers = np.sort(rng.choice(n, size=800, replace=False))
+    length = rng.choice([0.0, 0.01, ROOM.length], size=len(movers))
+    near = 2.0 * ROOM.radius + 2.0 * ROOM.length
+    outcomes = []
+    for drive in ("flags", "clearance"):
+        xy = start.copy()
+        refused = np.zeros(n, dtype=bool)
+        distance = np.zeros(n)
+        if drive == "flags":
+            drive_rooms(grid, flags, ROOM, movers, heading, length, xy, radius, True, csr, near, (refused, distance))
+        else:
+            for m, i in enumerate(movers):
+                refused[i], distance[i] = drive_one(grid, i, heading[i], length[m], xy, radius, True, csr, near)
+        outcomes.append((xy, refused, distance))
+    for got, want in zip(*outcomes, strict=True):
+        np.testing.assert_array_equal(got, want)
+    refused_steps = outcomes[0][1][movers] & (length > 0)
+    assert 0.1 < (outcomes[0][2] > 0).mean() and 0.05 < refused_steps.mean() < 0.8  # bodies and walls refuse some

@@ -21,7 +21,7 @@ from amronet.engine.radio import NeighbourTable
 from amronet.world.occupancy import OccupancyMap
 from amronet.world.space import clearance
 
-__all__ = ["QuietRing", "beam_angles", "body_table", "cast_bodies_one", "cast_grid_one", "cast_ring_one", "quiet_cells",
+__all__ = ["QuietRing", "beam_angles", "body_table", "cast_bodies_one", "cast_grid_one", "cast_rings", "quiet_cells",
            "range_scan"]
 
 QUIET_MARGIN = 0.01
@@ -30,7 +30,7 @@ points or cells."""
 
 
 class QuietRing(NamedTuple):
-    """A sensor ring as :func:`cast_ring_one` reads it: the beams and where they cannot meet the grid."""
+    """A sensor ring as :func:`cast_rings` reads it: the beams and where they cannot meet the grid."""
 
     angles: np.ndarray
     """``(n_beams,)``: the beams' angles from the heading (:func:`beam_angles`)."""
@@ -140,81 +140,86 @@ def quiet_cells(omap: OccupancyMap, max_range: float) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def cast_ring_one(grid, ring, i, xy, heading, radius, big, bodies, csr, dirs, out):  # pragma: no cover - numba
-    """Robot ``i``'s ring into ``out``: :func:`cast_grid_one`, then (``bodies``) :func:`cast_bodies_one`, bit for bit.
+def cast_rings(grid, ring, who, xy, heading, radius, big, bodies, csr, dirs, out):  # pragma: no cover - numba
+    """The rings of the robots ``who`` into ``out`` ``(len(who), n_beams)``: the grid's beams, then the bodies'.
 
-    ``grid``: the map's :class:`~amronet.engine.kernel_data.Grid`; ``ring``: a :class:`QuietRing`; ``radius`` and
-    ``big``: every robot's body radius and the largest; ``csr``: ``(indptr, indices, dist)``, the bodies near each
-    robot; ``dirs``: scratch ``(cos, sin)``, ``(n_beams,)`` each. Where the robot's cell is quiet the grid's beams
+    Bit for bit :func:`cast_grid_one`, then (``bodies``) :func:`cast_bodies_one`. ``grid``: the map's
+    :class:`~amronet.engine.kernel_data.Grid`; ``ring``: a :class:`QuietRing`; ``radius`` and ``big``: every
+    robot's body radius and the largest; ``csr``: ``(indptr, indices, dist)``, the bodies near each
+    robot; ``dirs``: scratch ``(cos, sin)``, ``(n_beams,)`` each. Where a robot's cell is quiet the grid's beams
     read the range without a march, and each beam's direction is computed once, for the grid and the bodies, and
-    only when one of them needs it: the same numbers, fewer sines.
+    only when one of them needs it: the same numbers, fewer sines. The loop over the robots is written here, not
+    around a per-robot function: numba counts the references of every array handed to a function, even an inlined
+    one, at each call, and at N = 3 000 those atomic counts took longer than the rings themselves.
     """
     angles, max_range, quiet = ring
     indptr, indices, dist = csr
     cos_a, sin_a = dirs
     blocked, clear, ox, oy, res = grid
-    x = xy[i, 0]
-    y = xy[i, 1]
-    h = heading[i]
     rows, cols = blocked.shape
-    c0 = int(math.floor((x - ox) / res))
-    r0 = int(math.floor((y - oy) / res))
-    have = False
-    # the quiet bit first: one byte, where blocked and clear take a cache line each (a quiet cell is free)
-    if 0 <= r0 < rows and 0 <= c0 < cols and ((quiet[r0, c0] & 1) != 0 or (not blocked[r0, c0] and
-                                                                           clear[r0, c0] - res >= max_range)):
-        for k in range(angles.shape[0]):
-            out[k] = max_range
-    else:
-        have = True
-        for k in range(angles.shape[0]):  # cast_grid_one's march
-            a = h + angles[k]
-            dx = math.cos(a)
-            dy = math.sin(a)
-            cos_a[k] = dx
-            sin_a[k] = dy
-            t = 0.0
-            hit = max_range
-            while t < max_range:
-                px = x + dx * t
-                py = y + dy * t
-                c = int(math.floor((px - ox) / res))
-                r = int(math.floor((py - oy) / res))
-                if r < 0 or r >= rows or c < 0 or c >= cols or blocked[r, c]:
-                    hit = t
-                    break
-                step = clear[r, c] - res
-                if step < 0.5 * res:
-                    step = 0.5 * res
-                t += step
-            out[k] = min(hit, max_range)
-    if not bodies:
-        return
-    for e in range(indptr[i], indptr[i + 1]):  # cast_bodies_one
-        if dist[e] > max_range + big:
-            continue
-        j = indices[e]
-        vx = xy[j, 0] - x
-        vy = xy[j, 1] - y
-        rj = radius[j]
-        dist2 = vx * vx + vy * vy
-        if dist2 > (max_range + rj) ** 2:
-            continue
-        for k in range(angles.shape[0]):
-            if not have:
+    for m in range(who.shape[0]):
+        i = who[m]
+        x = xy[i, 0]
+        y = xy[i, 1]
+        h = heading[i]
+        c0 = int(math.floor((x - ox) / res))
+        r0 = int(math.floor((y - oy) / res))
+        have = False
+        # the quiet bit first: one byte, where blocked and clear take a cache line each (a quiet cell is free)
+        if 0 <= r0 < rows and 0 <= c0 < cols and ((quiet[r0, c0] & 1) != 0 or (not blocked[r0, c0] and
+                                                                               clear[r0, c0] - res >= max_range)):
+            for k in range(angles.shape[0]):
+                out[m, k] = max_range
+        else:
+            have = True
+            for k in range(angles.shape[0]):  # cast_grid_one's march
                 a = h + angles[k]
-                cos_a[k] = math.cos(a)
-                sin_a[k] = math.sin(a)
-            tca = vx * cos_a[k] + vy * sin_a[k]
-            if tca <= 0.0:
+                dx = math.cos(a)
+                dy = math.sin(a)
+                cos_a[k] = dx
+                sin_a[k] = dy
+                t = 0.0
+                hit = max_range
+                while t < max_range:
+                    px = x + dx * t
+                    py = y + dy * t
+                    c = int(math.floor((px - ox) / res))
+                    r = int(math.floor((py - oy) / res))
+                    if r < 0 or r >= rows or c < 0 or c >= cols or blocked[r, c]:
+                        hit = t
+                        break
+                    step = clear[r, c] - res
+                    if step < 0.5 * res:
+                        step = 0.5 * res
+                    t += step
+                out[m, k] = min(hit, max_range)
+        if not bodies:
+            continue
+        for e in range(indptr[i], indptr[i + 1]):  # cast_bodies_one
+            if dist[e] > max_range + big:
                 continue
-            d2 = dist2 - tca * tca
-            if d2 > rj * rj:
+            j = indices[e]
+            vx = xy[j, 0] - x
+            vy = xy[j, 1] - y
+            rj = radius[j]
+            dist2 = vx * vx + vy * vy
+            if dist2 > (max_range + rj) ** 2:
                 continue
-            t = max(tca - math.sqrt(rj * rj - d2), 0.0)
-            if t < out[k]:
-                out[k] = t
-        have = True
+            for k in range(angles.shape[0]):
+                if not have:
+                    a = h + angles[k]
+                    cos_a[k] = math.cos(a)
+                    sin_a[k] = math.sin(a)
+                tca = vx * cos_a[k] + vy * sin_a[k]
+                if tca <= 0.0:
+                    continue
+                d2 = dist2 - tca * tca
+                if d2 > rj * rj:
+                    continue
+                t = max(tca - math.sqrt(rj * rj - d2), 0.0)
+                if t < out[m, k]:
+                    out[m, k] = t
+            have = True
 
 
 @njit(cache=True)

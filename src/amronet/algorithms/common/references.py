@@ -35,7 +35,8 @@ def check_loss_band(loss_margin: float, r_c: float, step: float, who: str) -> fl
         )
     return r_c - band
 
-__all__ = ["ReferenceView", "best_reference_margin", "check_loss_band", "track_references", "track_row"]
+__all__ = ["ReferenceView", "best_reference_margin", "check_loss_band", "track_references", "track_row",
+           "track_state_rows"]
 
 
 @dataclass(frozen=True)
@@ -109,6 +110,60 @@ def track_row(i, cur, is_reference, status, indptr, indices, dist, want_other): 
         if chosen >= 0 and status[chosen] >= 0:
             o, od = _nearest_other(lo, hi, status[chosen], is_reference, status, indices, dist)
     return chosen, best_d, o, od
+
+
+@njit(cache=True)
+def track_state_rows(state, tracking_state, current, is_reference, status, indptr, indices, dist, want_other,
+                     out):  # pragma: no cover - numba
+    """:func:`track_row` for every robot ``i`` with ``state[i] == tracking_state``, in index order; how many.
+
+    ``out``: ``(who, new_current, nearest_d, other)``. Robot ``i``'s current reference is ``current[i]``; the
+    ``k``-th such robot goes into ``who[k]``, its new
+    reference, nearest reference distance and reference of another status into ``new_current[k]``,
+    ``nearest_d[k]`` and ``other[k]``. :func:`track_row`'s operations written out in the loop, bit for bit: numba
+    counts the references of the arrays handed to a function at every call, and at N = 3 000 those counts cost
+    as much as the tracking itself.
+    """
+    who, new_current, nearest_d, other = out
+    k = 0
+    for i in range(state.shape[0]):
+        if state[i] != tracking_state:
+            continue
+        cur = current[i]
+        lo = indptr[i]
+        hi = indptr[i + 1]
+        s_cur = status[cur] if cur >= 0 else -1
+        still = False
+        best = -1
+        best_d = np.inf
+        o = -1
+        od = np.inf
+        for e in range(lo, hi):
+            j = indices[e]
+            if not is_reference[j]:
+                continue
+            de = dist[e]
+            if j == cur:
+                still = True
+            if de < best_d:
+                best_d = de
+                best = j
+            if want_other:
+                sj = status[j]
+                if sj >= 0 and s_cur >= 0 and sj != s_cur and de < od:
+                    od = de
+                    o = j
+        chosen = cur if still else best
+        if want_other and chosen != cur:
+            o = -1
+            if chosen >= 0 and status[chosen] >= 0:
+                o, od = _nearest_other(lo, hi, status[chosen], is_reference, status, indices, dist)
+        who[k] = i
+        new_current[k] = chosen
+        nearest_d[k] = best_d
+        other[k] = o
+        k += 1
+    return k
 
 
 @njit(cache=True)

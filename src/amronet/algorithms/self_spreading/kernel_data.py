@@ -155,7 +155,7 @@ class Moves(NamedTuple):
     """``(N, 2)``, the threaded step's: where the move would end."""
     roomy: Roomy
     """The step and body for which the map's cells (the ring's ``quiet``) say whether a move has room
-    (:func:`~amronet.algorithms.self_spreading.cells.drive_roomy`)."""
+    (:func:`~amronet.algorithms.self_spreading.cells.drive_rooms`)."""
 
 
 class Streams(NamedTuple):

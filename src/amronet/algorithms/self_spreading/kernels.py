@@ -14,9 +14,9 @@ import numpy as np
 from numba import njit, prange
 
 from amronet.algorithms.common.goto import steer_one
-from amronet.algorithms.common.references import track_row
-from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, QUIET, after_step
-from amronet.algorithms.self_spreading.cells import drive_roomy
+from amronet.algorithms.common.references import track_state_rows
+from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, QUIET, after_step_skin
+from amronet.algorithms.self_spreading.cells import drive_rooms
 from amronet.algorithms.self_spreading.kernel_data import Draws
 from amronet.algorithms.self_spreading.triangle_kernels import settle_with_triangles
 from amronet.algorithms.self_spreading.walk_kernels import (
@@ -30,7 +30,8 @@ from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
 from amronet.engine.motion import commit_one, plan_one
 from amronet.engine.robots import State
-from amronet.engine.sensing import cast_bodies_one, cast_grid_one, cast_ring_one
+from amronet.engine.sensing import cast_bodies_one, cast_grid_one, cast_rings
+from amronet.engine.skin_table import no_skin
 
 __all__ = [
     "commit_moves",
@@ -86,22 +87,17 @@ def track_explorers(data, indptr, indices, dist):  # pragma: no cover - numba
     n = state.shape[0]
     for j in range(n):
         is_ref[j] = tracking.deployed[state[j]]
-    k = 0
+    k = track_state_rows(state, _EXPLORE, current, is_ref, status, indptr, indices, dist, tracking.want_other,
+                         (explorers, new_current, nearest, other))
     candidates = 0
-    for i in range(n):
-        if state[i] != _EXPLORE:
-            continue
-        c, d, o, _ = track_row(i, current[i], is_ref, status, indptr, indices, dist, tracking.want_other)
-        explorers[k] = i
-        new_current[k] = c
-        nearest[k] = d
-        other[k] = o
+    for m in range(k):
+        c = new_current[m]
+        o = other[m]
         if o >= 0:
             dx = xy[c, 0] - xy[o, 0]
             dy = xy[c, 1] - xy[o, 1]
             if math.sqrt(dx * dx + dy * dy) > tracking.r_c and not (tracking.local and disabled[c] and disabled[o]):
                 candidates += 1
-        k += 1
     if candidates:
         return k, candidates, 0, 0
     for m in range(k):
@@ -230,7 +226,6 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
     xy, heading, state, max_speed, radius, distance = (robots.xy, robots.heading, robots.state, robots.max_speed,
                                                        robots.radius, robots.distance)
     refused, angles, sensor_range = walk.refused, ring.angles, ring.sensor_range
-    d_csr = Csr(d_indptr, d_indices, d_dist)
     scans, length = moves.scans, moves.length
     r_eff, dt = data.tracking.r_eff, data.dt
     movers = data.tracked.movers[:n_movers]
@@ -239,8 +234,8 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
     drive_bodies = data.collisions and sense_bodies
     s_csr = (s_indptr, s_indices, s_dist)
     dirs = (np.empty(angles.shape[0]), np.empty(angles.shape[0]))
-    for m in range(movers.shape[0]):  # sense: every mover's ring, from where everybody stands now
-        cast_ring_one(data.grid, ring, movers[m], xy, heading, radius, big, sense_bodies, s_csr, dirs, scans[m])
+    # sense: every mover's ring, from where everybody stands now
+    cast_rings(data.grid, ring, movers, xy, heading, radius, big, sense_bodies, s_csr, dirs, scans)
     w = 0
     longest = 0.0
     for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
@@ -260,12 +255,8 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
             longest = length[m]
     near = 2.0 * big + 2.0 * longest
     refused[:] = False
-    for m in range(movers.shape[0]):  # move, one after another
-        i = movers[m]
-        r, travelled = drive_roomy(data.grid, ring.quiet, moves.roomy, i, heading[i], length[m], xy, radius,
-                                   drive_bodies, d_csr, near)
-        refused[i] = r
-        distance[i] += travelled
+    drive_rooms(data.grid, ring.quiet, moves.roomy, movers, heading, length, xy, radius, drive_bodies,
+                (d_indptr, d_indices, d_dist), near, (refused, distance))  # move, one after another
     _arrive(movers, state, xy, steering.goal)
 
 
@@ -366,10 +357,11 @@ def spreading_stretch(limit, data, streams, radio, csr, books, index):  # pragma
 
     ``index``: the first step's index (step ``s`` of the stretch is at ``(index + s) * dt`` seconds, the loop's
     clock); ``streams``: the walkers' generators; ``radio`` and ``books``: the radio's search and the runs' books
-    (:func:`~amronet.algorithms.common.swarm_stretch_kernels.after_step`). The bodies the rings and the moves meet are
-    the table's (the caller checked that they reach no farther) or, for the moves without collisions, none.
+    (:func:`~amronet.algorithms.common.swarm_stretch_kernels.after_step_skin`: the table through a skin). The bodies
+    the rings and the moves meet are the table's (the caller checked that they reach no farther) or none.
     """
     robots, tracked, draws = data.robots, data.tracked, data.draws
+    skin = no_skin()
     for s in range(limit):
         k, candidates, n_movers, n_walkers = track_explorers(data, csr.indptr, csr.indices, csr.dist)
         if candidates and not data.tracking.starts:
@@ -392,7 +384,7 @@ def spreading_stretch(limit, data, streams, radio, csr, books, index):  # pragma
                 sense_steer_drive_rules(data, n_movers, normal, uniform, csr.indptr, csr.indices, csr.dist,
                                         d_csr.indptr, d_csr.indices, d_csr.dist, (csr.indptr, csr.indices, csr.dist),
                                         (index + s) * data.dt)
-        how, csr = after_step(robots.xy, robots.state, radio, books)
+        how, csr, skin = after_step_skin(robots.xy, robots.state, radio, books, skin, limit - s > 2)
         if how != QUIET:
             return s + 1, how, csr
     return limit, QUIET, csr
