@@ -62,6 +62,28 @@ def pseudo_angle(dx, dy):  # pragma: no cover - numba
     return 3.0 + dx / (dx - dy)
 
 
+@njit(cache=True, inline="always")
+def _span(dx0, dx1, dy0, dy1):  # pragma: no cover - numba
+    """The pseudo-angles ``(lo, hi)`` of the square ``[dx0, dx1] x [dy0, dy1]``'s corners, seen from the node.
+
+    A square without the node spans less than a half turn; one across +x has its directions below 2 go on past 4.
+    """
+    a0 = pseudo_angle(dx0, dy0)
+    a1 = pseudo_angle(dx1, dy0)
+    a2 = pseudo_angle(dx0, dy1)
+    a3 = pseudo_angle(dx1, dy1)
+    lo = min(min(a0, a1), min(a2, a3))
+    hi = max(max(a0, a1), max(a2, a3))
+    if hi - lo > 2.0:
+        a0 += 4.0 if a0 < 2.0 else 0.0
+        a1 += 4.0 if a1 < 2.0 else 0.0
+        a2 += 4.0 if a2 < 2.0 else 0.0
+        a3 += 4.0 if a3 < 2.0 else 0.0
+        lo = min(min(a0, a1), min(a2, a3))
+        hi = max(max(a0, a1), max(a2, a3))
+    return lo, hi
+
+
 @njit(cache=True)
 def shade(x, y, reach, bits, cols, ox, oy, res, out, lit):  # pragma: no cover - numba
     """Fill ``out`` and ``lit`` (:data:`BINS` floats each) with the shadows and the clear lines of ``(x, y)``.
@@ -109,19 +131,7 @@ def shade(x, y, reach, bits, cols, ox, oy, res, out, lit):  # pragma: no cover -
                 if gap2 < near2 or gap2 > far2:
                     continue
                 f2 = max(dx0 * dx0, dx1 * dx1) + fy
-                a0 = pseudo_angle(dx0, dy0)
-                a1 = pseudo_angle(dx1, dy0)
-                a2 = pseudo_angle(dx0, dy1)
-                a3 = pseudo_angle(dx1, dy1)
-                lo = min(min(a0, a1), min(a2, a3))
-                hi = max(max(a0, a1), max(a2, a3))
-                if hi - lo > 2.0:  # across +x: the directions below 2 go on past 4
-                    a0 += 4.0 if a0 < 2.0 else 0.0
-                    a1 += 4.0 if a1 < 2.0 else 0.0
-                    a2 += 4.0 if a2 < 2.0 else 0.0
-                    a3 += 4.0 if a3 < 2.0 else 0.0
-                    lo = min(min(a0, a1), min(a2, a3))
-                    hi = max(max(a0, a1), max(a2, a3))
+                lo, hi = _span(dx0, dx1, dy0, dy1)
                 b0 = int(math.ceil((lo + EPS) * _SCALE))
                 b1 = int(math.floor((hi - EPS) * _SCALE)) - 1  # bin b spans [b, b + 1) / _SCALE
                 for b in range(b0, b1 + 1):
@@ -146,19 +156,7 @@ def _light(dx0, dx1, dy0, dy1, far2, lit):  # pragma: no cover - numba
     g2 = gx * gx + gy * gy
     if g2 > far2:
         return False
-    a0 = pseudo_angle(dx0, dy0)
-    a1 = pseudo_angle(dx1, dy0)
-    a2 = pseudo_angle(dx0, dy1)
-    a3 = pseudo_angle(dx1, dy1)
-    lo = min(min(a0, a1), min(a2, a3))
-    hi = max(max(a0, a1), max(a2, a3))
-    if hi - lo > 2.0:  # across +x (a square without the node spans less than a half turn)
-        a0 += 4.0 if a0 < 2.0 else 0.0
-        a1 += 4.0 if a1 < 2.0 else 0.0
-        a2 += 4.0 if a2 < 2.0 else 0.0
-        a3 += 4.0 if a3 < 2.0 else 0.0
-        lo = min(min(a0, a1), min(a2, a3))
-        hi = max(max(a0, a1), max(a2, a3))
+    lo, hi = _span(dx0, dx1, dy0, dy1)
     for b in range(int(math.floor((lo - EPS) * _SCALE)), int(math.floor((hi + EPS) * _SCALE)) + 1):
         i = b % BINS
         if g2 < lit[i]:
