@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
 
-from amronet.engine.links import NO_PREVIOUS, candidate_margins, path_loss_candidate_margins
+from amronet.engine.links import NO_PREVIOUS, candidate_margins, open_pair, open_radius, path_loss_candidate_margins
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import make_medium
@@ -124,3 +124,38 @@ def test_the_path_loss_kernel_gives_the_generic_kernels_numbers(model, shadowing
     indptr2, indices2, dist2 = neighbour_csr(moved, medium.reach)
     reused = path_loss_candidate_margins(moved, indptr2, indices2, dist2, xy, indptr, indices, fresh, plain)
     np.testing.assert_array_equal(reused, candidate_margins(moved, indptr2, indices2, dist2, *NO_PREVIOUS, plain))
+
+
+@njit(cache=True)
+def _open_pairs(jump, ox, oy, res, a, b):  # pragma: no cover - numba
+    out = np.empty(a.shape[0], np.bool_)
+    for k in range(a.shape[0]):
+        d = np.sqrt((b[k, 0] - a[k, 0]) ** 2 + (b[k, 1] - a[k, 1]) ** 2)
+        out[k] = open_pair(d, open_radius(a[k, 0], a[k, 1], jump, ox, oy, res),
+                           open_radius(b[k, 0], b[k, 1], jump, ox, oy, res))
+    return out
+
+
+@pytest.mark.parametrize("name", ["office-32x32", "hospital_section", "obstacles-6x6"])
+def test_a_link_within_its_two_ends_open_radii_crosses_no_wall(name):
+    """:func:`open_pair`: shorter than the two ends' open radii together, the walk counts no wall."""
+    omap = resolve_map(name)
+    walls, jump = wall_grid(omap)
+    ox, oy, res = float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution)
+    rng = np.random.default_rng(5)
+    a = scattered(omap, 20_000, seed=6)
+    b = a + rng.normal(0.0, 1.0, a.shape) * rng.choice([0.1, 0.5, 2.0], len(a))[:, None]
+    b[::29] = a[::29] + 0.5 * (b[::29] - a[::29]).round()  # some along an axis
+    clear = _open_pairs(jump, ox, oy, res, a, b)
+    d = np.hypot(*(b - a).T)
+    ra = np.array([open_radius(x, y, jump, ox, oy, res) for x, y in a])
+    rb = np.array([open_radius(x, y, jump, ox, oy, res) for x, y in b])
+    assert clear.sum() > (d < np.maximum(ra, rb)).sum() + 100  # more than one end's radius alone decides
+    counts = count_walls_many(walls, jump, ox, oy, res, a[clear], b[clear], np.full(int(clear.sum()), BIG))
+    assert not counts.any()
+
+
+def test_open_pair_leaves_an_end_off_the_map_to_the_other():
+    assert open_pair(0.5, -1.0, 0.6) and open_pair(0.5, 0.6, -1.0)
+    assert not open_pair(0.5, -1.0, 1.2 - 1.0) and not open_pair(0.0, -1.0, -1.0)
+    assert open_pair(0.9, 0.5, 0.5) and not open_pair(1.0, 0.5, 0.5)

@@ -22,7 +22,7 @@ from amronet.engine.shadowing import _cell_value
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits
 
 __all__ = ["NO_PREVIOUS", "candidate_margins", "distance_margins", "fresh_margin", "keep_entries", "losses",
-           "mirror", "open_radius", "path_loss_candidate_margins"]
+           "mirror", "open_pair", "open_radius", "path_loss_candidate_margins"]
 
 model_margin = path_loss_margin
 """The margin kernel :func:`candidate_margins` calls (a model's own in the copies of
@@ -115,15 +115,28 @@ def open_radius(x, y, jump, ox, oy, res):  # pragma: no cover - numba
     return float(jump[int(v), int(u)])
 
 
+@njit(cache=True, inline="always")
+def open_pair(d, ra, rb):  # pragma: no cover - numba
+    """Whether a segment ``d`` long whose ends have the open radii ``ra`` and ``rb`` (:func:`open_radius`) is clear.
+
+    Every point of the segment is less than ``ra`` from one end or less than ``rb`` from the other when
+    ``d < ra + rb`` (the two distances sum to ``d``), and the disk of an end's open radius holds no wall cell: the
+    walk would visit free cells only and count 0 (its own answer, without the walk). A radius of -1 (an end off the
+    map) leaves the other end's disk alone: ``d < max(ra, rb, ra + rb)``, which is ``d < ra + rb`` for radii
+    ``>= 0`` (rounding is monotone).
+    """
+    return d < max(ra, rb, ra + rb)
+
+
 @njit(cache=True)
 def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indices, prev_margin,
                                 hearing):  # pragma: no cover - numba
     """:func:`candidate_margins` of the path-loss law (:func:`~amronet.engine.hearing.path_loss_margin`), faster.
 
     The same numbers bit for bit, by the law's own pieces: the inputs read once, not per pair, and a link shorter
-    than the safe jump (:func:`~amronet.engine.walls.wall_grid`) of one end's cell crosses no wall (every cell the
-    walk would visit is free), so neither the box test nor the walk is asked. Whether a node stands where it stood
-    in the previous table is decided once per node, and indices are read unsigned (no wraparound code).
+    than the sum of its two ends' open radii (:func:`open_radius`, :func:`open_pair`) crosses no wall (every cell
+    the walk would visit is free), so neither the box test nor the walk is asked. Whether a node stands where it
+    stood in the previous table is decided once per node, and indices are read unsigned (no wraparound code).
     """
     h = named_inputs(hearing)
     out = np.empty(indices.shape[0])
@@ -140,7 +153,8 @@ def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr,
     radius = np.empty(n if walled else 0)
     if walled:
         for i in range(n):
-            radius[_u(i)] = open_radius(xy[_u(i), 0], xy[_u(i), 1], jump, ox, oy, res)
+            # off the map (-1): 0, which keeps open_pair's answer (d < ra + 0 is d < ra) with one addition
+            radius[_u(i)] = max(open_radius(xy[_u(i), 0], xy[_u(i), 1], jump, ox, oy, res), 0.0)
     still = np.zeros(n, np.bool_)  # where the node stood in the previous table
     for i in range(min(n, n_prev)):
         still[_u(i)] = xy[_u(i), 0] == prev_xy[_u(i), 0] and xy[_u(i), 1] == prev_xy[_u(i), 1]
@@ -170,7 +184,7 @@ def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr,
                 d = dist[_u(e)]
                 sb = _cell_value(values, x0, y0, cell, xb, yb) if shadowed else 0.0
                 m = open_margin(d, sa, sb, r_c, n10, corr, clip)
-                if walled and m >= 0.0 and not (d < ra or d < radius[_u(j)]) and not box_clear_bits(
+                if walled and m >= 0.0 and not d < ra + radius[_u(j)] and not box_clear_bits(
                         bits, cols, ox, oy, res, xa, ya, xb, yb):
                     m -= wall_db * count_walls_bits(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb,
                                                     wall_limit(m, 0.0, wall_db))
@@ -196,8 +210,8 @@ def fresh_margin(d, end_a, end_b, law, bits, blocked, jump):  # pragma: no cover
     xb, yb, sb, rb = end_b
     r_c, n10, wall_db, corr, clip, cols, ox, oy, res = law
     m = open_margin(d, sa, sb, r_c, n10, corr, clip)
-    if wall_db > 0.0 and m >= 0.0 and not (d < ra or d < rb) and not box_clear_bits(bits, cols, ox, oy, res, xa, ya,
-                                                                                      xb, yb):
+    if wall_db > 0.0 and m >= 0.0 and not open_pair(d, ra, rb) and not box_clear_bits(bits, cols, ox, oy, res, xa,
+                                                                                       ya, xb, yb):
         m -= wall_db * count_walls_bits(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb, wall_limit(m, 0.0, wall_db))
     return m
 

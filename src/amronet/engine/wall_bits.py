@@ -127,7 +127,7 @@ def count_walls_bits(bits, walls, jump, ox, oy, res, x0, y0, x1, y1, limit):  # 
         since = 4  # free cells since the last look at the safe jump
         s = 0.0
         while True:
-            if 0 <= r < rows and 0 <= c < cols:
+            if _u(r) < _u(rows) and _u(c) < _u(cols):  # in the map (unsigned: one comparison each)
                 if _bit(bits, 0, r, c):
                     if not inside:
                         count += 1
