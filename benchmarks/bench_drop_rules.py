@@ -1,4 +1,4 @@
-"""CPU time per step of agent-assisted runs under each drop rule, switch and faults, against the paper's rule.
+"""CPU time per step of agent-assisted runs under each drop rule, switch, faults and repair, against the paper's rule.
 
 Run: ``.venv/bin/python benchmarks/bench_drop_rules.py [--map hospital_section] [--radio unit-disk|multi-wall]
 [--rounds 3] [--reference]``. One scenario, ``amronet reproduce buildings``'s (3 agents from one base station, the
@@ -6,7 +6,8 @@ frontier explorer, the map's ``r_c``), run for ``--seconds`` simulated seconds w
 the CPU time of the run over its steps, and the time of sense, decide and move alone (the loop's phase timer: the
 step's own cost, without the radio and the metrics, whose cost grows with the relays a rule drops), the median of
 ``--rounds`` rounds, every case once per round in turn. The ratios are to the paper's rule (``last-reference``) on the
-same scenario (target: within 1.5). ``--reference`` adds the
+same scenario (target: within 1.5). The faults cases fail 30 % of the routers at half time (``coverage_target``
+off); the repair cases repair them as ``reproduce failures`` does. ``--reference`` adds the
 phase-by-phase path's cost of each case (what a run without the compiled step costs).
 """
 
@@ -19,6 +20,7 @@ from typing import Any
 
 from amronet.experiments.buildings import BUILDINGS, RADIOS
 from amronet.experiments.common import agent_scenario
+from amronet.experiments.failures import WALL_DROP_RULE
 from amronet.scenario import load_scenario
 from amronet.sim import Simulation
 
@@ -32,18 +34,26 @@ CASES: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     "drop_settle_s 2": ("last-reference", {"drop_settle_s": 2.0}, {}),
     "reverse_drop 5 s (distance-junction)": ("distance-junction", {"reverse_drop": 5.0}, {}),
     "faults: 30 % of routers at half time": ("last-reference", {}, {"faults": "half"}),
+    "faults + repair: relocate": ("failures", {}, {"faults": "half", "repair": "relocate"}),
+    "faults + repair: retrace": ("failures", {}, {"faults": "half", "repair": "retrace"}),
 }
-"""Label → (drop rule, ``agents`` fields, extras)."""
+"""Label → (drop rule, ``agents`` fields, extras). Drop rule ``failures``: ``reproduce failures``' for the radio (the
+paper's on the unit disk, :data:`~amronet.experiments.failures.WALL_DROP_RULE` behind walls, where the paper's rule
+drops no relay to fail)."""
 
 
 def _scenario(map_name: str, radio: str, seconds: float, case: str) -> dict[str, Any]:
     rule, agents, extra = CASES[case]
+    if rule == "failures":
+        rule = "last-reference" if radio == "unit-disk" else WALL_DROP_RULE
     b = BUILDINGS[map_name]
     sc = agent_scenario(b.map, b.r_c, (b.base,), 3, "frontier", seconds, radio=RADIOS[radio], drop_rule=rule,
                         agents=agents)
     if extra.get("faults"):
         sc["faults"] = [{"at": seconds / 2, "routers": 0.3}]
         sc["sim"] = {**sc["sim"], "coverage_target": "off"}
+    if extra.get("repair"):  # as ``reproduce failures`` sets its repair rules
+        sc["algorithm"]["params"]["repair"] = extra["repair"]
     return sc
 
 

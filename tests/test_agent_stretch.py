@@ -172,6 +172,7 @@ UNPACKED = {  # (module, kernel): {tuple it unpacks: the named structure laid ou
     (R, "rule_acts"): {"rules": R.RuleStep},
     (stretch_books, "observe_links"): {"books": AgentBooks, "arrays": stretch_books.Links},
     (stretch_books, "back_up_starts"): {"reverse_drop": stretch_books.ReverseDrop},
+    (stretch_books, "back_up"): {"reverse_drop": stretch_books.ReverseDrop},
     (stretch_links, "next_radio"): {"radio": stretch_links.Radio},
     (knowledge, "integrate_readings"): {"cells": knowledge.Cells},
     (planning, "search_target"): {"targets": planning.Targets, "claims": planning.Claims},

@@ -108,7 +108,7 @@ def test_rules_the_kernel_checks_take_quiet_stretches(rule, stretches):
 
 
 def test_reverse_drops_take_quiet_stretches_and_give_the_reference_run():
-    """Agents out of contact for ``reverse_drop`` seconds back up: the stretch stops before, keeps their paths."""
+    """Agents out of contact for ``reverse_drop`` seconds back up, in stretches too; the stretch keeps their paths."""
     b = BUILDINGS["depot"]  # (multi-wall: agents lose contact, and back up)
     sc = load_scenario(agent_scenario(b.map, b.r_c, (b.base,), 3, "frontier", 100.0, radio=RADIOS["multi-wall"],
                                       drop_rule="distance-junction", agents={"reverse_drop": 5.0}))
@@ -117,12 +117,14 @@ def test_reverse_drops_take_quiet_stretches_and_give_the_reference_run():
     assert isinstance(quiet, QuietStretch)
     a, b = stretched.run(), reference.run()
     assert quiet.ends["quiet"] > 0 and stretched.controller.reverse_drops > 0
+    assert quiet.backing_steps > 0  # the agents that back up do so in stretches too
     mine, theirs = stretched.controller, reference.controller
     np.testing.assert_array_equal(stretched.swarm.xy, reference.swarm.xy)
     for attr in ("contact_since", "reversing", "left", "current"):
         np.testing.assert_array_equal(getattr(mine, attr), getattr(theirs, attr))
-    np.testing.assert_array_equal(mine.trails._last, theirs.trails._last)
-    assert [np.array(p).tolist() for p in mine.trails.points] == [np.array(p).tolist() for p in theirs.trails.points]
+    np.testing.assert_array_equal(mine.trails.last, theirs.trails.last)
+    for m in range(len(mine.agents)):
+        np.testing.assert_array_equal(mine.trails.path(m), theirs.trails.path(m))
     assert stretched.rows == reference.rows and a.network == b.network
     assert {k: v for k, v in a.summary.items() if k != "wall_time_s"} == \
         {k: v for k, v in b.summary.items() if k != "wall_time_s"}

@@ -95,19 +95,23 @@ class DropSwitches:
 
     def _back_up(self, view: AgentView | None) -> None:
         """MARBLE's reverse drop: an agent out of contact for ``reverse_after_s`` backs up along its own path."""
-        assert self.trails is not None and view is not None and view.in_contact is not None
+        assert view is not None and view.in_contact is not None
+        self._back_up_at(view.t, view.in_contact)
+
+    def _back_up_at(self, t: float, contact: np.ndarray) -> None:
+        """:meth:`_back_up` at time ``t``, ``contact``: which agents have a path to a base station ``(A,)``."""
+        assert self.trails is not None
         sw, agents = self.swarm, self.agents
-        contact = view.in_contact
-        self.contact_since[contact] = view.t
+        self.contact_since[contact] = t
         self.reversing &= ~contact
         self.trails.update(sw.xy[agents], ~self.reversing)
-        start = ~contact & ~self.reversing & (view.t - self.contact_since > self.reverse_after_s)
+        start = ~contact & ~self.reversing & (t - self.contact_since > self.reverse_after_s)
         self.reversing |= start & (self.left[agents] >= 1)
         for m in np.flatnonzero(self.reversing):
             target = self.trails.back(int(m), sw.xy[agents[m]])
             if target is None:  # back at the start of its path and still cut off: give up backing
                 self.reversing[m] = False
-                self.contact_since[m] = view.t
+                self.contact_since[m] = t
                 continue
             d = target - sw.xy[agents[m]]
             sw.heading[agents[m]] = np.arctan2(d[1], d[0])

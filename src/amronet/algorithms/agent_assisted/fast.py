@@ -108,8 +108,7 @@ class AgentControls(Protocol):
     served_pairs: Callable[[], Any]
     triangles_released: list
     _settle_dropped: Callable[[float], None]
-    _view: Callable[..., Any]
-    _back_up: Callable[..., None]
+    _back_up_at: Callable[[float, np.ndarray], None]
 
 
 class CompiledAgents(FastStep):
@@ -188,9 +187,9 @@ class CompiledAgents(FastStep):
                                  self.knowledge.stamp + 1)
             self.knowledge.stamp += 1
         self._steer(scans)
-        if c.trails is not None:  # the reverse drop's books and the agents that back up
-            c._back_up(c._view(replace(now, readings=Readings({c.agent_model: (c.agents, scans)})),
-                               c.current[c.agents]))
+        if c.trails is not None:  # the reverse drop's books and the agents that back up (the contact the check read)
+            assert rules is not None and rules.contact
+            c._back_up_at(now.t, rules.last_contact)
         if readings is None:
             self.drive(now, None if self.repair is None else self.repair.quiet(now, scans))
         else:  # the triangle and strip routers steer in the controller's Python, then everybody moves

@@ -85,6 +85,8 @@ class RuleCheck:
         """Whether the check reads the agents' contact with a base station."""
         self.base_xy = c.swarm.xy[c.bases]  # (base nodes never move)
         self._no_contact = np.zeros(a, dtype=np.bool_)
+        self.last_contact = self._no_contact
+        """The agents' contact with a base station as :meth:`quiet` last read it (where :attr:`contact` holds)."""
         self._no_margin = np.full(a, -np.inf)
         self._contact = np.zeros(a, dtype=np.bool_)
         self._best = np.full(a, -np.inf)
@@ -129,6 +131,7 @@ class RuleCheck:
             relay_xy = np.concatenate([relay_xy, sw.xy[sw.state == State.DROPPED]])
         contact = (agents_connected(now.table, c.agents, c.bases, sw.relaying) if self.contact
                    else self._no_contact)
+        self.last_contact = contact
         best = best_reference_margin(now.table, c.agents, is_ref) if self.code == LINK else self._no_margin
         inputs = RuleInputs(now.t, c.agents, sw.xy, c.current, c.nearest_d, c.left, relay_xy, self.base_xy, contact,
                             best, scans)

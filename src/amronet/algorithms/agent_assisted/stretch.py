@@ -92,6 +92,8 @@ class QuietStretch:
         """Steps taken in stretches with triangle routers driving to their goals."""
         self.strip_steps = 0
         """Steps taken in stretches with strip routers driving to their goals (``strip-goals``)."""
+        self.backing_steps = 0
+        """Steps taken in stretches that began with an agent backing up (``agents.reverse_drop``)."""
         self.paper = paper_rule_step(context.dt)
         """The drop rule's check under the paper's rule alone (none)."""
         self.no_retracing = no_retracing(len(compiled.controller.agents))
@@ -177,8 +179,9 @@ class QuietStretch:
         if c.settle_at or n < 2 or use_threads(n) or dropped:
             return None
         reverse = self._reverse_drop(limit)
-        if reverse is None:  # (an agent backs up)
+        if reverse is None:  # (the retrace repair's agents back up their own way)
             return None
+        backing = bool(c.reversing.any())
         retracing = self.no_retracing if comp.repair is None else comp.repair.stretch_start(now, limit)
         if retracing is None:  # (the repair is not idle, or an agent backs up now)
             return None
@@ -214,16 +217,14 @@ class QuietStretch:
             (tuple(triangles), tuple(rules)), tuple(moving), knowledge, tuple(frontier), tuple(agent_books), limit)
         if comp.repair is not None:
             comp.repair.stretch_end(done, retracing)
-        if c.trails is not None:  # the agents' paths: every step begun (the one it stopped in too, as _back_up does)
-            everyone = np.ones(m, dtype=np.bool_)
-            for k in range(done + (how in (ACTS, TRIANGLES_END))):
-                c.trails.update(reverse.trail[k], everyone)
         if how == NON_FINITE:
             return Stretched(done, non_finite=True)
         csr = (radio[5], radio[6], radio[7]) if done else None  # the pairs searched, and their margins
         margin = radio[9] if done and self.laws else None
         self.ends[{ACTS: "acts", TRIANGLES_END: "triangle", LINKED: "linked"}.get(how, "quiet")] += 1
         self.idle_steps += idle
+        if backing:
+            self.backing_steps += done
         self.triangles_looked_at += looked
         if len(tri):
             driving = sw.state[tri]
@@ -248,15 +249,18 @@ class QuietStretch:
     def _reverse_drop(self, limit: int) -> ReverseDrop | None:
         """The kernel's :class:`~.stretch_books.ReverseDrop` for up to ``limit`` steps; ``None``: no stretch now.
 
-        None while an agent backs up, nor under ``repair: retrace`` too (its agents back up their own way).
+        None under ``repair: retrace`` (its agents back up their own way), nor where an agent's path could reach its
+        most points in the stretch (:class:`~.drops.trail.Trails`: the oldest would go).
         """
         comp = self.compiled
         c = comp.controller
-        if c.trails is None:
+        trails = c.trails
+        if trails is None:
             return self.no_reverse_drop
-        if c.reversing.any() or (comp.repair is not None and comp.repair.retracer is not None):
+        if (comp.repair is not None and comp.repair.retracer is not None) or not trails.reserve(limit):
             return None
-        return ReverseDrop(np.empty((limit, len(c.agents), 2)), c.contact_since, float(c.reverse_after_s))
+        return ReverseDrop(trails.points, trails.count, trails.last, float(trails.spacing), c.contact_since,
+                           float(c.reverse_after_s), c.reversing)
 
     def _address(self, rng: np.random.Generator) -> int:
         """The ``bitgen_t`` address of ``rng``'s bit generator (kept while it is the run's generator)."""

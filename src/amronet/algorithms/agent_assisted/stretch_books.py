@@ -7,14 +7,17 @@ and path (:class:`ReverseDrop`).
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
+from amronet.algorithms.agent_assisted.release_kernels import dot2
 from amronet.engine.network import agents_linked_kernel
 
-__all__ = ["Links", "Retracing", "ReverseDrop", "back_up_starts", "no_retracing", "no_reverse_drop", "observe_links"]
+__all__ = ["Links", "Retracing", "ReverseDrop", "back_up", "back_up_starts", "no_retracing", "no_reverse_drop",
+           "observe_links"]
 
 
 class Links(NamedTuple):
@@ -61,24 +64,34 @@ class Retracing(NamedTuple):
 class ReverseDrop(NamedTuple):
     """What a stretch keeps of MARBLE's reverse drop (``agents.reverse_drop``), step by step.
 
-    What :meth:`~.drop_switches.DropSwitches._back_up` does in a step in which no agent backs up: a stretch starts with
-    none backing up, and at the start of each step the agents in contact with a base station (on its table) get the
-    step's time in ``contact_since`` and every agent's position goes into ``trail`` (the caller puts them on the
-    agents' paths, :meth:`~.drops.trail.Trails.update`); the stretch stops before a step in which an agent that
-    carries a router would start to back up (out of contact for more than ``after_s`` seconds).
+    What :meth:`~.drop_switches.DropSwitches._back_up` does: the stretch stops before a step in which an agent that
+    carries a router would start to back up (out of contact for more than ``after_s`` seconds,
+    :func:`back_up_starts`); in the others, once the agents are steered, the agents in contact with a base station
+    (on the step's table) get the step's time in ``contact_since`` and stop backing up, the others' positions go on
+    their paths, and those backing up head for their path's newest point not reached yet (:func:`back_up`).
     """
 
-    trail: np.ndarray
-    """Gets the agents' positions at the start of each step begun ``(limit, A, 2)`` (no rows: no reverse drop)."""
+    points: np.ndarray
+    """The agents' paths (:attr:`~.drops.trail.Trails.points`, room for the stretch's points), kept in place (no
+    rows: no reverse drop)."""
+    count: np.ndarray
+    """How many points of its row each agent keeps ``(A,)``, kept in place."""
+    last: np.ndarray
+    """Each agent's newest point ``(A, 2)``, kept in place."""
+    spacing: float
+    """Distance between the points of a path, metres."""
     contact_since: np.ndarray
     """When each agent was last in contact ``(A,)`` (the controller's), kept in place."""
     after_s: float
     """How long an agent is out of contact before it backs up, seconds."""
+    reversing: np.ndarray
+    """Which agents back up ``(A,)`` (the controller's), kept in place."""
 
 
 def no_reverse_drop(m: int) -> ReverseDrop:
     """The :class:`ReverseDrop` of a stretch without ``agents.reverse_drop``, for ``m`` agents: it keeps nothing."""
-    return ReverseDrop(np.zeros((0, m, 2)), np.zeros(m), np.inf)
+    return ReverseDrop(np.zeros((0, 1, 2)), np.zeros(m, dtype=np.int64), np.zeros((m, 2)), 1.0, np.zeros(m), np.inf,
+                       np.zeros(m, dtype=np.bool_))
 
 
 def no_retracing(m: int) -> Retracing:
@@ -131,21 +144,62 @@ def observe_links(indptr, indices, agents, books):  # pragma: no cover - numba
 
 
 @njit(cache=True, inline="always")
-def back_up_starts(reverse_drop, done, t, agents, xy, left, contact):  # pragma: no cover - numba
-    """The reverse drop's books at the start of step ``done`` of a stretch, at time ``t`` (:class:`ReverseDrop`).
+def back_up_starts(reverse_drop, t, agents, left, contact):  # pragma: no cover - numba
+    """Whether an agent that carries a router starts to back up in the step at time ``t`` (:class:`ReverseDrop`).
 
     ``contact``: whether each agent has a path to a base station on the step's table; ``left``: the routers each robot
-    carries ``(N,)``. Returns whether an agent that carries a router starts to back up in this step (then nothing is
-    noted: the stretch stops before it); otherwise notes who is in contact, and where the agents are.
+    carries ``(N,)``. The stretch stops before such a step.
     """
-    back_trail, back_contact_since, back_after_s = reverse_drop
-    m = agents.shape[0]
-    for j in range(m):
-        if not contact[j] and left[agents[j]] >= 1 and t - back_contact_since[j] > back_after_s:
+    _, _, _, _, back_contact_since, back_after_s, back_reversing = reverse_drop
+    for j in range(agents.shape[0]):
+        if (not contact[j] and not back_reversing[j] and left[agents[j]] >= 1
+                and t - back_contact_since[j] > back_after_s):
             return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def back_up(reverse_drop, t, agents, xy, heading, contact):  # pragma: no cover - numba
+    """The reverse drop's part of the step at time ``t`` once the agents are steered, where no agent starts to back up.
+
+    What :meth:`~.drop_switches.DropSwitches._back_up` does (and :class:`~.drops.trail.Trails` with it), number for
+    number: a distance on a path is ``sqrt(dx * dx + dy * dy)`` (``np.linalg.norm(axis=1)``), the distance to the
+    point an agent heads for that of ``np.linalg.norm`` of a 2-vector (:func:`~.release_kernels.dot2`).
+    """
+    back_points, back_count, back_last, back_spacing, back_contact_since, _, back_reversing = reverse_drop
+    m = agents.shape[0]
     for j in range(m):
         if contact[j]:
             back_contact_since[j] = t
-        back_trail[done, j, 0] = xy[agents[j], 0]
-        back_trail[done, j, 1] = xy[agents[j], 1]
-    return False
+            back_reversing[j] = False
+    for j in range(m):  # the paths of the agents not backing up
+        i = agents[j]
+        dx = xy[i, 0] - back_last[j, 0]
+        dy = xy[i, 1] - back_last[j, 1]
+        if back_reversing[j] or not math.sqrt(dx * dx + dy * dy) >= back_spacing:
+            continue
+        k = back_count[j]
+        back_points[j, k, 0] = xy[i, 0]
+        back_points[j, k, 1] = xy[i, 1]
+        back_count[j] = k + 1
+        back_last[j, 0] = xy[i, 0]
+        back_last[j, 1] = xy[i, 1]
+    for j in range(m):  # those backing up head for their path's newest point not reached yet
+        if not back_reversing[j]:
+            continue
+        i = agents[j]
+        k = back_count[j]
+        while k:
+            dx = back_points[j, k - 1, 0] - xy[i, 0]
+            dy = back_points[j, k - 1, 1] - xy[i, 1]
+            if not math.sqrt(dot2(dx, dy, dx, dy, False)) < 0.5 * back_spacing:
+                break
+            k -= 1
+        back_count[j] = k
+        if not k:  # back at the start of its path and still cut off: it gives up backing
+            back_reversing[j] = False
+            back_contact_since[j] = t
+            continue
+        back_last[j, 0] = back_points[j, k - 1, 0]
+        back_last[j, 1] = back_points[j, k - 1, 1]
+        heading[i] = math.atan2(back_points[j, k - 1, 1] - xy[i, 1], back_points[j, k - 1, 0] - xy[i, 0])

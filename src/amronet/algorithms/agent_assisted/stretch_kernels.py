@@ -33,7 +33,7 @@ from numba import njit
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
 from amronet.algorithms.agent_assisted.rule_kernels import LINK, PAPER, rule_acts, rule_commit
-from amronet.algorithms.agent_assisted.stretch_books import Links, back_up_starts, observe_links
+from amronet.algorithms.agent_assisted.stretch_books import Links, back_up, back_up_starts, observe_links
 from amronet.algorithms.agent_assisted.stretch_links import Radio, next_radio
 from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
 from amronet.engine.bitgen import next_double
@@ -272,9 +272,9 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         _, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, _, _, _, _ = radio
         scans = np.empty((m, angles.shape[0]))
         near = (near_indptr, near_indices, near_dist)  # the rings and the moves read every pair within r
-        if reverse_drop[0].shape[0]:  # reverse drop: stop before a step in which an agent backs up
+        if reverse_drop[0].shape[0]:  # reverse drop: stop before a step in which an agent starts to back up
             agents_linked_kernel(indptr, indices, agents, rule_bases, rule_relaying, rule_contact)
-            if back_up_starts(reverse_drop, done, (rule_first + done) * rule_dt, agents, xy, left, rule_contact):
+            if back_up_starts(reverse_drop, (rule_first + done) * rule_dt, agents, left, rule_contact):
                 return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
         n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, near, scans, tracking,
                                               (indptr, indices, dist), paper, knowledge, stamp + 1)
@@ -308,6 +308,8 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         # ... then the agents its plans left idle walk at random (steer_idle; a plan may come back any step)
         walked = random_walk_drawing(bitgen, heading, agents, active, avoided, angles, avoid, refused_m, sigma, normal,
                                      uniform)
+        if reverse_drop[0].shape[0]:  # the reverse drop's books, and the agents that back up (their contact as above)
+            back_up(reverse_drop, (rule_first + done) * rule_dt, agents, xy, heading, rule_contact)
         reach_now = reach
         if nt:  # the triangle and strip routers' rings, then their steering, unless one arrives or gives up now
             for q in range(nt):
