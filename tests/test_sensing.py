@@ -83,7 +83,8 @@ def test_the_ring_in_one_pass_is_the_grid_then_the_bodies_bit_for_bit():
     def rings(grid, ring, xy, heading, radius, csr, out):
         dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
         who = np.arange(xy.shape[0])
-        cast_rings(grid, ring, who, xy, heading, radius, radius.max(), True, csr, dirs, out)
+        cast_rings(grid, ring, who, xy, heading, radius, radius.max(), True, csr, dirs, out,
+                   (0.0, np.empty(xy.shape[0] + 1, np.int64), np.empty(csr[1].shape[0] + 1, np.int64)))
 
     omap, max_range = _cluttered_map(), 0.14
     rng = np.random.default_rng(1)

@@ -10,6 +10,11 @@ from helpers import box_map
 
 SENSOR_RANGE = 0.14
 ROOM = Roomy(0.02, 0.045)  # the Bebot's step (0.2 m/s x 0.1 s) and body
+UNLISTED = (False, 0.0, np.zeros(1, np.int64), np.zeros(1, np.int64))  # drive_rooms reads the rows
+
+
+def _unlisted(near):
+    return (near, *UNLISTED)
 
 
 def _cluttered_map():
@@ -45,7 +50,8 @@ def test_a_ring_reads_only_bit_0_of_its_quiet_cells():
     def rings(grid, ring, xy, heading, radius, csr, out):
         dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
         who = np.arange(xy.shape[0])
-        cast_rings(grid, ring, who, xy, heading, radius, radius.max(), False, csr, dirs, out)
+        cast_rings(grid, ring, who, xy, heading, radius, radius.max(), False, csr, dirs, out,
+                   (0.0, np.empty(xy.shape[0] + 1, np.int64), np.empty(1, np.int64)))
 
     omap = _cluttered_map()
     grid = grid_of(omap)
@@ -83,8 +89,8 @@ def test_a_move_by_the_flags_is_the_move_by_the_clearance_bit_for_bit():
         refused = np.empty(n, dtype=bool)
         distance = np.zeros(n)
         if drive == "flags":
-            drive_rooms(grid, flags, ROOM, np.arange(n), heading, length, xy, radius, False, csr, 1.0,
-                        (refused, distance))
+            drive_rooms(grid, flags, ROOM, np.arange(n), heading, length, xy, radius, False, csr, (refused, distance),
+                        _unlisted(1.0))
         else:
             for i in range(n):
                 refused[i], distance[i] = drive_one(grid, i, heading[i], length[i], xy, radius, False, csr, 1.0)
@@ -117,7 +123,8 @@ def test_moves_among_bodies_by_the_flags_are_drive_one_in_turn_bit_for_bit():
         refused = np.zeros(n, dtype=bool)
         distance = np.zeros(n)
         if drive == "flags":
-            drive_rooms(grid, flags, ROOM, movers, heading, length, xy, radius, True, csr, near, (refused, distance))
+            drive_rooms(grid, flags, ROOM, movers, heading, length, xy, radius, True, csr, (refused, distance),
+                        _unlisted(near))
         else:
             for m, i in enumerate(movers):
                 refused[i], distance[i] = drive_one(grid, i, heading[i], length[m], xy, radius, True, csr, near)
@@ -126,3 +133,64 @@ def test_moves_among_bodies_by_the_flags_are_drive_one_in_turn_bit_for_bit():
         np.testing.assert_array_equal(got, want)
     refused_steps = outcomes[0][1][movers] & (length > 0)
     assert 0.1 < (outcomes[0][2] > 0).mean() and 0.05 < refused_steps.mean() < 0.8  # bodies and walls refuse some
+
+
+def test_moves_from_the_links_the_rings_listed_are_the_moves_from_the_rows_bit_for_bit():
+    """The rings' pass lists each mover's links within a reach; the moves read those (or the rows, if they reach
+    farther) and end where drive_one puts them in turn, among bodies close enough to refuse many steps."""
+    from numba import njit
+
+    from amronet.engine.radio import UnitDisk
+
+    @njit
+    def ring_then_moves(grid, ring, movers, xy, heading, radius, csr, length, near, reach, refused, distance):
+        first = np.empty(movers.shape[0] + 1, np.int64)
+        edges = np.empty(csr[1].shape[0] + 1, np.int64)
+        scans = np.empty((movers.shape[0], ring.angles.shape[0]))
+        dirs = (np.empty(ring.angles.shape[0]), np.empty(ring.angles.shape[0]))
+        cast_rings(grid, ring, movers, xy, heading, radius, radius.max(), True, csr, dirs, scans, (reach, first, edges))
+        drive_rooms(grid, ring.quiet, ROOM, movers, heading, length, xy, radius, True, csr, (refused, distance),
+                    (near, True, reach, first, edges))
+        return first, edges
+
+    omap = _cluttered_map()
+    grid = grid_of(omap)
+    flags = cell_flags(omap, grid, SENSOR_RANGE, ROOM)
+    rng = np.random.default_rng(5)
+    n = 1500
+    start = _free_points(omap, rng, n)
+    heading = rng.uniform(-np.pi, np.pi, n)
+    radius = np.full(n, ROOM.radius)
+    table = UnitDisk(1.0).update(start)
+    csr = (table.indptr, table.indices, table.dist)
+    movers = np.sort(rng.choice(n, size=1200, replace=False))
+    ring = QuietRing(beam_angles(12), SENSOR_RANGE, flags)
+    ring_reach = SENSOR_RANGE + ROOM.radius  # the list is cut at the ring's own reach at least
+    short = rng.choice([0.0, 0.01, ROOM.length], size=len(movers))  # the walkers' steps
+    long = rng.choice([0.0, 0.01, 0.15], size=len(movers))  # bodies beyond the list's reach refuse some of these
+    # a list long enough for the moves, one cut at the ring's reach, and steps reaching past it (the rows)
+    for listed_reach, length in ((2.0 * ROOM.radius + 2.0 * ROOM.length + 1e-6, short), (0.0, short), (0.0, long)):
+        near = 2.0 * ROOM.radius + 2.0 * length.max()
+        want_xy = start.copy()
+        want_refused = np.zeros(n, dtype=bool)
+        want_distance = np.zeros(n)
+        for m, i in enumerate(movers):
+            want_refused[i], want_distance[i] = drive_one(grid, i, heading[i], length[m], want_xy, radius, True, csr,
+                                                          near)
+        xy = start.copy()
+        refused = np.zeros(n, dtype=bool)
+        distance = np.zeros(n)
+        first, edges = ring_then_moves(grid, ring, movers, xy, heading, radius, csr, length, near, listed_reach,
+                                       refused, distance)
+        np.testing.assert_array_equal(xy, want_xy)
+        np.testing.assert_array_equal(refused, want_refused)
+        np.testing.assert_array_equal(distance, want_distance)
+        cut = max(listed_reach, ring_reach)
+        for m in rng.choice(len(movers), size=200, replace=False):  # the list: the row's links within the reach
+            i = movers[m]
+            row = np.arange(table.indptr[i], table.indptr[i + 1])
+            np.testing.assert_array_equal(edges[first[m]:first[m + 1]], row[table.dist[row] <= cut])
+        refused_steps = want_refused[movers] & (length > 0)
+        assert 0.05 < refused_steps.mean() < 0.8  # bodies and walls refuse some
+    listed = np.diff(first)
+    assert listed.mean() < 0.3 * np.diff(table.indptr)[movers].mean() and listed.max() > 1  # short lists

@@ -140,21 +140,30 @@ def quiet_cells(omap: OccupancyMap, max_range: float) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def cast_rings(grid, ring, who, xy, heading, radius, big, bodies, csr, dirs, out):  # pragma: no cover - numba
+def cast_rings(grid, ring, who, xy, heading, radius, big, bodies, csr, dirs, out,
+               close):  # pragma: no cover - numba
     """The rings of the robots ``who`` into ``out`` ``(len(who), n_beams)``: the grid's beams, then the bodies'.
 
     Bit for bit :func:`cast_grid_one`, then (``bodies``) :func:`cast_bodies_one`. ``grid``: the map's
     :class:`~amronet.engine.kernel_data.Grid`; ``ring``: a :class:`QuietRing`; ``radius`` and ``big``: every
     robot's body radius and the largest; ``csr``: ``(indptr, indices, dist)``, the bodies near each
-    robot; ``dirs``: scratch ``(cos, sin)``, ``(n_beams,)`` each. Where a robot's cell is quiet the grid's beams
-    read the range without a march, and each beam's direction is computed once, for the grid and the bodies, and
-    only when one of them needs it: the same numbers, fewer sines. The loop over the robots is written here, not
-    around a per-robot function: numba counts the references of every array handed to a function, even an inlined
-    one, at each call, and at N = 3 000 those atomic counts took longer than the rings themselves.
+    robot; ``dirs``: scratch ``(cos, sin)``, ``(n_beams,)`` each. ``close``: ``(reach, first, edges)``: with
+    ``bodies``, robot ``who[m]``'s links no longer than ``reach`` (at least ``ring.sensor_range + big``) are listed,
+    in row order, as the positions ``edges[first[m]:first[m + 1]]`` in ``csr`` (``first``: ``(len(who) + 1,)``;
+    ``edges``: as long as ``csr``'s links, and one more), and the bodies are cast from that list: a later pass over
+    the same robots' near links (their moves) reads a link or two each instead of a dozen. Where a robot's cell is
+    quiet the grid's beams read the range without a march, and each beam's direction is computed once, for the grid
+    and the bodies, and only when one of them needs it: the same numbers, fewer sines. The loop over the robots is
+    written here, not around a per-robot function: numba counts the references of every array handed to a function,
+    even an inlined one, at each call, and at N = 3 000 those atomic counts took longer than the rings themselves.
     """
     angles, max_range, quiet = ring
     indptr, indices, dist = csr
     cos_a, sin_a = dirs
+    reach, first, edges = close
+    reach = max(reach, max_range + big)
+    listed = 0
+    first[0] = 0
     blocked, clear, ox, oy, res = grid
     rows, cols = blocked.shape
     for m in range(who.shape[0]):
@@ -195,7 +204,13 @@ def cast_rings(grid, ring, who, xy, heading, radius, big, bodies, csr, dirs, out
                 out[m, k] = min(hit, max_range)
         if not bodies:
             continue
-        for e in range(indptr[i], indptr[i + 1]):  # cast_bodies_one
+        start = listed
+        for e in range(indptr[i], indptr[i + 1]):  # the row's near links, without a branch
+            edges[listed] = e
+            listed += dist[e] <= reach
+        first[m + 1] = listed
+        for q in range(start, listed):  # cast_bodies_one
+            e = edges[q]
             if dist[e] > max_range + big:
                 continue
             j = indices[e]

@@ -30,7 +30,7 @@ from amronet.engine.motion import plan_one
 from amronet.engine.sensing import quiet_cells
 from amronet.world.occupancy import OccupancyMap
 
-__all__ = ["QUIET_RING", "ROOMY", "Roomy", "cell_flags", "drive_rooms"]
+__all__ = ["QUIET_RING", "ROOMY", "Roomy", "cell_flags", "drive_rooms", "same_rows"]
 
 QUIET_RING = 1
 """Flag: no beam of the ring cast from anywhere in the cell meets the grid (all read the range)."""
@@ -69,8 +69,8 @@ def cell_flags(omap: OccupancyMap, grid: Grid, sensor_range: float, roomy: Roomy
 
 
 @njit(cache=True, inline="always")
-def drive_rooms(grid, flags, roomy, movers, heading, length, xy, radius, bodies, csr, near,
-                done):  # pragma: no cover - numba
+def drive_rooms(grid, flags, roomy, movers, heading, length, xy, radius, bodies, csr, done,
+                near):  # pragma: no cover - numba
     """:func:`~amronet.engine.motion.drive_one` for each of ``movers`` in turn, asking the :data:`ROOMY` flag first.
 
     Bit for bit. Mover ``m`` (robot ``i = movers[m]``) goes ``length[m]`` along ``heading[i]``; with ``done``
@@ -80,10 +80,17 @@ def drive_rooms(grid, flags, roomy, movers, heading, length, xy, radius, bodies,
     :func:`~amronet.engine.motion.plan_one` asks the clearance itself. The bodies' half is
     :func:`~amronet.engine.motion.commit_one`'s, written out in the loop: numba counts the references of every array
     handed to a function, inlined or not, at each call, and at N = 3 000 that took a third of the moves' time.
+    ``near``: ``(near, listed, reach, first, edges)``: a body farther than ``near`` before the moves cannot touch the
+    mover after its step; with ``listed`` (``csr`` is the table the movers' rings were cast from) ``first, edges``
+    is the list of their links no longer than ``reach`` that :func:`~amronet.engine.sensing.cast_rings` made, and
+    where ``near <= reach`` the bodies are read from it (every link it leaves out is farther than ``near``, which the
+    test skips: the same moves), otherwise from the rows.
     """
     blocked, clear, ox, oy, res = grid
     indptr, indices, dist = csr
     refused, distance = done
+    near, listed, reach, first, edges = near
+    listed = listed and near <= reach
     rows, cols = flags.shape
     for m in range(movers.shape[0]):
         i = movers[m]
@@ -101,7 +108,9 @@ def drive_rooms(grid, flags, roomy, movers, heading, length, xy, radius, bodies,
             free, nx, ny = plan_one(blocked, clear, ox, oy, res, x0, y0, heading[i], step, radius[i])
         refuse = not free
         if free and bodies:  # commit_one
-            for e in range(indptr[i], indptr[i + 1]):
+            lo, hi = (first[m], first[m + 1]) if listed else (indptr[i], indptr[i + 1])
+            for q in range(lo, hi):
+                e = edges[q] if listed else q
                 if dist[e] > near:
                     continue  # too far apart before this step to touch after it
                 j = indices[e]
@@ -123,3 +132,14 @@ def drive_rooms(grid, flags, roomy, movers, heading, length, xy, radius, bodies,
             travelled = math.hypot(nx - x0, ny - y0)
         refused[i] = refuse
         distance[i] += travelled
+
+
+@njit(cache=True, inline="always")
+def same_rows(s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist):  # pragma: no cover - numba
+    """Whether the rings' and the moves' neighbour lists are the same arrays: a stretch's table, and most steps'.
+
+    Then the moves may read the rings' list of near links (:func:`drive_rooms`).
+    """
+    return (s_indptr.ctypes.data == d_indptr.ctypes.data and s_indices.ctypes.data == d_indices.ctypes.data
+            and s_dist.ctypes.data == d_dist.ctypes.data and s_indptr.shape[0] == d_indptr.shape[0]
+            and s_indices.shape[0] == d_indices.shape[0] and s_dist.shape[0] == d_dist.shape[0])

@@ -16,7 +16,7 @@ from numba import njit, prange
 from amronet.algorithms.common.goto import steer_one
 from amronet.algorithms.common.references import track_state_rows
 from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, QUIET, after_step_skin
-from amronet.algorithms.self_spreading.cells import drive_rooms
+from amronet.algorithms.self_spreading.cells import drive_rooms, same_rows
 from amronet.algorithms.self_spreading.kernel_data import Draws
 from amronet.algorithms.self_spreading.triangle_kernels import settle_with_triangles
 from amronet.algorithms.self_spreading.walk_kernels import (
@@ -234,8 +234,13 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
     drive_bodies = data.collisions and sense_bodies
     s_csr = (s_indptr, s_indices, s_dist)
     dirs = (np.empty(angles.shape[0]), np.empty(angles.shape[0]))
+    # the links the moves may meet a body on (their step at most the walkers'), listed by the rings' pass
+    reach = max(sensor_range + big, 2.0 * big + 2.0 * moves.roomy.length) + 1e-6
+    first = np.empty(movers.shape[0] + 1, np.int64)
+    edges = np.empty(s_indices.shape[0] + 1, np.int64)
     # sense: every mover's ring, from where everybody stands now
-    cast_rings(data.grid, ring, movers, xy, heading, radius, big, sense_bodies, s_csr, dirs, scans)
+    cast_rings(data.grid, ring, movers, xy, heading, radius, big, sense_bodies, s_csr, dirs, scans,
+               (reach, first, edges))
     w = 0
     longest = 0.0
     for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
@@ -255,8 +260,10 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
             longest = length[m]
     near = 2.0 * big + 2.0 * longest
     refused[:] = False
+    listed = sense_bodies and same_rows(s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist)
     drive_rooms(data.grid, ring.quiet, moves.roomy, movers, heading, length, xy, radius, drive_bodies,
-                (d_indptr, d_indices, d_dist), near, (refused, distance))  # move, one after another
+                (d_indptr, d_indices, d_dist), (refused, distance),
+                (near, listed, reach, first, edges))  # move, one after another
     _arrive(movers, state, xy, steering.goal)
 
 
