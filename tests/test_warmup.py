@@ -159,6 +159,16 @@ def test_common_names_warm_up_cases():
     assert frontier.first  # the longest chain of kernels starts first
 
 
+def test_the_log_distance_hearing_kernels_start_beside_the_longest_chains():
+    """Self-spreading's log-distance case starts with the first ones: agent-assisted's, which shares its hearing
+    kernels, starts only once the frontier chain is done, and would otherwise wait for them in the other worker."""
+    labels = warmup.task_labels()
+    first = [case.label for case in warmup_cases() if case.first]
+    assert "radio log-distance" in first
+    ahead = labels.index("radio log-distance")
+    assert ahead < labels.index("signal map") and ahead < labels.index("radio log-distance, agents")
+
+
 def test_warm_up_runs_the_cases_named_and_notes_the_common_ones(monkeypatch):
     ran: list[int] = []
     noted: list[str] = []
