@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -138,3 +139,20 @@ def test_most_cells_in_sight_are_found_on_clear_lines():
         found += int(np.count_nonzero(lit_up))
         seen += int(np.count_nonzero(open_))
     assert found > 0.8 * seen  # the walks and box tests coverage skips
+
+
+@pytest.mark.parametrize("node", [(6.3695, -0.0315), (6.3695, -1e-9)])
+def test_a_node_outside_the_map_has_no_clear_line(node):
+    """The walk counts everything outside the map as wall: a line from a node there is never known clear."""
+    omap = resolve_map("hospital_section")
+    grid, bits = wall_grid(omap), wall_bits(omap)
+    out, lit = np.empty(BINS), np.empty(BINS)
+    shade(*node, 3.0, bits, omap.shape[1], float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution),
+          out, lit)
+    rows, cols = np.nonzero(grid[0][:60, :400] == 0)  # free cells near the node (row 0 is free there)
+    ends = omap.cell_centres(rows, cols)
+    d = ends - np.array(node)
+    dd = (d * d).sum(axis=1)
+    lit_up = np.array([clear(lit, dx, dy, s) for (dx, dy), s in zip(d, dd, strict=True)])
+    assert not lit_up.any()
+    assert (_walls(omap, grid, np.array(node), ends) > 0).all()  # the walk: each line leaves the map first

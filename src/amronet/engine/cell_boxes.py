@@ -2,20 +2,27 @@
 
 The kernels walk a grid's cells in blocks of :data:`BLOCK` cells a side, and skip a block whose nearest cell centre
 is too far for a link to be heard (:func:`block_gap`); :func:`node_box` gives the cells within a node's reach.
-``cells`` is a grid's :class:`~amronet.engine.hearing.Cells`.
+``cells`` is a grid's :class:`Cells` (:func:`cells_of`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, NamedTuple
 
+import numpy as np
 from numba import njit
 
-__all__ = ["BLOCK", "block_gap", "node_box"]
+from amronet.engine.shadowing import _lookup
+
+if TYPE_CHECKING:
+    from amronet.engine.hearing import HearingInputs
+
+__all__ = ["BLOCK", "Cells", "block_gap", "cells_of", "node_box"]
 
 BLOCK = 8
 """Cells per side of the blocks that the coverage and signal kernels cull as a whole (see
-:func:`~amronet.engine.hearing.cells_of`)."""
+:func:`cells_of`)."""
 
 
 @njit(cache=True, inline="always")
@@ -45,3 +52,46 @@ def node_box(x, y, reach, cells, rows, cols):  # pragma: no cover - numba
     j0 = max(int(math.floor(max((x - reach - cells.ox) / cells.res, -1.0))), 0)
     j1 = min(int(math.floor(min((x + reach - cells.ox) / cells.res, float(cols)))), cols - 1)
     return i0, i1, j0, j1
+
+
+class Cells(NamedTuple):
+    """A grid whose cell centres the coverage and signal kernels decide, with the shadowing field there."""
+
+    ox: float
+    """x of the grid's lower-left corner, metres."""
+    oy: float
+    """y of the grid's lower-left corner, metres."""
+    res: float
+    """Cell size, metres."""
+    field: np.ndarray
+    """The shadowing field at every cell centre ``(rows, cols)`` (1x1 zeros without shadowing)."""
+    block_field: np.ndarray
+    """Its maximum over blocks of :data:`BLOCK` cells (1x1 zeros without shadowing)."""
+
+
+def cells_of(shape: tuple[int, int], ox: float, oy: float, res: float, h: HearingInputs) -> Cells:
+    """The :class:`Cells` of a grid of ``shape`` cells of side ``res`` from ``(ox, oy)`` under the radio ``h``.
+
+    The kernels take it as a plain tuple in the fields' order (``tuple(cells)``, see :meth:`HearingInputs.plain`).
+
+    The kernels bound a block's best margin by its nearest point and its largest field value, and skip the block
+    when even that bound is below what they look for.
+    """
+    rows, cols = shape
+    if h.clip == 0.0:
+        return Cells(ox, oy, res, np.zeros((1, 1)), np.zeros((1, 1)))
+    f = h.field
+    cy = oy + (np.arange(rows) + 0.5) * res
+    cx = ox + (np.arange(cols) + 0.5) * res
+    xx, yy = np.meshgrid(cx, cy)
+    values = _lookup(f.values, f.x0, f.y0, f.h, xx.ravel(), yy.ravel()).reshape(rows, cols)
+    nb_r, nb_c = -(-rows // BLOCK), -(-cols // BLOCK)
+    padded = np.full((nb_r * BLOCK, nb_c * BLOCK), -np.inf)
+    padded[:rows, :cols] = values
+    return Cells(ox, oy, res, values, padded.reshape(nb_r, BLOCK, nb_c, BLOCK).max(axis=(1, 3)))
+
+
+@njit(cache=True, inline="always")
+def _named_cells(t):  # pragma: no cover - numba
+    """The :class:`Cells` of its plain tuple."""
+    return Cells(t[0], t[1], t[2], t[3], t[4])

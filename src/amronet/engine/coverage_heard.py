@@ -195,7 +195,7 @@ class HeardCells:
         return int((np.maximum(i1 - i0 + 1, 0) * np.maximum(j1 - j0 + 1, 0)).sum())
 
     def cells(self, omap: OccupancyMap) -> tuple:
-        """The kernels' :class:`~amronet.engine.hearing.Cells` of a map's grid as a plain tuple, cached per grid."""
+        """The kernels' :class:`~amronet.engine.cell_boxes.Cells` of a map's grid as a plain tuple, cached per grid."""
         key = (omap.shape, float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution))
         if key not in self._cells:
             self._cells[key] = tuple(cells_of(*key, self.hearing))

@@ -14,7 +14,6 @@ because the freed cells are decided again by the younger members in the order th
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
 import numpy as np
@@ -119,24 +118,21 @@ class HeardUnion:
 
     def _leave(self, slots: list[int], mark: Mark) -> None:
         """Unmark the cells the members in ``slots`` own and decide them again by the younger members left."""
-        lo_i = lo_j = math.inf
-        hi_i = hi_j = -math.inf
         oldest = self._joined[slots].min()
-        for slot in slots:
-            i0, i1, j0, j1 = self._box[slot].tolist()
-            owner = self.owner[i0:i1 + 1, j0:j1 + 1]
-            mine = owner == slot
-            if mine.any():
-                rows, cols = np.nonzero(mine)
-                self.union[i0:i1 + 1, j0:j1 + 1][mine] = False
-                self._todo[i0:i1 + 1, j0:j1 + 1][mine] = True
-                owner[mine] = -1
-                lo_i, hi_i = min(lo_i, i0 + int(rows.min())), max(hi_i, i0 + int(rows.max()))
-                lo_j, hi_j = min(lo_j, j0 + int(cols.min())), max(hi_j, j0 + int(cols.max()))
+        box = self._box[slots]
+        i0, i1, j0, j1 = int(box[:, 0].min()), int(box[:, 1].max()), int(box[:, 2].min()), int(box[:, 3].max())
+        leaving = np.zeros(len(self._xy) + 1, dtype=bool)  # by slot + 1: a cell without owner (-1) is not theirs
+        leaving[np.asarray(slots) + 1] = True
+        owner = self.owner[i0:i1 + 1, j0:j1 + 1]  # every cell they marked: each marked in its own box only
+        mine = leaving[owner + 1]
         self._free.extend(slots)
-        if lo_i > hi_i:  # they marked no cell first
+        rows, cols = np.flatnonzero(mine.any(axis=1)), np.flatnonzero(mine.any(axis=0))
+        if len(rows) == 0:  # they marked no cell first
             return
-        window = (int(lo_i), int(hi_i), int(lo_j), int(hi_j))
+        self.union[i0:i1 + 1, j0:j1 + 1][mine] = False
+        self._todo[i0:i1 + 1, j0:j1 + 1][mine] = True
+        owner[mine] = -1
+        window = (i0 + int(rows[0]), i0 + int(rows[-1]), j0 + int(cols[0]), j0 + int(cols[-1]))
         rest = np.fromiter(self.members.values(), dtype=np.int32, count=len(self.members))
         box = self._box[rest]
         near = rest[(box[:, 0] <= window[1]) & (box[:, 1] >= window[0]) & (box[:, 2] <= window[3])

@@ -30,11 +30,11 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from amronet.engine.cell_boxes import BLOCK, block_gap, node_box
+from amronet.engine.cell_boxes import BLOCK, Cells, _named_cells, block_gap, cells_of, node_box
 from amronet.engine.kernel_data import Grid
 from amronet.engine.occlusion import BINS, NEAR, behind, clear, shade
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
-from amronet.engine.shadowing import FieldGrid, ShadowingField, _lookup, field_at, link_shadowing
+from amronet.engine.shadowing import FieldGrid, ShadowingField, field_at, link_shadowing
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
 from amronet.engine.walls import wall_grid
 from amronet.world.occupancy import OccupancyMap
@@ -191,47 +191,14 @@ clear line from the node (no wall) and of a cell whose budget allows no wall and
 (:mod:`amronet.engine.occlusion`): the walk's answers."""
 
 
-class Cells(NamedTuple):
-    """A grid whose cell centres the coverage and signal kernels decide, with the shadowing field there."""
-
-    ox: float
-    """x of the grid's lower-left corner, metres."""
-    oy: float
-    """y of the grid's lower-left corner, metres."""
-    res: float
-    """Cell size, metres."""
-    field: np.ndarray
-    """The shadowing field at every cell centre ``(rows, cols)`` (1x1 zeros without shadowing)."""
-    block_field: np.ndarray
-    """Its maximum over blocks of :data:`BLOCK` cells (1x1 zeros without shadowing)."""
-
-
-def cells_of(shape: tuple[int, int], ox: float, oy: float, res: float, h: HearingInputs) -> Cells:
-    """The :class:`Cells` of a grid of ``shape`` cells of side ``res`` from ``(ox, oy)`` under the radio ``h``.
-
-    The kernels take it as a plain tuple in the fields' order (``tuple(cells)``, see :meth:`HearingInputs.plain`).
-
-    The kernels bound a block's best margin by its nearest point and its largest field value, and skip the block
-    when even that bound is below what they look for.
-    """
-    rows, cols = shape
-    if h.clip == 0.0:
-        return Cells(ox, oy, res, np.zeros((1, 1)), np.zeros((1, 1)))
-    f = h.field
-    cy = oy + (np.arange(rows) + 0.5) * res
-    cx = ox + (np.arange(cols) + 0.5) * res
-    xx, yy = np.meshgrid(cx, cy)
-    values = _lookup(f.values, f.x0, f.y0, f.h, xx.ravel(), yy.ravel()).reshape(rows, cols)
-    nb_r, nb_c = -(-rows // BLOCK), -(-cols // BLOCK)
-    padded = np.full((nb_r * BLOCK, nb_c * BLOCK), -np.inf)
-    padded[:rows, :cols] = values
-    return Cells(ox, oy, res, values, padded.reshape(nb_r, BLOCK, nb_c, BLOCK).max(axis=(1, 3)))
-
-
 @njit(cache=True, inline="always")
-def _named_cells(t):  # pragma: no cover - numba
-    """The :class:`Cells` of its plain tuple."""
-    return Cells(t[0], t[1], t[2], t[3], t[4])
+def _heard_within2(s, h):  # pragma: no cover - numba
+    """Squared length past which :func:`path_loss_bound` is below 0 for field values summing to ``<= s``.
+
+    A relative 1e-9 to spare: no cell farther from the node is heard (:func:`_mark_node` skips it unasked).
+    """
+    far = h.r_c * 10.0 ** (_shadow_bound(s, h.clip) / h.n10) if h.clip > 0.0 else h.r_c
+    return far * far * (1.0 + 1e-9)
 
 
 @njit(cache=True)
@@ -290,31 +257,44 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field):
             gap = block_gap(x, y, cells, bi, bj, rows, cols)
             if gap > reach:
                 continue
-            if model_bound(gap, sa + at_block[bi, bj] if shadowed else 0.0, h) < 0.0:
+            up = model_bound(gap, sa + at_block[bi, bj] if shadowed else 0.0, h)
+            if up < 0.0:
                 continue
+            far2 = _heard_within2(sa + at_block[bi, bj] if shadowed else 0.0, h) if model_is_path_loss else math.inf
+            dim = model_is_path_loss and walled and up < h.wall_db - 1e-9  # no cell of the block allows a wall
             for i in range(max(bi * BLOCK, i0), min(bi * BLOCK + BLOCK, i1 + 1)):
                 cy = cells.oy + (i + 0.5) * cells.res
                 for j in range(max(bj * BLOCK, j0), min(bj * BLOCK + BLOCK, j1 + 1)):
                     if not mask[i, j] or out[i, j]:
                         continue
                     cx = cells.ox + (j + 0.5) * cells.res
-                    d = math.sqrt((cx - x) * (cx - x) + (cy - y) * (cy - y))
+                    dd = (cx - x) * (cx - x) + (cy - y) * (cy - y)
+                    if dd > far2:  # past the block's bound: not heard
+                        continue
+                    sight = -1  # in a dim block once the shadows are drawn: 1 a clear line, 0 to walk
+                    if dim and asked >= SHADE_AFTER:  # a cell in a wall's shadow needs no margin
+                        if dd > 0.0 and clear(lit, cx - x, cy - y, dd):
+                            sight = 1
+                        elif dd > near2 and behind(shadows, cx - x, cy - y, dd):
+                            continue
+                        else:
+                            sight = 0
+                    d = math.sqrt(dd)
                     if d > reach:
                         continue
                     sb = at_cell[i, j] if shadowed else 0.0
                     if model_is_path_loss:  # path_loss_margin written out, a shadowed cell's walk skipped
                         m = open_margin(d, sa, sb, h.r_c, h.n10, h.corr, h.clip)
                         if walled and m >= 0.0:
-                            dd = (cx - x) * (cx - x) + (cy - y) * (cy - y)
                             if asked < SHADE_AFTER:
                                 m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)
                                 asked += 1
                                 if asked == SHADE_AFTER:
                                     shade(x, y, reach, h.wall_bits, h.walls.blocked.shape[1], h.walls.ox,
                                           h.walls.oy, h.walls.res, shadows, lit)
-                            elif dd > 0.0 and clear(lit, cx - x, cy - y, dd):  # no wall on the way
-                                pass
-                            elif m < h.wall_db and dd > near2 and behind(shadows, cx - x, cy - y, dd):
+                            elif sight == 1 or (sight < 0 and dd > 0.0 and clear(lit, cx - x, cy - y, dd)):
+                                pass  # no wall on the way
+                            elif sight < 0 and m < h.wall_db and dd > near2 and behind(shadows, cx - x, cy - y, dd):
                                 continue  # no wall allowed, and in a wall's shadow: not heard
                             else:
                                 m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)

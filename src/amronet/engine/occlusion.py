@@ -22,7 +22,8 @@ wall cell, grown by :data:`SHRINK` of a cell on every side, whose directions rea
 spare). :func:`clear` tells whether a point is nearer than that (by a relative 1e-9): the segment to it then comes
 no nearer than a hundredth of a cell to any wall cell, so the walk, which visits only cells the segment passes
 through (rounding aside, of the order of 1e-12 of a cell), counts no wall. That answers the cells in sight of the
-node without a walk or a box test. A node in a grown wall cell has no clear line.
+node without a walk or a box test. A node in a grown wall cell, or outside the map (a wall to the walk),
+has no clear line.
 """
 
 from __future__ import annotations
@@ -99,6 +100,9 @@ def shade(x, y, reach, bits, cols, ox, oy, res, out, lit):  # pragma: no cover -
     if rows == 0 or cols == 0 or not (abs(x) + abs(y) + reach < 1e15):
         lit[:] = 0.0
         return
+    if not (0 <= math.floor((y - oy) / res) < rows and 0 <= math.floor((x - ox) / res) < cols):
+        lit[:] = 0.0  # the node outside the map, which the walk counts as wall: no line known clear
+        lit[0] = -1.0  # (and no more to draw)
     r0 = max(int(math.floor((y - reach - oy) / res)), 0)
     r1 = min(int(math.floor((y + reach - oy) / res)), rows - 1)
     c0 = max(int(math.floor((x - reach - ox) / res)), 0)
