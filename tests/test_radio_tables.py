@@ -18,7 +18,7 @@ import pytest
 from amronet.engine.links import keep_entries
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.radio import make_medium
-from amronet.engine.shadowing import _cell_value, link_shadowing
+from amronet.engine.shadowing import cell_value, link_shadowing
 from amronet.engine.walls import count_walls_many, wall_grid
 from amronet.world.builtin import resolve_map
 from amronet.world.occupancy import OccupancyMap
@@ -64,8 +64,8 @@ def _reference(xy: np.ndarray, medium, omap: OccupancyMap) -> dict[str, np.ndarr
     for a, c, d in zip(i, j, dist, strict=True):
         m = h.n10 * math.log10(h.r_c / max(float(d), MIN_DISTANCE_M))
         if field is not None:
-            sa = _cell_value(field.values, field.x0, field.y0, field.h, xy[a, 0], xy[a, 1])
-            sb = _cell_value(field.values, field.x0, field.y0, field.h, xy[c, 0], xy[c, 1])
+            sa = cell_value(field.values, field.x0, field.y0, field.h, xy[a, 0], xy[a, 1])
+            sb = cell_value(field.values, field.x0, field.y0, field.h, xy[c, 0], xy[c, 1])
             m += link_shadowing(sa, sb, float(d), h.corr, h.clip)
         m0.append(m)
     m0 = np.array(m0)

@@ -18,7 +18,7 @@ from numba import uint64 as _u  # unsigned indices: numba then skips its negativ
 
 from amronet.engine.hearing import named_inputs, open_margin, path_loss_margin, wall_limit
 from amronet.engine.propagation import delivery_ratio
-from amronet.engine.shadowing import _cell_value
+from amronet.engine.shadowing import cell_value
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits
 
 __all__ = ["NO_PREVIOUS", "candidate_margins", "distance_margins", "fresh_margin", "keep_entries", "losses",
@@ -74,7 +74,7 @@ def candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indi
         xa = xy[i, 0]
         ya = xy[i, 1]
         still_i = i < n_prev and xa == prev_xy[i, 0] and ya == prev_xy[i, 1]
-        sa = _cell_value(values, x0, y0, cell, xa, ya) if shadowed else 0.0
+        sa = cell_value(values, x0, y0, cell, xa, ya) if shadowed else 0.0
         p = prev_indptr[i] if still_i else 0  # row i of the previous table, merged along this one (both sorted)
         p_end = prev_indptr[i + 1] if still_i else 0
         for e in range(indptr[i], indptr[i + 1]):
@@ -92,7 +92,7 @@ def candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr, prev_indi
             if f >= 0:
                 m = prev_margin[f]
             else:
-                sb = _cell_value(values, x0, y0, cell, xb, yb) if shadowed else 0.0
+                sb = cell_value(values, x0, y0, cell, xb, yb) if shadowed else 0.0
                 m = model_margin(xa, ya, xb, yb, dist[e], sa, sb, 0.0, h)
             out[e] = m
             f = cursor[j]
@@ -162,7 +162,7 @@ def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr,
         xa = xy[_u(i), 0]
         ya = xy[_u(i), 1]
         still_i = still[_u(i)]
-        sa = _cell_value(values, x0, y0, cell, xa, ya) if shadowed else 0.0
+        sa = cell_value(values, x0, y0, cell, xa, ya) if shadowed else 0.0
         ra = radius[_u(i)] if walled else 0.0
         p = prev_indptr[_u(i)] if still_i else 0  # row i of the previous table, merged along this one (both sorted)
         p_end = prev_indptr[_u(i + 1)] if still_i else 0
@@ -182,7 +182,7 @@ def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr,
                 xb = xy[_u(j), 0]
                 yb = xy[_u(j), 1]
                 d = dist[_u(e)]
-                sb = _cell_value(values, x0, y0, cell, xb, yb) if shadowed else 0.0
+                sb = cell_value(values, x0, y0, cell, xb, yb) if shadowed else 0.0
                 m = open_margin(d, sa, sb, r_c, n10, corr, clip)
                 if walled and m >= 0.0 and not d < ra + radius[_u(j)] and not box_clear_bits(
                         bits, cols, ox, oy, res, xa, ya, xb, yb):

@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-__all__ = ["FieldGrid", "ShadowingField", "field_at", "link_shadowing"]
+__all__ = ["FieldGrid", "ShadowingField", "cell_value", "field_at", "link_shadowing"]
 
 _CELLS_PER_CORR = 8
 _MAX_SIDE = 512
@@ -93,7 +93,11 @@ def _gaussian_field(ny: int, nx: int, h: float, corr: float, rng: np.random.Gene
 
 
 @njit(cache=True)
-def _cell_value(grid, x0, y0, h, x, y):  # pragma: no cover - numba
+def cell_value(grid, x0, y0, h, x, y):  # pragma: no cover - numba
+    """``S`` at ``(x, y)`` of the field ``grid`` with origin ``(x0, y0)`` and cell side ``h`` (clamped at the edges).
+
+    :func:`field_at` with the field's arrays and numbers passed one by one (as kernels that take the field apart do).
+    """
     i = int(math.floor((y - y0) / h)) if math.isfinite(y) else 0
     j = int(math.floor((x - x0) / h)) if math.isfinite(x) else 0
     i = min(max(i, 0), grid.shape[0] - 1)
@@ -104,14 +108,14 @@ def _cell_value(grid, x0, y0, h, x, y):  # pragma: no cover - numba
 @njit(cache=True, inline="always")
 def field_at(field, x, y):  # pragma: no cover - numba
     """``S`` at ``(x, y)`` of a :class:`FieldGrid` (the value of the grid cell holding it; clamped at the edges)."""
-    return _cell_value(field.values, field.x0, field.y0, field.h, x, y)
+    return cell_value(field.values, field.x0, field.y0, field.h, x, y)
 
 
 @njit(cache=True)
 def _lookup(grid, x0, y0, h, x, y):  # pragma: no cover - numba
     out = np.empty(x.shape[0])
     for k in range(x.shape[0]):
-        out[k] = _cell_value(grid, x0, y0, h, x[k], y[k])
+        out[k] = cell_value(grid, x0, y0, h, x[k], y[k])
     return out
 
 

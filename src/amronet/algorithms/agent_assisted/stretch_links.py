@@ -36,7 +36,7 @@ from numba import njit
 from amronet.engine.hearing import named_inputs
 from amronet.engine.links import distance_margins, fresh_margin, keep_entries, open_radius, path_loss_candidate_margins
 from amronet.engine.neighbours import search_kernel
-from amronet.engine.shadowing import _cell_value
+from amronet.engine.shadowing import cell_value
 
 __all__ = ["FEW_MOVED", "NO_MARGIN", "Radio", "moved_nodes", "moved_radio", "next_radio", "rebuilt_radio"]
 
@@ -184,7 +184,7 @@ def moved_radio(here, radio, moved):  # pragma: no cover - numba
     radius = np.zeros(n)
     for i in range(n):
         if clip > 0.0:
-            shade[i] = _cell_value(values, x0, y0, cell, here[i, 0], here[i, 1])
+            shade[i] = cell_value(values, x0, y0, cell, here[i, 0], here[i, 1])
         if wall_db > 0.0:
             radius[i] = open_radius(here[i, 0], here[i, 1], jump, ox, oy, res)
     r2 = r * r
