@@ -154,7 +154,8 @@ def _upper_pairs(cs, sx, sy, r2, nx, ny, n_groups):  # pragma: no cover - numba
         if need > cap:  # grown per cell, never inside the hot loops (that would slow them down)
             cap = max(2 * cap, need)
             grown = np.empty(cap, np.int32)
-            grown[:cnt] = pb[:cnt]
+            for q in range(cnt):  # (a loop: numba compiles a slice copy's shape-mismatch message, seconds)
+                grown[_u(q)] = pb[_u(q)]
             pb = grown
         for a in range(s0, s1):
             ustart[_u(a)] = cnt

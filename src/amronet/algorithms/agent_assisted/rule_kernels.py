@@ -224,10 +224,16 @@ def rule_quiet(books, inputs):  # pragma: no cover - numba
 def rule_commit(books):  # pragma: no cover - numba
     """Keep this step's books of a quiet step (what the rule's own ``decide`` and ``losing`` would have kept)."""
     code, _, _, _, _, _, _, samples, new_samples, smoothed, new_smoothed = books
+    # loops, not slice copies: a slice copied from an array makes numba compile its shape-mismatch message (string
+    # formatting, 1-2 s of `amronet compile` per rank of array and worker)
     if code == JUNCTION:
-        samples[:] = new_samples
+        for m in range(samples.shape[0]):
+            for k in range(samples.shape[1]):
+                for c in range(samples.shape[2]):
+                    samples[m, k, c] = new_samples[m, k, c]
     elif code == LINK:
-        smoothed[:] = new_smoothed
+        for m in range(smoothed.shape[0]):
+            smoothed[m] = new_smoothed[m]
 
 
 @njit(cache=True)

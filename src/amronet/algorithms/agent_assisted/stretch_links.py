@@ -247,9 +247,10 @@ def moved_radio(here, radio, moved):  # pragma: no cover - numba
         hi = last_near_indptr[i + 1]
         for q in range(k + 1):
             stop = at[i, q] if q < k else hi
-            near_indices[o:o + stop - s] = last_near_indices[s:stop]  # (a block)
-            near_dist[o:o + stop - s] = last_near_dist[s:stop]
-            near_margin[o:o + stop - s] = last_near_margin[s:stop]
+            for e in range(s, stop):  # (a block; a loop, not slices: see rule_kernels.rule_commit)
+                near_indices[o + e - s] = last_near_indices[e]
+                near_dist[o + e - s] = last_near_dist[e]
+                near_margin[o + e - s] = last_near_margin[e]
             o += stop - s
             s = stop
             if q == k:
