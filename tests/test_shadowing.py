@@ -13,11 +13,13 @@ import math
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.stats import norm
 
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import make_medium
-from amronet.engine.shadowing import ShadowingField, link_shadowing
+from amronet.engine.shadowing import ShadowingField, link_shadowing, values_on_grid
 from amronet.world.builtin import resolve_map
 
 SIGMA = 5.0
@@ -209,3 +211,16 @@ def test_medium_applies_link_shadowing_symmetrically():
     assert len(table.indices) == int((cand.margin >= 0).sum())
     m = sp.csr_matrix((table.rssi, table.indices, table.indptr), shape=(len(xy), len(xy)))
     assert (m != m.T).nnz == 0
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(-3.0, 3.0), st.floats(-3.0, 3.0), st.floats(0.01, 0.7), st.integers(1, 40), st.integers(1, 40),
+       st.integers(0, 2**32 - 1))
+def test_values_on_a_grid_are_the_lookups_of_its_points(ox, oy, res, rows, cols, seed):
+    """:func:`values_on_grid` equals the field's lookup at every point of the grid, bit for bit (edges clamped)."""
+    field = ShadowingField((0.0, 6.0, 0.0, 4.0), 4.0, 1.0, np.random.default_rng(seed))
+    cy = oy + (np.arange(rows) + 0.5) * res  # the coverage grid's cell centres, partly off the field's extent
+    cx = ox + (np.arange(cols) + 0.5) * res
+    xx, yy = np.meshgrid(cx, cy)
+    expected = field.at(np.column_stack([xx.ravel(), yy.ravel()])).reshape(rows, cols)
+    np.testing.assert_array_equal(values_on_grid(field.kernel_grid, cx, cy), expected)

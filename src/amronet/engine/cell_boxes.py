@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numba import njit
 
-from amronet.engine.shadowing import _lookup
+from amronet.engine.shadowing import values_on_grid
 
 if TYPE_CHECKING:
     from amronet.engine.hearing import HearingInputs
@@ -80,11 +80,9 @@ def cells_of(shape: tuple[int, int], ox: float, oy: float, res: float, h: Hearin
     rows, cols = shape
     if h.clip == 0.0:
         return Cells(ox, oy, res, np.zeros((1, 1)), np.zeros((1, 1)))
-    f = h.field
     cy = oy + (np.arange(rows) + 0.5) * res
     cx = ox + (np.arange(cols) + 0.5) * res
-    xx, yy = np.meshgrid(cx, cy)
-    values = _lookup(f.values, f.x0, f.y0, f.h, xx.ravel(), yy.ravel()).reshape(rows, cols)
+    values = values_on_grid(h.field, cx, cy)
     nb_r, nb_c = -(-rows // BLOCK), -(-cols // BLOCK)
     padded = np.full((nb_r * BLOCK, nb_c * BLOCK), -np.inf)
     padded[:rows, :cols] = values

@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-__all__ = ["FieldGrid", "ShadowingField", "cell_value", "field_at", "link_shadowing"]
+__all__ = ["FieldGrid", "ShadowingField", "cell_value", "field_at", "link_shadowing", "values_on_grid"]
 
 _CELLS_PER_CORR = 8
 _MAX_SIDE = 512
@@ -109,6 +109,18 @@ def cell_value(grid, x0, y0, h, x, y):  # pragma: no cover - numba
 def field_at(field, x, y):  # pragma: no cover - numba
     """``S`` at ``(x, y)`` of a :class:`FieldGrid` (the value of the grid cell holding it; clamped at the edges)."""
     return cell_value(field.values, field.x0, field.y0, field.h, x, y)
+
+
+def values_on_grid(field: FieldGrid, cx: np.ndarray, cy: np.ndarray) -> np.ndarray:
+    """The field's values at the points of the grid ``cx`` x ``cy`` ``(len(cy), len(cx))``: :func:`cell_value` of each.
+
+    ``cx`` and ``cy``: finite x and y coordinates (``(cols,)`` and ``(rows,)``); a grid row's points share one row of
+    the field, a column's one column, so each index is computed once per coordinate (the same operations).
+    """
+    rows, cols = field.values.shape
+    i = np.clip(np.floor((cy - field.y0) / field.h).astype(np.int64), 0, rows - 1)
+    j = np.clip(np.floor((cx - field.x0) / field.h).astype(np.int64), 0, cols - 1)
+    return field.values[np.ix_(i, j)]
 
 
 @njit(cache=True)
