@@ -8,17 +8,14 @@ is too far for a link to be heard (:func:`block_gap`); :func:`node_box` gives th
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from amronet.engine.shadowing import values_on_grid
+from amronet.engine.shadowing import FieldGrid, values_on_grid
 
-if TYPE_CHECKING:
-    from amronet.engine.hearing import HearingInputs
-
-__all__ = ["BLOCK", "Cells", "block_gap", "cells_of", "node_box"]
+__all__ = ["BLOCK", "Cells", "block_gap", "cells_of", "named_cells", "node_box"]
 
 BLOCK = 8
 """Cells per side of the blocks that the coverage and signal kernels cull as a whole (see
@@ -69,8 +66,10 @@ class Cells(NamedTuple):
     """Its maximum over blocks of :data:`BLOCK` cells (1x1 zeros without shadowing)."""
 
 
-def cells_of(shape: tuple[int, int], ox: float, oy: float, res: float, h: HearingInputs) -> Cells:
-    """The :class:`Cells` of a grid of ``shape`` cells of side ``res`` from ``(ox, oy)`` under the radio ``h``.
+def cells_of(shape: tuple[int, int], ox: float, oy: float, res: float, clip: float, field: FieldGrid) -> Cells:
+    """The :class:`Cells` of a grid of ``shape`` cells of side ``res`` from ``(ox, oy)`` under a radio's shadowing.
+
+    ``clip`` and ``field``: the radio's (:class:`~amronet.engine.hearing.HearingInputs`; ``clip`` 0: no shadowing).
 
     The kernels take it as a plain tuple in the fields' order (``tuple(cells)``, see :meth:`HearingInputs.plain`).
 
@@ -78,11 +77,11 @@ def cells_of(shape: tuple[int, int], ox: float, oy: float, res: float, h: Hearin
     when even that bound is below what they look for.
     """
     rows, cols = shape
-    if h.clip == 0.0:
+    if clip == 0.0:
         return Cells(ox, oy, res, np.zeros((1, 1)), np.zeros((1, 1)))
     cy = oy + (np.arange(rows) + 0.5) * res
     cx = ox + (np.arange(cols) + 0.5) * res
-    values = values_on_grid(h.field, cx, cy)
+    values = values_on_grid(field, cx, cy)
     nb_r, nb_c = -(-rows // BLOCK), -(-cols // BLOCK)
     padded = np.full((nb_r * BLOCK, nb_c * BLOCK), -np.inf)
     padded[:rows, :cols] = values
@@ -90,6 +89,6 @@ def cells_of(shape: tuple[int, int], ox: float, oy: float, res: float, h: Hearin
 
 
 @njit(cache=True, inline="always")
-def _named_cells(t):  # pragma: no cover - numba
+def named_cells(t):  # pragma: no cover - numba
     """The :class:`Cells` of its plain tuple."""
     return Cells(t[0], t[1], t[2], t[3], t[4])

@@ -198,7 +198,7 @@ class HeardCells:
         """The kernels' :class:`~amronet.engine.cell_boxes.Cells` of a map's grid as a plain tuple, cached per grid."""
         key = (omap.shape, float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution))
         if key not in self._cells:
-            self._cells[key] = tuple(cells_of(*key, self.hearing))
+            self._cells[key] = tuple(cells_of(*key, self.hearing.clip, self.hearing.field))
         return self._cells[key]
 
 

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from amronet.engine.cell_boxes import BLOCK, Cells, _named_cells, block_gap, cells_of, node_box
+from amronet.engine.cell_boxes import BLOCK, Cells, block_gap, cells_of, named_cells, node_box
 from amronet.engine.kernel_data import Grid
 from amronet.engine.occlusion import BINS, NEAR, behind, clear, shade
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
@@ -319,7 +319,7 @@ def heard_cells(xy, keys, mask, grid, reach, covered, owner, window, hearing):  
     Each cell's decision depends on the node and the cell alone: the union marked is the same in any order, over
     any split of the nodes into calls.
     """
-    cells, h = _named_cells(grid), named_inputs(hearing)
+    cells, h = named_cells(grid), named_inputs(hearing)
     owned = owner.shape[0] > 0
     total = 0
     top_field = cells.block_field.max()
@@ -337,7 +337,7 @@ def best_margin_grid(xy, grid, out, floor_db, reach, hearing):  # pragma: no cov
     first); no margin at or above ``floor_db`` is farther than ``reach`` (which may be infinite). ``grid`` and
     ``hearing`` as for :func:`heard_cells`.
     """
-    cells, h = _named_cells(grid), named_inputs(hearing)
+    cells, h = named_cells(grid), named_inputs(hearing)
     rows, cols = out.shape
     shadowed = h.clip > 0.0
     at_cell, at_block = cells.field, cells.block_field  # out of the loops (see candidate_margins)
