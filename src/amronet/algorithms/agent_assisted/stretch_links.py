@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba import uint64 as _u  # unsigned indices: no wraparound code, the copies vectorised
 
 from amronet.engine.hearing import named_inputs
 from amronet.engine.links import distance_margins, fresh_margin, keep_entries, open_radius, path_loss_candidate_margins
@@ -43,11 +44,11 @@ __all__ = ["FEW_MOVED", "NO_MARGIN", "Radio", "moved_nodes", "moved_radio", "nex
 NO_MARGIN = np.zeros(0)
 """The margins of a table whose margins nobody reads (a stand-in of their type)."""
 
-FEW_MOVED = (1, 8)
+FEW_MOVED = (1, 6)
 """``(p, q)``: :func:`next_radio` makes only the moved robots' pairs anew while at most ``p / q`` of the robots moved.
 
-Measured on the office's tables under 4 dB shadowing (30 to 210 robots, nearly every pair within ``r``): with 3
-robots moved a step costs 0.4 to 0.9 times the whole build, and the two cost the same at 1/5 to 1/9 of them moved."""
+Measured on the office's tables under 4 dB shadowing (15 to 210 robots, nearly every pair within ``r``): with 3
+robots moved a step costs 0.25 to 0.9 times the whole build, and the two cost the same at about 1/5 of them moved."""
 
 
 class Radio(NamedTuple):
@@ -227,11 +228,17 @@ def moved_radio(here, radio, moved):  # pragma: no cover - numba
                 at[i, q] = lo
                 c += (1 if within[q, i] else 0) - (1 if lo < hi and last_near_indices[lo] == u else 0)
         rows[i + 1] = rows[i] + c
-    # the rows: the last entries between robots that stood still, the moved robots' merged in by index
+    # the rows: the last entries between robots that stood still, the moved robots' merged in by index; each row's
+    # links as soon as it is written (the pairs whose margin is >= 0 and whose two ends send, as rebuilt_radio keeps)
     nnz = rows[n]
     near_indices = np.empty(nnz, last_near_indices.dtype)
     near_dist = np.empty(nnz)
     near_margin = np.empty(nnz)
+    indptr = np.zeros(n + 1, np.int64)
+    indices = np.empty(nnz, last_near_indices.dtype)
+    dist = np.empty(nnz)
+    margin = np.empty(nnz)
+    f = 0
     for i in range(n):
         o = rows[i]
         qi = slot[i]
@@ -242,39 +249,15 @@ def moved_radio(here, radio, moved):  # pragma: no cover - numba
                     near_dist[o] = fresh_dist[qi, v]
                     near_margin[o] = fresh[qi, v]
                     o += 1
-            continue
-        s = last_near_indptr[i]
-        hi = last_near_indptr[i + 1]
-        for q in range(k + 1):
-            stop = at[i, q] if q < k else hi
-            for e in range(s, stop):  # (a block; a loop, not slices: see rule_kernels.rule_commit)
-                near_indices[o + e - s] = last_near_indices[e]
-                near_dist[o + e - s] = last_near_dist[e]
-                near_margin[o + e - s] = last_near_margin[e]
-            o += stop - s
-            s = stop
-            if q == k:
-                break
-            if s < hi and last_near_indices[s] == moved[q]:
-                s += 1
-            if within[q, i]:
-                near_indices[o] = moved[q]
-                near_dist[o] = fresh_dist[q, i]
-                near_margin[o] = fresh[q, i]
-                o += 1
-    # the links: the pairs whose margin is >= 0 and whose two ends send (a few in a row: a branch seldom taken)
-    indptr = np.zeros(n + 1, np.int64)
-    indices = np.empty(nnz, last_near_indices.dtype)
-    dist = np.empty(nnz)
-    margin = np.empty(nnz)
-    f = 0
-    for i in range(n):
-        if not mute[i]:
+        else:
+            _merge_row(i, o, moved, (within, fresh_dist, fresh, at), (last_near_indptr, last_near_indices,
+                       last_near_dist, last_near_margin), (near_indices, near_dist, near_margin))
+        if not mute[i]:  # (a few in a row: a branch seldom taken)
             for e in range(rows[i], rows[i + 1]):
-                if near_margin[e] >= 0.0 and not mute[near_indices[e]]:
-                    indices[f] = near_indices[e]
-                    dist[f] = near_dist[e]
-                    margin[f] = near_margin[e]
+                if near_margin[_u(e)] >= 0.0 and not mute[_u(near_indices[_u(e)])]:
+                    indices[_u(f)] = near_indices[_u(e)]
+                    dist[_u(f)] = near_dist[_u(e)]
+                    margin[_u(f)] = near_margin[_u(e)]
                     f += 1
         indptr[i + 1] = f
     if f == nnz:  # every pair is a link (as rebuilt_radio passes them on)
@@ -282,6 +265,40 @@ def moved_radio(here, radio, moved):  # pragma: no cover - numba
                       hearing, silent)
     return True, (r, indptr, indices[:f].copy(), dist[:f].copy(), margin[:f].copy(), rows, near_indices, near_dist,
                   here, near_margin, hearing, silent)
+
+
+@njit(cache=True, inline="always")
+def _merge_row(i, o, moved, fresh_pairs, last, out):  # pragma: no cover - numba
+    """Row ``i`` (a robot that stood still) of :func:`moved_radio`'s geometric table, written from ``o`` on.
+
+    The last row's entries in blocks between the moved robots' places (``at[i]``), each moved robot's pair in its
+    place where it is within ``r``. ``fresh_pairs``: ``(within, fresh_dist, fresh, at)``; ``last``: the last table's
+    ``(indptr, indices, dist, margin)``; ``out``: the new ``(indices, dist, margin)``. The blocks are copied by loops
+    on unsigned indices (not slices: see rule_kernels.rule_commit), which compile to plain copies.
+    """
+    within, fresh_dist, fresh, at = fresh_pairs
+    last_indptr, last_indices, last_dist, last_margin = last
+    near_indices, near_dist, near_margin = out
+    k = moved.shape[0]
+    s = last_indptr[i]
+    hi = last_indptr[i + 1]
+    for q in range(k + 1):
+        stop = at[i, q] if q < k else hi
+        for e in range(s, stop):
+            near_indices[_u(o + e - s)] = last_indices[_u(e)]
+            near_dist[_u(o + e - s)] = last_dist[_u(e)]
+            near_margin[_u(o + e - s)] = last_margin[_u(e)]
+        o += stop - s
+        s = stop
+        if q == k:
+            break
+        if s < hi and last_indices[s] == moved[q]:
+            s += 1
+        if within[q, i]:
+            near_indices[o] = moved[q]
+            near_dist[o] = fresh_dist[q, i]
+            near_margin[o] = fresh[q, i]
+            o += 1
 
 
 @njit(cache=True, inline="always")
