@@ -158,3 +158,38 @@ def test_crowded_agents_find_the_farther_rings_spot_and_none_when_full():
     radius = np.full(len(boxed), 0.1)
     args = (boxed[0], boxed[1], 0.35, 0.25, 0.03, np.inf, lambda s, e, rad: np.ones(len(s), bool), boxed, radius, 0)
     assert release_spot(*args) is None and _reference_spot(*args) is None
+
+
+def test_a_reference_out_of_reach_leaves_no_spot_and_the_hand_is_not_asked():
+    """Farther than ``within`` beyond the farthest ring: no spot, found without a look at the walls."""
+    asked = []
+
+    def hand(start, end, radius):
+        asked.append(len(start))
+        return np.ones(len(start), dtype=bool)
+
+    xy = np.array([[10.0, 20.0], [10.0 + 3.0 + 0.35 + 2 * 0.25 + 1e-6, 20.0]])
+    radius = np.full(2, 0.03)
+    assert release_spot(xy[0], xy[1], 0.35, 0.25, 0.03, 3.0, hand, xy, radius, 0) is None
+    assert asked == []
+    xy[1, 0] -= 2e-6  # just in reach: the search runs and finds the farthest ring's spot toward the reference
+    spot = release_spot(xy[0], xy[1], 0.35, 0.25, 0.03, 3.0, hand, xy, radius, 0)
+    assert asked and spot is not None
+    np.testing.assert_array_equal(spot, _reference_spot(xy[0], xy[1], 0.35, 0.25, 0.03, 3.0, hand, xy, radius, 0))
+
+
+@settings(max_examples=300, deadline=None)
+@given(angle=st.floats(-np.pi, np.pi), off=st.floats(-1e-6, 1e-6), within=st.floats(0.5, 30.0),
+       at=st.tuples(st.floats(-500.0, 500.0), st.floats(-500.0, 500.0)))
+def test_spots_near_the_limit_of_reach_are_the_numpy_forms(angle, off, within, at):
+    """References at about ``within`` beyond the farthest ring: the same answer as the full NumPy search."""
+    gap, step, r = 0.35, 0.25, 0.03
+    d = within + gap + 2.0 * step + off
+    p = np.array(at)
+    xy = np.array([p, p + d * np.array([np.cos(angle), np.sin(angle)])])
+    radius = np.full(2, r)
+    args = (xy[0], xy[1], gap, step, r, within, lambda s, e, rad: np.ones(len(s), bool), xy, radius, 0)
+    new, old = release_spot(*args), _reference_spot(*args)
+    assert (new is None) == (old is None)
+    if old is not None:
+        np.testing.assert_array_equal(new, old, strict=True)

@@ -278,13 +278,16 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
             view = self._view(step, current)
             losing = self.drop_rule.losing(view)
             drop = self.drop_rule.decide(view)
-            if self.reversing.any():
+            reversing = self.reversing.any()  # (releasing a router does not change it)
+            if reversing:
                 drop = self._reverse_drops(view, drop)
-            dropped = np.zeros(len(agents), dtype=bool)
-            for m in np.asarray(drop).nonzero()[0]:  # (np.flatnonzero's cost thrice over, on a few agents)
+            droppers = np.asarray(drop).nonzero()[0]  # (np.flatnonzero's cost thrice over, on a few agents)
+            dropped = np.zeros(len(agents), dtype=bool) if len(droppers) else None
+            for m in droppers:
                 toward = self._toward(m, view)
                 new = self._release_reference(int(agents[m]), toward, step.t) if toward >= 0 else None
                 if new is not None:
+                    assert dropped is not None
                     dropped[m] = True
                     if losing[m] and sw.state[new] == State.STRIP:  # it drives off (strip-goals): wait for one to stay
                         if held is None:
@@ -294,11 +297,11 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
                     if held is None:
                         held = np.zeros(len(agents), dtype=bool)
                     held[m] = True  # no free spot to put a router down: turn back as a tethered agent does
-            if dropped.any():
+            if dropped is not None and dropped.any():
                 self.drop_rule.dropped(dropped, view)
                 if self.settle_s > 0:
                     self.pending_until[dropped] = step.t + self.settle_s
-                if self.reversing.any():
+                if reversing:
                     self.reverse_drops += int(np.count_nonzero(dropped & self.reversing))
                     self.reversing &= ~dropped
 
@@ -309,10 +312,13 @@ class AgentAssisted(Releasing, DropSwitches, Movers, Controller):
                             self.deployed_nodes()[1])
         if losing is not None:
             assert view is not None
-            tethered = losing & (self.left[agents] < 1) if self.tether else np.zeros(len(agents), dtype=bool)
-            if held is not None:
-                tethered |= held
-            for m in tethered.nonzero()[0]:
+            if self.tether:
+                tethered = losing & (self.left[agents] < 1)
+                if held is not None:
+                    tethered |= held
+            else:
+                tethered = held  # (None: no agent turns back)
+            for m in () if tethered is None else tethered.nonzero()[0]:
                 toward = self._toward(m, view)
                 if toward >= 0:
                     back = sw.xy[toward] - sw.xy[agents[m]]

@@ -45,6 +45,8 @@ class DropSwitches:
     reversing: np.ndarray
     trails: Trails | None
     nearest_d: np.ndarray
+    _base_xy: np.ndarray | None = None
+    _no_margin: np.ndarray | None = None
     deployed_nodes: Callable[[], tuple[np.ndarray, np.ndarray]]
     _nodes_changed: Callable[[], None]
 
@@ -56,13 +58,22 @@ class DropSwitches:
         contact = None
         if rule.needs_contact or self.reverse_after_s is not None:
             contact = agents_connected(step.table, agents, self.bases, sw.relaying)
-        best = (best_reference_margin(step.table, agents, is_ref) if not rule.reads_positions
-                else np.full(len(agents), -np.inf))
-        return AgentView(
-            t=step.t, current=current, nearest_d=self.nearest_d, best_margin=best, xy=sw.xy[agents],
-            heading=sw.heading[agents], relay_xy=relay_xy, base_xy=sw.xy[self.bases], in_contact=contact,
-            scans=step.readings.of(agents, self.agent_model) if rule.needs_scans else None,
-            can_drop=(self.left[agents] >= 1) & (self.pending_until <= step.t))
+        best = self._no_margins() if rule.reads_positions else best_reference_margin(step.table, agents, is_ref)
+        if self._base_xy is None:  # (base nodes never move: kept, read-only)
+            self._base_xy = sw.xy[self.bases]
+            self._base_xy.flags.writeable = False
+        # by position, in the order of the fields (keywords cost more, once per step an agent acts)
+        return AgentView(step.t, current, self.nearest_d, best, sw.xy[agents], sw.heading[agents], relay_xy,
+                         self._base_xy, contact,
+                         step.readings.of(agents, self.agent_model) if rule.needs_scans else None,
+                         (self.left[agents] >= 1) & (self.pending_until <= step.t))
+
+    def _no_margins(self) -> np.ndarray:
+        """What a rule that reads positions is shown of the link margins: ``-inf`` per agent (kept, read-only)."""
+        if self._no_margin is None:
+            self._no_margin = np.full(len(self.agents), -np.inf)
+            self._no_margin.flags.writeable = False
+        return self._no_margin
 
     def _toward(self, m: int, view: AgentView) -> int:
         """The node agent ``m`` puts a router down next to or turns back to (-1: none).

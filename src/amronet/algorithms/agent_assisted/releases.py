@@ -6,6 +6,7 @@ Cold code: a handful of events per run. :class:`Releasing` is mixed into
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -43,6 +44,18 @@ _RINGS = np.repeat([0.0, 1.0, 2.0], [len(_NEAR_TURNS), len(_FAR_TURNS), len(_FAR
 """Every candidate's ring: its distance from the agent is ``gap + ring * step``."""
 
 
+def _out_of_reach(p: np.ndarray, ref: np.ndarray, reach: float, within: float) -> bool:
+    """Whether every point within ``reach`` of ``p`` is farther than ``within`` from ``ref``, rounding included.
+
+    A candidate spot lies at most ``reach`` from ``p`` (up to the rounding of its coordinates), so its distance to
+    ``ref`` is at least ``|p - ref| - reach``; the slack (a billionth of the coordinates' size, far above their
+    rounding errors) keeps every spot the full search would take.
+    """
+    px, py, rx, ry = float(p[0]), float(p[1]), float(ref[0]), float(ref[1])
+    slack = 1e-9 * (1.0 + abs(px) + abs(py) + abs(rx) + abs(ry) + reach)
+    return math.hypot(rx - px, ry - py) - reach > within + slack
+
+
 def release_spot(p: np.ndarray, ref: np.ndarray, gap: float, step: float, r: float, within: float,
                  path_clear: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray], xy: np.ndarray,
                  radius: np.ndarray, agent: int) -> np.ndarray | None:
@@ -53,7 +66,12 @@ def release_spot(p: np.ndarray, ref: np.ndarray, gap: float, step: float, r: flo
     body. A spot must be within ``within`` of ``ref``, clear of walls along the way (``path_clear``, the agent's
     hand, asked once for every candidate) and clear of every body of ``xy``/``radius`` but ``agent``
     (:func:`~amronet.algorithms.agent_assisted.release_kernels.first_free_spot`).
+
+    A reference farther than ``within`` beyond the farthest ring (an agent that strayed out of its reach) leaves
+    no spot: the answer is ``None`` at once, the hand never asked (:func:`_out_of_reach`).
     """
+    if _out_of_reach(p, ref, gap + 2.0 * step, within):
+        return None
     angles = np.arctan2(ref[1] - p[1], ref[0] - p[0]) + _TURNS
     away = gap + _RINGS * step
     cand = np.empty((len(_TURNS), 2))

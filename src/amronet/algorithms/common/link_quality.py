@@ -104,8 +104,8 @@ class MarginSmoother:
         A robot without history starts at its sample; one that hears nothing loses its history (``nan``).
         """
         old = self.value[who]
-        with np.errstate(invalid="ignore"):
-            new = np.where(np.isnan(old), margin, old + self.alpha * (margin - old))
+        # no invalid operation to silence: a kept value is finite or nan (never inf), so no inf - inf arises
+        new = np.where(np.isnan(old), margin, old + self.alpha * (margin - old))
         new[~np.isfinite(margin)] = np.nan
         self.value[who] = new
         return new

@@ -77,9 +77,9 @@ class LinkQuality(DropRule):
         if view.t != self._t:  # once per step, whether decide or losing asks first
             self._t = view.t
             smoothed = self.filter.update(self._all, view.best_margin)
-            with np.errstate(invalid="ignore"):
-                self._weak = (smoothed < self.params.drop_margin_db) | (view.best_margin < self.params.loss_margin_db)
-            self._weak &= np.isfinite(view.best_margin)
+            best = view.best_margin  # (comparisons with nan, no history, are false and raise nothing)
+            self._weak = (smoothed < self.params.drop_margin_db) | (best < self.params.loss_margin_db)
+            self._weak &= np.isfinite(best)
         return self._weak
 
     def decide(self, view: AgentView) -> np.ndarray:  # noqa: D102
