@@ -15,9 +15,10 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from amronet.engine.cell_boxes import BLOCK
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.coverage_heard import HeardCells
-from amronet.engine.coverage_union import BYTES_PER_CELL, full_window
+from amronet.engine.coverage_union import BYTES_PER_CELL, block_grid, full_window
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import RadioMedium, make_medium
 from amronet.world.builtin import resolve_map
@@ -49,7 +50,7 @@ def _afresh(medium: RadioMedium, area: CoverageArea, xy: np.ndarray) -> np.ndarr
     out = np.zeros(area.mask.shape, dtype=bool)
     medium.kernels.heard_cells(np.ascontiguousarray(xy, dtype=float).reshape(-1, 2), NO_KEYS, area.mask,
                                medium.heard.cells(area.omap), float(medium.reach), out, NO_OWNER,
-                               full_window(out.shape), medium.hearing.plain())
+                               full_window(out.shape), medium.hearing.plain(), block_grid(out.shape))
     return out
 
 
@@ -103,14 +104,14 @@ class _Work:
         self.cy = omap.origin[1] + (np.arange(omap.shape[0]) + 0.5) * omap.resolution
         self.cx = omap.origin[0] + (np.arange(omap.shape[1]) + 0.5) * omap.resolution
 
-    def __call__(self, xy, keys, mask, grid, reach, covered, owner, window, hearing):
+    def __call__(self, xy, keys, mask, grid, reach, covered, owner, window, hearing, blocks):
         i0, i1, j0, j1 = window
         open_ = mask[i0:i1 + 1, j0:j1 + 1] & ~covered[i0:i1 + 1, j0:j1 + 1]
         for x, y in xy:
             near = np.hypot(self.cx[None, j0:j1 + 1] - x, self.cy[i0:i1 + 1, None] - y) <= reach
             self.pairs += int(np.count_nonzero(open_ & near))
         self.calls += 1
-        return self.kernel(xy, keys, mask, grid, reach, covered, owner, window, hearing)
+        return self.kernel(xy, keys, mask, grid, reach, covered, owner, window, hearing, blocks)
 
     def take(self) -> int:
         pairs, self.pairs = self.pairs, 0
@@ -218,3 +219,33 @@ def test_areas_share_the_room_the_least_recently_used_union_goes_first():
             kept = [(memo.area, u) for memo in heard.areas.values() for u in memo.unions]
             assert [kept_area for kept_area, _ in kept] == [a]  # the other area's union made room
             assert sum(u.nbytes for _, u in kept) <= room
+
+
+def _blocks_with_cells_left(area: CoverageArea, union: np.ndarray) -> np.ndarray:
+    """Per block of :data:`BLOCK` cells a side: whether it holds a mask cell the union does not cover."""
+    rows, cols = area.mask.shape
+    left = np.zeros((-(-rows // BLOCK) * BLOCK, -(-cols // BLOCK) * BLOCK), dtype=bool)
+    left[:rows, :cols] = area.mask & ~union
+    return left.reshape(left.shape[0] // BLOCK, BLOCK, left.shape[1] // BLOCK, BLOCK).any(axis=(1, 3))
+
+
+def test_a_block_with_no_cell_left_to_decide_is_not_looked_at_again():
+    area, pool = _world()
+    medium = _medium(4.0)
+    heard = HeardCells(medium.hearing, medium.kernels)
+    routers = pool[:12]
+    heard.covered(area, routers, medium.reach)
+    union = next(iter(heard.areas.values())).unions[0]
+    skipped = union.blocks == 0
+    assert skipped.sum() > 300  # blocks the routers cover whole, or that hold no mask cell
+    assert not (skipped & _blocks_with_cells_left(area, union.union)).any()  # never one with a cell left
+    # the kernel looks at no cell of a block marked so: with every block marked, a node marks nothing
+    args = (NO_KEYS, area.mask, medium.heard.cells(area.omap), float(medium.reach))
+    out = np.zeros(area.mask.shape, dtype=bool)
+    rest = (NO_OWNER, full_window(out.shape), medium.hearing.plain())
+    assert medium.kernels.heard_cells(pool[12:], *args, out, *rest, np.zeros_like(union.blocks)) == 0
+    assert medium.kernels.heard_cells(pool[12:], *args, out, *rest, block_grid(out.shape)) > 0
+    # a router that leaves opens the blocks of the cells it marked first again: the union stays exact
+    for xy in (routers[1:], routers[2:], pool[:3]):
+        np.testing.assert_array_equal(heard.covered(area, xy, medium.reach), _afresh(medium, area, xy))
+        assert not ((union.blocks == 0) & _blocks_with_cells_left(area, union.union)).any()

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from amronet.engine.occlusion import BINS, behind, clear, shade
+from amronet.engine.occlusion import BINS, EPS, NEAR, SHRINK, _span, behind, clear, shade
 from amronet.engine.wall_bits import wall_bits
 from amronet.engine.walls import count_walls_many, wall_grid
 from amronet.world.builtin import resolve_map
@@ -156,3 +157,69 @@ def test_a_node_outside_the_map_has_no_clear_line(node):
     lit_up = np.array([clear(lit, dx, dy, s) for (dx, dy), s in zip(d, dd, strict=True)])
     assert not lit_up.any()
     assert (_walls(omap, grid, np.array(node), ends) > 0).all()  # the walk: each line leaves the map first
+
+
+def _gap(lo: float, hi: float) -> float:
+    return lo if lo > 0.0 else (-hi if hi < 0.0 else 0.0)
+
+
+def _cell_by_cell(bits, cols: int, x: float, y: float, reach: float, ox: float, oy: float, res: float):
+    """:func:`shade` drawn wall cell by wall cell over every wall cell within reach, none passed over: its numbers."""
+    out, lit = np.full(BINS, np.inf), np.full(BINS, np.inf)
+    rows, scale, s = bits.shape[1], BINS / 4.0, SHRINK * res
+    span = _span.py_func
+    if not (0 <= math.floor((y - oy) / res) < rows and 0 <= math.floor((x - ox) / res) < cols):
+        lit[:], lit[0] = 0.0, -1.0
+    r0, r1 = max(math.floor((y - reach - oy) / res), 0), min(math.floor((y + reach - oy) / res), rows - 1)
+    c0, c1 = max(math.floor((x - reach - ox) / res), 0), min(math.floor((x + reach - ox) / res), cols - 1)
+    walls = np.unpackbits(bits[0].view(np.uint8), axis=1, bitorder="little")[:, :cols]
+    far2 = reach * reach
+    for r, c in zip(*np.nonzero(walls[r0:r1 + 1, c0:c1 + 1]), strict=True):
+        r, c = int(r) + r0, int(c) + c0
+        dy0, dy1 = oy + r * res + s - y, oy + (r + 1) * res - s - y
+        dx0, dx1 = ox + c * res + s - x, ox + (c + 1) * res - s - x
+        gx, gy = _gap(dx0, dx1), _gap(dy0, dy1)
+        ex0, ex1, ey0, ey1 = dx0 - 2.0 * s, dx1 + 2.0 * s, dy0 - 2.0 * s, dy1 + 2.0 * s  # the cell grown
+        hx, hy = _gap(ex0, ex1), _gap(ey0, ey1)
+        if lit[0] >= 0.0 and hx == 0.0 and hy == 0.0:
+            lit[:], lit[0] = 0.0, -1.0
+        elif lit[0] >= 0.0 and hx * hx + hy * hy <= far2:
+            lo, hi = span(ex0, ex1, ey0, ey1)
+            for b in range(math.floor((lo - EPS) * scale), math.floor((hi + EPS) * scale) + 1):
+                lit[b % BINS] = min(lit[b % BINS], hx * hx + hy * hy)
+        gap2 = gx * gx + gy * gy
+        if (NEAR * res) * (NEAR * res) <= gap2 <= far2:
+            f2 = max(dx0 * dx0, dx1 * dx1) + max(dy0 * dy0, dy1 * dy1)
+            lo, hi = span(dx0, dx1, dy0, dy1)
+            for b in range(math.ceil((lo + EPS) * scale), math.floor((hi - EPS) * scale)):
+                out[b % BINS] = min(out[b % BINS], f2)
+    return out, lit
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), where=st.sampled_from(["free", "face", "corner", "wall", "outside"]),
+       reach=st.sampled_from([0.3, 2.0, 5.0]))
+def test_shade_passing_over_blocks_gives_the_numbers_of_every_wall_cell_drawn(seed, where, reach):
+    omap, grid, bits = _office()
+    rng = np.random.default_rng(seed)
+    node = np.array([-0.3, 31.0 * rng.uniform()]) if where == "outside" else _node(omap, grid, rng, where)
+    ox, oy, res = float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution)
+    out, lit = np.empty(BINS), np.empty(BINS)
+    shade(*node, reach, bits, omap.shape[1], ox, oy, res, out, lit)
+    want_out, want_lit = _cell_by_cell(bits, omap.shape[1], *node, reach, ox, oy, res)
+    np.testing.assert_array_equal(out, want_out)
+    np.testing.assert_array_equal(lit, want_lit)
+
+
+def test_shade_draws_few_of_the_wall_cells_behind_the_nearest_walls():
+    omap, grid, bits = _office()
+    ox, oy, res = float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution)
+    rng = np.random.default_rng(5)
+    drawn = walls = 0
+    for _ in range(4):
+        node = _node(omap, grid, rng, "free")
+        drawn += shade(*node, REACH, bits, omap.shape[1], ox, oy, res, np.empty(BINS), np.empty(BINS))
+        i0, j0 = max(math.floor((node[1] - REACH - oy) / res), 0), max(math.floor((node[0] - REACH - ox) / res), 0)
+        i1, j1 = math.floor((node[1] + REACH - oy) / res), math.floor((node[0] + REACH - ox) / res)
+        walls += int(np.count_nonzero(grid[0][i0:i1 + 1, j0:j1 + 1] == 1))  # the wall cells in its box
+    assert 0 < drawn < walls // 2

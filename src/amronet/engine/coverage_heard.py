@@ -13,7 +13,7 @@ from collections.abc import Callable
 import numpy as np
 
 from amronet.engine.coverage import CoverageArea
-from amronet.engine.coverage_union import BYTES_PER_CELL, HeardUnion, Mark, full_window
+from amronet.engine.coverage_union import BYTES_PER_CELL, HeardUnion, Mark, block_grid, full_window
 from amronet.engine.hearing import HearingInputs, cells_of
 from amronet.engine.margin_kernels import MarginKernels
 from amronet.world.occupancy import OccupancyMap
@@ -92,7 +92,7 @@ class HeardCells:
         if union is not None:
             return union.union.copy()
         covered = np.zeros(area.mask.shape, dtype=bool)  # no node, or no room for a union: one pass
-        mark(xy, _NO_KEYS, area.mask, covered, _NO_OWNER, full_window(covered.shape))
+        mark(xy, _NO_KEYS, area.mask, covered, _NO_OWNER, full_window(covered.shape), block_grid(covered.shape))
         return covered
 
     def _union(self, memo: _AreaCache, positions: dict, mark: Mark) -> HeardUnion | None:
@@ -153,8 +153,8 @@ class HeardCells:
         cells, h, kernel = self.cells(area.omap), self.plain, self.kernels.heard_cells
 
         def mark(xy: np.ndarray, keys: np.ndarray, mask: np.ndarray, covered: np.ndarray, owner: np.ndarray,
-                 window: tuple[int, int, int, int]) -> int:
-            return kernel(xy, keys, mask, cells, reach, covered, owner, window, h)
+                 window: tuple[int, int, int, int], blocks: np.ndarray) -> int:
+            return kernel(xy, keys, mask, cells, reach, covered, owner, window, h, blocks)
         return mark
 
     def best_margins(self, omap: OccupancyMap, xy: np.ndarray, floor_db: float, reach: float,

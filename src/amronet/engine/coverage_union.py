@@ -18,18 +18,27 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["BYTES_PER_CELL", "HeardUnion", "Mark", "full_window"]
+from amronet.engine.cell_boxes import BLOCK
+
+__all__ = ["BYTES_PER_CELL", "HeardUnion", "Mark", "block_grid", "full_window"]
 
 BYTES_PER_CELL = 6
 """What a union keeps per cell: the union (1 byte), the owner (4), the cells to decide again (1)."""
 
-Mark = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]], int]
-"""``mark(xy, keys, mask, covered, owner, window)``: :func:`~amronet.engine.hearing.heard_cells` of one grid."""
+Mark = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int], np.ndarray],
+                int]
+"""``mark(xy, keys, mask, covered, owner, window, blocks)``: :func:`~amronet.engine.hearing.heard_cells` of one
+grid."""
 
 
 def full_window(shape: tuple[int, int]) -> tuple[int, int, int, int]:
     """The window ``(i0, i1, j0, j1)`` of every cell of a grid of ``shape``."""
     return 0, shape[0] - 1, 0, shape[1] - 1
+
+
+def block_grid(shape: tuple[int, int]) -> np.ndarray:
+    """One 1 per block of a grid of ``shape`` (every block may hold a cell to decide; see ``heard_cells``)."""
+    return np.ones((-(-shape[0] // BLOCK), -(-shape[1] // BLOCK)), dtype=np.uint8)
 
 
 class HeardUnion:
@@ -47,10 +56,13 @@ class HeardUnion:
         dropped: The positions that left at the last update (met again, two callers alternate: see
             :class:`~amronet.engine.coverage_heard.HeardCells`).
         used: When it last served a call (its keeper's clock).
+        blocks: Per block of cells, 0 when it holds no cell of the area's mask outside the union (the kernel
+            skips it; a member that leaves opens the blocks of its cells again).
     """
 
     def __init__(self, shape: tuple[int, int], boxes: Callable[[np.ndarray], np.ndarray]) -> None:
         self.union = np.zeros(shape, dtype=bool)
+        self.blocks = block_grid(shape)
         self.owner = np.full(shape, -1, dtype=np.int32)
         self._todo = np.zeros(shape, dtype=bool)
         self._todo_read = self._todo.view()  # what the kernel reads: read-only like an area's mask (one compile)
@@ -73,6 +85,7 @@ class HeardUnion:
     def clear(self) -> None:
         """No member left (the grids kept)."""
         self.union[:] = False
+        self.blocks[:] = 1
         self.owner[:] = -1
         self.members.clear()
         self.dropped = set()
@@ -81,6 +94,7 @@ class HeardUnion:
     def become(self, other: HeardUnion) -> None:
         """Take ``other``'s members and grids (copies; its keeper's clock and last leavers are not taken)."""
         np.copyto(self.union, other.union)
+        np.copyto(self.blocks, other.blocks)
         np.copyto(self.owner, other.owner)
         self.members = dict(other.members)
         self.dropped = set()
@@ -114,7 +128,7 @@ class HeardUnion:
             self._count += len(new)
             for key, slot in zip(new, slots.tolist(), strict=True):
                 self.members[key] = slot
-            mark(xy, slots, mask, self.union, self.owner, full_window(mask.shape))
+            mark(xy, slots, mask, self.union, self.owner, full_window(mask.shape), self.blocks)
 
     def _leave(self, slots: list[int], mark: Mark) -> None:
         """Unmark the cells the members in ``slots`` own and decide them again by the younger members left."""
@@ -130,6 +144,7 @@ class HeardUnion:
         if len(rows) == 0:  # they marked no cell first
             return
         self.union[i0:i1 + 1, j0:j1 + 1][mine] = False
+        self.blocks[i0 // BLOCK:i1 // BLOCK + 1, j0 // BLOCK:j1 // BLOCK + 1] = 1  # their cells to decide again
         self._todo[i0:i1 + 1, j0:j1 + 1][mine] = True
         owner[mine] = -1
         window = (i0 + int(rows[0]), i0 + int(rows[-1]), j0 + int(cols[0]), j0 + int(cols[-1]))
@@ -139,7 +154,8 @@ class HeardUnion:
                     & (box[:, 3] >= window[2]) & (self._joined[rest] > oldest)]
         near = near[np.argsort(self._joined[near], kind="stable")]  # oldest first: the invariant (module doc)
         if len(near):
-            mark(self._xy[near], near, self._todo_read, self.union, self.owner, window)
+            # (the pass sees the cells to decide again only: what it finds of the blocks is not kept)
+            mark(self._xy[near], near, self._todo_read, self.union, self.owner, window, self.blocks.copy())
         self._todo[window[0]:window[1] + 1, window[2]:window[3] + 1] = False
 
     def _slots(self, n: int) -> np.ndarray:

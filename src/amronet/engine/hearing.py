@@ -32,7 +32,7 @@ from numba import njit
 
 from amronet.engine.cell_boxes import BLOCK, Cells, block_gap, cells_of, named_cells, node_box
 from amronet.engine.kernel_data import Grid
-from amronet.engine.occlusion import BINS, NEAR, behind, clear, shade
+from amronet.engine.occlusion import BINS, NEAR, look, shade
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.shadowing import FieldGrid, ShadowingField, field_at, link_shadowing
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
@@ -221,12 +221,12 @@ def node_reach(s, reach, h):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field):  # pragma: no cover - numba
+def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field, blocks):  # pragma: no cover - numba
     """Mark ``out[i, j]`` for the ``mask`` cells ``(i, j)`` of ``window`` heard from the node at ``(x, y)``.
 
     Cells already marked are skipped; with an ``owner`` grid (not 0x0) a newly marked cell's owner is ``key``.
-    ``window``: the cells ``(i0, i1, j0, j1)`` looked at; ``top_field``: the largest of ``cells.block_field``.
-    Returns how many were newly marked.
+    ``window``: the cells ``(i0, i1, j0, j1)`` looked at; ``top_field``: the largest of ``cells.block_field``;
+    ``blocks``: as :func:`heard_cells` takes it. Returns how many were newly marked.
     """
     rows, cols = mask.shape
     total = 0
@@ -252,8 +252,11 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field):
     lit = np.empty(BINS if model_is_path_loss and walled else 0)
     asked = 0  # cells asked about walls: the shadows and clear lines are drawn after SHADE_AFTER of them
     near2 = (NEAR * h.walls.res) ** 2
+    kept = blocks.shape[0] > 0
     for bi in range(i0 // BLOCK, i1 // BLOCK + 1):
         for bj in range(j0 // BLOCK, j1 // BLOCK + 1):
+            if kept and blocks[bi, bj] == 0:  # no cell left to decide
+                continue
             gap = block_gap(x, y, cells, bi, bj, rows, cols)
             if gap > reach:
                 continue
@@ -262,23 +265,24 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field):
                 continue
             far2 = _heard_within2(sa + at_block[bi, bj] if shadowed else 0.0, h) if model_is_path_loss else math.inf
             dim = model_is_path_loss and walled and up < h.wall_db - 1e-9  # no cell of the block allows a wall
-            for i in range(max(bi * BLOCK, i0), min(bi * BLOCK + BLOCK, i1 + 1)):
+            ia, ib = max(bi * BLOCK, i0), min(bi * BLOCK + BLOCK, i1 + 1)
+            ja, jb = max(bj * BLOCK, j0), min(bj * BLOCK + BLOCK, j1 + 1)
+            left = 0  # the block's mask cells still not marked
+            for i in range(ia, ib):
                 cy = cells.oy + (i + 0.5) * cells.res
-                for j in range(max(bj * BLOCK, j0), min(bj * BLOCK + BLOCK, j1 + 1)):
+                for j in range(ja, jb):
                     if not mask[i, j] or out[i, j]:
                         continue
+                    left += 1
                     cx = cells.ox + (j + 0.5) * cells.res
                     dd = (cx - x) * (cx - x) + (cy - y) * (cy - y)
                     if dd > far2:  # past the block's bound: not heard
                         continue
-                    sight = -1  # in a dim block once the shadows are drawn: 1 a clear line, 0 to walk
+                    sight = 2  # once the shadows are drawn: 1 a clear line, -1 in a wall's shadow, 0 neither; 2 unasked
                     if dim and asked >= SHADE_AFTER:  # a cell in a wall's shadow needs no margin
-                        if dd > 0.0 and clear(lit, cx - x, cy - y, dd):
-                            sight = 1
-                        elif dd > near2 and behind(shadows, cx - x, cy - y, dd):
+                        sight = look(lit, shadows, cx - x, cy - y, dd, near2)
+                        if sight < 0:
                             continue
-                        else:
-                            sight = 0
                     d = math.sqrt(dd)
                     if d > reach:
                         continue
@@ -292,12 +296,13 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field):
                                 if asked == SHADE_AFTER:
                                     shade(x, y, reach, h.wall_bits, h.walls.blocked.shape[1], h.walls.ox,
                                           h.walls.oy, h.walls.res, shadows, lit)
-                            elif sight == 1 or (sight < 0 and dd > 0.0 and clear(lit, cx - x, cy - y, dd)):
-                                pass  # no wall on the way
-                            elif sight < 0 and m < h.wall_db and dd > near2 and behind(shadows, cx - x, cy - y, dd):
-                                continue  # no wall allowed, and in a wall's shadow: not heard
                             else:
-                                m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)
+                                if sight == 2:
+                                    sight = look(lit, shadows, cx - x, cy - y, dd, near2)
+                                if sight < 0 and m < h.wall_db:
+                                    continue  # no wall allowed, and in a wall's shadow: not heard
+                                if sight != 1:  # a wall may be on the way
+                                    m -= h.wall_db * walls_crossed(x, y, cx, cy, wall_limit(m, 0.0, h.wall_db), h)
                     else:
                         m = model_margin(x, y, cx, cy, d, sa, sb, 0.0, h)
                     if m >= 0.0:
@@ -305,17 +310,23 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field):
                         if owned:
                             owner[i, j] = key
                         total += 1
+                        left -= 1
+            if kept and left == 0 and ia == bi * BLOCK and ib == min(bi * BLOCK + BLOCK, rows) \
+                    and ja == bj * BLOCK and jb == min(bj * BLOCK + BLOCK, cols):  # the whole block looked at
+                blocks[bi, bj] = 0
     return total
 
 
 @njit(cache=True)
-def heard_cells(xy, keys, mask, grid, reach, covered, owner, window, hearing):  # pragma: no cover - numba
+def heard_cells(xy, keys, mask, grid, reach, covered, owner, window, hearing, blocks):  # pragma: no cover - numba
     """Mark in ``covered`` the ``mask`` cells heard from a node of ``xy``; return how many were newly marked.
 
     ``grid``: the :class:`Cells` (:func:`cells_of`) and ``hearing`` the :class:`HearingInputs`, as plain tuples;
     cells already marked are skipped; no link is longer than ``reach``. Only the cells of ``window``
     ``(i0, i1, j0, j1)`` are looked at (a node whose box misses it costs nothing). With an ``owner`` grid (int32,
     not 0x0), a cell newly marked from ``xy[k]`` gets the owner ``keys[k]`` (``keys`` may be empty without one).
+    ``blocks`` (uint8, one per block of :data:`BLOCK` cells a side, or 0x0 for none): 0 where a block holds no
+    ``mask`` cell left unmarked in ``covered`` (its cells are not looked at); set to 0 where a pass finds that so.
     Each cell's decision depends on the node and the cell alone: the union marked is the same in any order, over
     any split of the nodes into calls.
     """
@@ -325,7 +336,8 @@ def heard_cells(xy, keys, mask, grid, reach, covered, owner, window, hearing):  
     top_field = cells.block_field.max()
     for k in range(xy.shape[0]):
         key = keys[k] if owned else np.int32(-1)
-        total += _mark_node(xy[k, 0], xy[k, 1], mask, cells, reach, covered, owner, key, window, h, top_field)
+        total += _mark_node(xy[k, 0], xy[k, 1], mask, cells, reach, covered, owner, key, window, h, top_field,
+                            blocks)
     return total
 
 

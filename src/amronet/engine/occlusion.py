@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 from numba import uint64 as _u
 
-__all__ = ["BINS", "behind", "clear", "pseudo_angle", "shade"]
+__all__ = ["BINS", "behind", "clear", "look", "pseudo_angle", "shade"]
 
 BINS = 4096
 """Bins of directions around a node (a quarter turn is :data:`BINS` / 4 of them)."""
@@ -45,6 +45,8 @@ NEAR = 1.5
 """Wall cells nearer the node than this many cells cast no shadow."""
 EPS = 1e-9
 """Pseudo-angle to spare at both ends of a wall cell's range of directions."""
+SIDE = 8
+"""Cells a side of the blocks of wall cells :func:`shade` passes over whole when none could draw (a divisor of 64)."""
 _DE_BRUIJN = np.uint64(0x03F79D71B4CB0A89)
 _LOWEST = np.zeros(64, np.int64)  # the index of a word's lowest set bit, by its de Bruijn product's top six bits
 _LOWEST[[((1 << k) * 0x03F79D71B4CB0A89 % 2**64) >> 58 for k in range(64)]] = np.arange(64)
@@ -93,13 +95,20 @@ def shade(x, y, reach, bits, cols, ox, oy, res, out, lit):  # pragma: no cover -
     and ``res`` its origin and cell size; the wall cells within ``reach`` count. ``out[b]``: the squared distance
     beyond which the lines in bin ``b``'s directions have crossed a wall cell (``inf``: none known). ``lit[b]``:
     the squared distance within which they are clear (see the module doc; read by :func:`clear` only).
+
+    The wall cells go by blocks of :data:`SIDE` cells a side, in rings outwards from the node's block; a block
+    that no cell of it could lower (every bin its directions reach is already at or below its nearest point,
+    :func:`_hidden`) is passed over whole. Both are minima over the wall cells: the same numbers in any order.
+
+    Returns:
+        How many wall cells were drawn (the others were passed over by block).
     """
     out[:] = np.inf
     lit[:] = np.inf
     rows = bits.shape[1]
     if rows == 0 or cols == 0 or not (abs(x) + abs(y) + reach < 1e15):
         lit[:] = 0.0
-        return
+        return 0
     if not (0 <= math.floor((y - oy) / res) < rows and 0 <= math.floor((x - ox) / res) < cols):
         lit[:] = 0.0  # the node outside the map, which the walk counts as wall: no line known clear
         lit[0] = -1.0  # (and no more to draw)
@@ -107,41 +116,100 @@ def shade(x, y, reach, bits, cols, ox, oy, res, out, lit):  # pragma: no cover -
     r1 = min(int(math.floor((y + reach - oy) / res)), rows - 1)
     c0 = max(int(math.floor((x - reach - ox) / res)), 0)
     c1 = min(int(math.floor((x + reach - ox) / res)), cols - 1)
+    if r0 > r1 or c0 > c1:
+        return 0
+    b0, b1, k0, k1 = r0 // SIDE, r1 // SIDE, c0 // SIDE, c1 // SIDE
+    band = np.zeros((b1 - b0 + 1, (c1 >> 6) - (c0 >> 6) + 1), np.uint64)  # the wall bits of a band of SIDE rows
+    for r in range(r0, r1 + 1):
+        for w in range(c0 >> 6, (c1 >> 6) + 1):
+            band[r // SIDE - b0, w - (c0 >> 6)] |= bits[0, _u(r), _u(w)]
+    pb = min(max(int(math.floor(min(max((y - oy) / res, -1.0), rows + 1.0))) // SIDE, b0), b1)  # the node's block
+    pk = min(max(int(math.floor(min(max((x - ox) / res, -1.0), cols + 1.0))) // SIDE, k0), k1)
+    drawn = 0
+    for ring in range(max(pb - b0, b1 - pb, pk - k0, k1 - pk) + 1):
+        for bi in range(max(pb - ring, b0), min(pb + ring, b1) + 1):
+            step = 1 if ring == 0 or bi == pb - ring or bi == pb + ring else 2 * ring  # the ring's sides only
+            for bj in range(pk - ring, pk + ring + 1, step):
+                if k0 <= bj <= k1:
+                    ra, rb = max(bi * SIDE, r0), min(bi * SIDE + SIDE - 1, r1)
+                    ca, cb = max(bj * SIDE, c0), min(bj * SIDE + SIDE - 1, c1)
+                    w = ca >> 6
+                    keep = (_ONES << _u(ca & 63)) & (_ONES >> _u(63 - (cb & 63)))  # the block's columns
+                    if band[bi - b0, w - (c0 >> 6)] & keep == _u(0):
+                        continue  # no wall cell
+                    if _hidden(ox + ca * res + SHRINK * res - x - 2.0 * (SHRINK * res),
+                               ox + (cb + 1) * res - SHRINK * res - x + 2.0 * (SHRINK * res),
+                               oy + ra * res + SHRINK * res - y - 2.0 * (SHRINK * res),
+                               oy + (rb + 1) * res - SHRINK * res - y + 2.0 * (SHRINK * res), res, reach, out, lit):
+                        continue
+                    drawn += _draw(x, y, reach, bits, ra, rb, w, keep, (ox, oy, res), out, lit)
+    return drawn
+
+
+@njit(cache=True)
+def _hidden(dx0, dx1, dy0, dy1, res, reach, out, lit):  # pragma: no cover - numba
+    """Whether no wall cell in the rectangle ``[dx0, dx1] x [dy0, dy1]`` (from the node) can lower ``out`` or ``lit``.
+
+    The rectangle holds every wall cell's square grown by :data:`SHRINK` (the same operations as :func:`shade`'s,
+    so its nearest point ``g2`` is no farther than any cell's, exactly). True when it is out of reach, or more than
+    a block from the node and every bin its directions reach (:data:`EPS` to spare twice over) is already at or
+    below ``g2``: a cell lowers a bin only to its own nearest (``lit``) or farthest (``out``) point.
+    """
+    gx = dx0 if dx0 > 0.0 else (-dx1 if dx1 < 0.0 else 0.0)
+    gy = dy0 if dy0 > 0.0 else (-dy1 if dy1 < 0.0 else 0.0)
+    g2 = gx * gx + gy * gy
+    if g2 > reach * reach:
+        return True
+    if g2 <= (SIDE * res) * (SIDE * res):
+        return False
+    lo, hi = _span(dx0, dx1, dy0, dy1)
+    for b in range(int(math.floor((lo - 2.0 * EPS) * _SCALE)), int(math.floor((hi + 2.0 * EPS) * _SCALE)) + 1):
+        i = b % BINS
+        if out[i] > g2 or lit[i] > g2:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _draw(x, y, reach, bits, ra, rb, w, keep, grid, out, lit):  # pragma: no cover - numba
+    """Draw the wall cells of rows ``ra..rb`` in word ``w``'s columns ``keep`` into ``out`` and ``lit``; how many.
+
+    ``grid``: the map's ``(ox, oy, res)``.
+    """
+    ox, oy, res = grid
     near2 = (NEAR * res) * (NEAR * res)
     far2 = reach * reach
     s = SHRINK * res
-    for r in range(r0, r1 + 1):
+    drawn = 0
+    for r in range(ra, rb + 1):
         dy0 = oy + r * res + s - y
         dy1 = oy + (r + 1) * res - s - y
         gy = dy0 if dy0 > 0.0 else (-dy1 if dy1 < 0.0 else 0.0)
         fy = max(dy0 * dy0, dy1 * dy1)
-        for w in range(c0 >> 6, (c1 >> 6) + 1):
-            word = bits[0, _u(r), _u(w)]
-            if w == c0 >> 6:
-                word &= _ONES << _u(c0 & 63)
-            if w == c1 >> 6:
-                word &= _ONES >> _u(63 - (c1 & 63))
-            while word != _u(0):  # the word's wall cells, lowest first
-                low = word & (~word + _u(1))
-                word ^= low
-                c = w * 64 + _LOWEST[(low * _DE_BRUIJN) >> _u(58)]
-                dx0 = ox + c * res + s - x
-                dx1 = ox + (c + 1) * res - s - x
-                gx = dx0 if dx0 > 0.0 else (-dx1 if dx1 < 0.0 else 0.0)
-                gap2 = gx * gx + gy * gy
-                if _light(dx0 - 2.0 * s, dx1 + 2.0 * s, dy0 - 2.0 * s, dy1 + 2.0 * s, far2, lit):
-                    lit[:] = 0.0  # the node is in a grown wall cell: no line known clear
-                    lit[0] = -1.0  # (and no more to draw)
-                if gap2 < near2 or gap2 > far2:
-                    continue
-                f2 = max(dx0 * dx0, dx1 * dx1) + fy
-                lo, hi = _span(dx0, dx1, dy0, dy1)
-                b0 = int(math.ceil((lo + EPS) * _SCALE))
-                b1 = int(math.floor((hi - EPS) * _SCALE)) - 1  # bin b spans [b, b + 1) / _SCALE
-                for b in range(b0, b1 + 1):
-                    i = b - BINS if b >= BINS else b
-                    if f2 < out[i]:
-                        out[i] = f2
+        word = bits[0, _u(r), _u(w)] & keep
+        while word != _u(0):  # the word's wall cells, lowest first
+            low = word & (~word + _u(1))
+            word ^= low
+            c = w * 64 + _LOWEST[(low * _DE_BRUIJN) >> _u(58)]
+            drawn += 1
+            dx0 = ox + c * res + s - x
+            dx1 = ox + (c + 1) * res - s - x
+            gx = dx0 if dx0 > 0.0 else (-dx1 if dx1 < 0.0 else 0.0)
+            gap2 = gx * gx + gy * gy
+            if _light(dx0 - 2.0 * s, dx1 + 2.0 * s, dy0 - 2.0 * s, dy1 + 2.0 * s, far2, lit):
+                lit[:] = 0.0  # the node is in a grown wall cell: no line known clear
+                lit[0] = -1.0  # (and no more to draw)
+            if gap2 < near2 or gap2 > far2:
+                continue
+            f2 = max(dx0 * dx0, dx1 * dx1) + fy
+            lo, hi = _span(dx0, dx1, dy0, dy1)
+            b0 = int(math.ceil((lo + EPS) * _SCALE))
+            b1 = int(math.floor((hi - EPS) * _SCALE)) - 1  # bin b spans [b, b + 1) / _SCALE
+            for b in range(b0, b1 + 1):
+                i = b - BINS if b >= BINS else b
+                if f2 < out[i]:
+                    out[i] = f2
+    return drawn
 
 
 @njit(cache=True, inline="always")
@@ -187,3 +255,22 @@ def behind(shadows, dx, dy, dd):  # pragma: no cover - numba
     if b >= BINS:
         b = BINS - 1
     return dd > shadows[b] * (1.0 + 1e-9)
+
+
+@njit(cache=True, inline="always")
+def look(lit, shadows, dx, dy, dd, near2):  # pragma: no cover - numba
+    """:func:`clear` and :func:`behind` of the point ``(dx, dy)`` from the node at once (one bin of directions).
+
+    ``dd``: its squared distance; ``near2``: within it :func:`behind` is not asked. Returns 1 when the segment to
+    the point is clear (``dd > 0``), else -1 when it lies in a shadow farther than ``near2``, else 0.
+    """
+    if not dd > 0.0:
+        return 0
+    b = int(pseudo_angle(dx, dy) * _SCALE)
+    if b >= BINS:
+        b = BINS - 1
+    if dd < lit[b] * (1.0 - 1e-9):
+        return 1
+    if dd > near2 and dd > shadows[b] * (1.0 + 1e-9):
+        return -1
+    return 0
