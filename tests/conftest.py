@@ -19,7 +19,11 @@ def shared_maps() -> Path:
 
 @pytest.fixture
 def threaded_spreading_calls(monkeypatch) -> list:
-    """Self-spreading's compiled step on its threaded path (:mod:`amronet.threads`) at any size; one entry per call."""
+    """Self-spreading's compiled step on its threaded path (:mod:`amronet.threads`) at any size; one entry per call.
+
+    As in a swarm large enough for threads, no step is taken in a stretch (``SwarmStretch.applies``): every step is.
+    """
+    from amronet.algorithms.common import swarm_stretch
     from amronet.algorithms.self_spreading import fast as compiled_step
 
     calls = []
@@ -30,5 +34,6 @@ def threaded_spreading_calls(monkeypatch) -> list:
         return threaded(*args)
 
     monkeypatch.setattr(compiled_step, "use_threads", lambda n: True)
+    monkeypatch.setattr(swarm_stretch, "use_threads", lambda n: True)
     monkeypatch.setattr(compiled_step, "sense_steer_plan_threaded", counting)
     return calls

@@ -229,3 +229,22 @@ def test_quiet_steps_are_the_steps_in_which_due_finds_and_draws_nothing(at, dt, 
             break
         expected += 1
     assert quiet == expected
+
+
+@settings(max_examples=100, deadline=None)
+@given(at=st.floats(0.0, 20.0), dt=st.sampled_from([0.1, 0.05, 0.2, 1.0 / 3.0]), poisson=st.booleans())
+def test_pending_is_false_exactly_in_the_steps_in_which_due_finds_and_draws_nothing(at, dt, poisson):
+    """The loop's faults phase asks pending() before due() (amronet.sim.loop.Loop._fail_nodes)."""
+    from amronet.scenario.schema import FaultSpec
+    from amronet.sim.faults import FaultSchedule
+
+    spec = FaultSpec(rate_per_hour=1e12, at=at) if poisson else FaultSpec(at=at, ids=[1])
+    schedule = FaultSchedule([spec], np.array([0]), dt, np.random.default_rng(0))
+    role, deployed = np.array([Role.BASE, Role.ROUTER]), np.array([True, True])
+    for step in range(round(at / dt) + 3):
+        drawn = schedule.rng.bit_generator.state
+        pending = schedule.pending(step * dt)
+        events = schedule.due(step * dt, role, np.full(2, State.REFERENCE), deployed)
+        assert pending == bool(events)
+        if not pending:
+            assert schedule.rng.bit_generator.state == drawn

@@ -92,6 +92,12 @@ class FaultSchedule:
             quiet = min(quiet, k - step)
         return max(quiet, 0)
 
+    def pending(self, t: float) -> bool:
+        """Whether :meth:`due` may find or draw anything in the step that starts at ``t`` (else it returns ``[]``)."""
+        if self.timed and self._strikes(self.timed[0][0], t):
+            return True
+        return any(self._strikes(s.at or 0.0, t) for s in self.poisson)
+
     def due(self, t: float, role: np.ndarray, state: np.ndarray, deployed: np.ndarray) -> list[tuple[str, np.ndarray]]:
         """The faults of the step that starts at ``t``: ``(kind, node ids)`` per event, ids sorted.
 
@@ -154,6 +160,8 @@ class FaultBook:
     distance_at_first: np.ndarray | None = None
     """Distance travelled so far by each node when the first fault struck (routers deployed then count)."""
     deployed_at_first: np.ndarray | None = None
+    _open: int = 0
+    """Events whose damage is not repaired yet (those of :attr:`events` with ``restored_at`` ``None``)."""
 
     def before(self, run: FaultedRun, t: float, kind: str, ids: np.ndarray) -> None:
         """Note the state of the network just before nodes ``ids`` fail."""
@@ -164,6 +172,7 @@ class FaultBook:
             self.distance_at_first = sw.distance.copy()
             self.deployed_at_first = sw.deployed & (sw.role == Role.ROUTER)
         self.events.append(_Event(t, kind, [int(i) for i in ids], m.coverage, m.connected_coverage))
+        self._open += 1
 
     def after(self, run: FaultedRun) -> None:
         """Note the network just after the last event's nodes failed (the table already without them).
@@ -176,11 +185,12 @@ class FaultBook:
         ev.coverage_after, ev.connected_coverage_after = m.coverage, m.connected_coverage
         if self._all_linked(run):
             ev.restored_at = ev.t
+            self._open -= 1
 
     @property
     def restoring(self) -> bool:
         """Whether some event's damage is not repaired yet."""
-        return any(ev.restored_at is None for ev in self.events)
+        return self._open > 0
 
     def observe(self, run: FaultedRun) -> None:
         """After a step: whether every surviving agent and deployed router has a path to a base station again."""
@@ -189,6 +199,7 @@ class FaultBook:
         for ev in self.events:
             if ev.restored_at is None:
                 ev.restored_at = run.t
+        self._open = 0
 
     @classmethod
     def _all_linked(cls, run: FaultedRun) -> bool:

@@ -140,8 +140,7 @@ class Loop:
         self.steps = 0
         self._places_robots = sc.agents.per_base > 0 and self.groups is None
         """Whether the controller may put robots down in the decide phase (agents releasing routers; never batched)."""
-        self.compiled: FastStep | None = (self.controller.fast_step(self.step_context()) if step == "compiled"
-                                          else None)
+        self.compiled: FastStep | None = self.controller.fast_step(self.step_context()) if step == "compiled" else None
         """The algorithm's fast sense-decide-move for this loop, or ``None`` (the phases one by one)."""
         self.phase_seconds = ({"sense+decide+move": 0.0, "radio": 0.0} if self.compiled is not None
                               else {"sense": 0.0, "decide": 0.0, "move": 0.0, "radio": 0.0})
@@ -299,6 +298,8 @@ class Loop:
     def _fail_nodes(self, run: Run) -> None:
         """The faults phase (cold: it acts only in a fault's step): nodes due fail, the table loses their links."""
         assert run.faults is not None and run.fault_book is not None
+        if not run.faults.pending(self.t):  # (most steps: nothing due, nothing drawn)
+            return
         sw = self.swarm
         for kind, ids in run.faults.due(self.t, sw.role, sw.state, sw.deployed):
             self._failed = self._failed or len(ids) > 0
@@ -357,9 +358,9 @@ class Loop:
         unsettled = False  # every active run's books say "not settled" (the last step left them so)
         now_settled = self._settled_runs()
         while active:
-            # the steps before the next recorded one in one go where the compiled step can: a stretch stops after a
-            # step that changed an active run's settled state, so the books below are what each step would leave
-            ahead = min(sim.record_every - self.steps % sim.record_every, max_steps - self.steps) - 1
+            # the steps up to the next recorded one (included) in one go where the compiled step can: a stretch stops
+            # after a step that changed an active run's settled state, so the books below are what each step leaves
+            ahead = min(sim.record_every - self.steps % sim.record_every, max_steps - self.steps)
             if fast is None or ahead <= 0 or not self._stretch(fast, ahead, ids, now_settled):
                 self.step()
             now_settled = self._settled_runs()

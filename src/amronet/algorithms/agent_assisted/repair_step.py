@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from amronet.algorithms.agent_assisted.relocate import Relocator
 from amronet.algorithms.agent_assisted.retrace import Retracer
 from amronet.algorithms.agent_assisted.stretch_books import Retracing, no_retracing
 from amronet.algorithms.base import StepInput
@@ -115,28 +116,53 @@ class RepairStep:
     def stretch_start(self, now: StepInput, limit: int) -> Retracing | None:
         """What a stretch keeps of the repair from this step on (:class:`~.stretch_books.Retracing`).
 
-        ``None``: no stretch now (the relocator is not idle, or routers drive that ``retrace`` would record, or a
-        relocating router's loss might start; an agent starts to back up now). Under ``retrace`` this step's contact
-        is noted, as :meth:`.Retracer.steer_agents` notes it first.
+        ``None``: no stretch now (the relocator is not idle, not even after its look taken here (:meth:`_look`), or
+        routers drive that ``retrace`` would record, or a relocating router's loss might start; an agent starts to
+        back up now). Under ``retrace`` this step's contact is noted, as :meth:`.Retracer.steer_agents` notes it
+        first.
         """
         c, r = self.controller, self.relocator
         sw = c.swarm
-        if self.busy() or not self.idle():
+        if self.busy():
             return None
+        b = self.retracer
         driving = c.moving_triangles or (c.strips is not None and c.strips.moving)
-        if driving and (self.retracer is not None or r.waiting_movable(sw).any()):
+        if b is not None:
+            contact = agents_connected(now.table, c.agents, c.bases, sw.relaying)
+            at = np.where(contact, now.t, b.contact_at)
+            if (~contact & ~b.on_path & (now.t - at >= b.confirm_s - 1e-9)).any():
+                return None
+        if not self.idle() and (driving or not self._look(now)):
+            return None
+        if driving and (b is not None or r.waiting_movable(sw).any()):
             return None  # (triangle or strip routers on their way add to their way, or may cut a router off)
         m = len(c.agents)
-        if self.retracer is None:
+        if b is None:
             return no_retracing(m)
-        b = self.retracer
-        contact = agents_connected(now.table, c.agents, c.bases, sw.relaying)
-        at = np.where(contact, now.t, b.contact_at)
-        if (~contact & ~b.on_path & (now.t - at >= b.confirm_s - 1e-9)).any():
-            return None
         b.contact_at[:] = at
         return Retracing(np.empty((limit, m, 2)), b.contact_at, b.on_path, float(b.confirm_s), int(now.index),
                          float(now.dt))
+
+    def _look(self, now: StepInput) -> bool:
+        """The relocator's look of this step (its ``update``), taken at the start of a stretch; whether it is idle then.
+
+        Only where the look can start and stop nothing (nobody relocates or drives, no loss waits whose router may
+        move, and a loss it notices now is not due before ``confirm_s``), and no router can be picked up in the step
+        (no reverse drops), so that it leaves what the step's own look would: the same call on the same table, and a
+        second call in the step (an agent acts in it) adds at most the links of a router put down. Under ``retrace``
+        the odometry is not recorded here: the stretch records its first step's (or the step's own look, where an agent
+        acts in it, after the agent has put its router down and extended its way).
+        """
+        c, r, table = self.controller, self.relocator, now.table
+        sw = c.swarm
+        if (not self.fixed_links or c.trails is not None or len(table.indptr) - 1 != len(sw) or r.confirm_s <= 1e-9
+                or r.waiting_movable(sw).any()
+                or (sw.state == State.TRIANGLE).any() or (sw.state == State.STRIP).any()):
+            return False
+        started, stopped = Relocator.update(r, now.t, table, sw)  # (without Retracer.update's odometry)
+        assert not len(started) and not len(stopped), "a look at the start of a stretch moved a router"
+        self._note_idle(table)
+        return self.idle()
 
     def stretch_end(self, done: int, retracing: Retracing) -> None:
         """After a stretch of ``done`` whole steps: ``retrace``'s odometry of them (the kernel noted the contact)."""
