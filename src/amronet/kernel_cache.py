@@ -65,6 +65,9 @@ _KERNEL = re.compile(r"^@(numba\.)?njit\b", re.MULTILINE)
 
 _folder: Path | None = None
 """The folder :func:`configure` pointed numba at (``None``: the user's ``NUMBA_CACHE_DIR``, or numba's default)."""
+_locks: Path | None = None
+"""The folder whose ``locks`` hold the kernels' compile locks (:mod:`amronet.kernel_cache_lock`): :data:`_folder`, or
+``amronet`` in the user's ``NUMBA_CACHE_DIR``."""
 
 _IMPORT = re.compile(r"^\s*(?:from|import) (amronet(?:\.\w+)*)", re.MULTILINE)
 
@@ -159,15 +162,18 @@ def configure() -> Path | None:
 
     ``None``: the user's ``NUMBA_CACHE_DIR`` applies, or no folder could be written (numba's default applies).
     Whichever folder applies, an entry that cannot be loaded is recompiled (:mod:`amronet.kernel_cache_repair`);
-    in amronet's folder, processes compile each kernel once between them (:mod:`amronet.kernel_cache_lock`).
+    in amronet's folder and in the user's ``NUMBA_CACHE_DIR``, processes compile each kernel once between them
+    (:mod:`amronet.kernel_cache_lock`; there its locks are in a folder ``amronet``).
     """
-    global _folder
+    global _folder, _locks
     from amronet import kernel_cache_lock, kernel_cache_repair
 
     kernel_cache_repair.install(lambda: _folder)
-    kernel_cache_lock.install(lambda: _folder)
-    _folder = None
-    if os.environ.get("NUMBA_CACHE_DIR"):
+    kernel_cache_lock.install(lambda: _locks)
+    _folder = _locks = None
+    mine = os.environ.get("NUMBA_CACHE_DIR")
+    if mine:  # numba caches there; the locks go there too, made as the first kernel compiles
+        _locks = Path(mine) / "amronet"
         return None
     try:
         folder = cache_folder()
@@ -182,7 +188,7 @@ def configure() -> Path | None:
     import numba
 
     numba.config.CACHE_DIR = str(folder)
-    _folder = folder
+    _folder = _locks = folder
     return folder
 
 

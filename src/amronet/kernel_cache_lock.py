@@ -12,8 +12,9 @@ compiles and saves it. A second process that needs the same kernel waits for the
 first one saved. A kernel's callees are locked inside their caller's lock: calls between kernels form no cycle, so
 no two processes wait for each other. The lock is ``flock``'s, which the system releases when its process ends,
 however it ends; a process that waited :data:`PATIENCE` seconds compiles by itself, as numba alone would (a
-missing lock makes nothing wrong, it only makes work twice). Where amronet does not manage the cache folder (the
-user's ``NUMBA_CACHE_DIR``, numba's ``__pycache__``), or without ``fcntl``, nothing is locked.
+missing lock makes nothing wrong, it only makes work twice). In the user's ``NUMBA_CACHE_DIR`` (a CI's, a
+container's) the locks are in a folder of amronet's own there, ``amronet/locks``; where numba's default
+``__pycache__`` applies (amronet's folder cannot be written), or without ``fcntl``, nothing is locked.
 """
 
 from __future__ import annotations
@@ -50,7 +51,7 @@ _held: set[Path] = set()
 def lock_path(dispatcher: Any, args: tuple[Any, ...]) -> Path | None:
     """The lock file of a kernel and its argument types, or ``None`` where nothing is locked.
 
-    ``folder/locks/<numba's index file name without .nbi>.<hash>.lock`` in the folder amronet manages; the hash is of
+    ``folder/locks/<numba's index file name without .nbi>.<hash>.lock`` in the folder that keeps them; the hash is of
     the index file's path (two modules of one name in two packages differ by their folder only) and the types.
 
     Args:
@@ -60,7 +61,7 @@ def lock_path(dispatcher: Any, args: tuple[Any, ...]) -> Path | None:
     folder = _managed_folder()
     cache = getattr(dispatcher, "_cache", None)
     index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
-    if folder is None or index is None:  # not cached on disk (cache=False), or not amronet's folder
+    if folder is None or index is None:  # not cached on disk (cache=False), or numba's default folder
         return None
     digest = hashlib.sha256(f"{index}\0{tuple(args)}".encode()).hexdigest()[:16]
     return folder / "locks" / f"{os.path.basename(index).removesuffix('.nbi')}.{digest}.lock"
@@ -75,7 +76,7 @@ def _locked(path: Path) -> Iterator[None]:
         yield
         return
     try:
-        path.parent.mkdir(exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     except OSError:
         yield  # a folder that cannot be written: compile unlocked, as numba alone does
@@ -122,7 +123,7 @@ def install(managed_folder: Callable[[], Path | None]) -> None:
     """Lock each kernel's compiling across processes (see the module's docstring); idempotent.
 
     Args:
-        managed_folder: The cache folder amronet manages at the time of a compile (``None``: none; nothing is
+        managed_folder: The folder that keeps the locks at the time of a compile (``None``: none; nothing is
             locked), :func:`amronet.kernel_cache.configure`'s.
     """
     global _installed, _managed_folder
