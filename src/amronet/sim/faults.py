@@ -83,9 +83,8 @@ class FaultSchedule:
         every step from its ``at`` on. The loop takes such steps in a stretch (:meth:`amronet.sim.loop.Loop.advance`).
         """
         dt = self.dt
-        starts = [at for at, _, _ in self.timed[:1]] + [float(s.at or 0.0) for s in self.poisson]
         quiet = limit
-        for at in starts:
+        for at in self._starts():
             k = max(int(at / dt) - 2, step)  # (then up to the exact step, with due's own arithmetic)
             while k < step + quiet and not self._strikes(at, k * dt):
                 k += 1
@@ -94,9 +93,11 @@ class FaultSchedule:
 
     def pending(self, t: float) -> bool:
         """Whether :meth:`due` may find or draw anything in the step that starts at ``t`` (else it returns ``[]``)."""
-        if self.timed and self._strikes(self.timed[0][0], t):
-            return True
-        return any(self._strikes(s.at or 0.0, t) for s in self.poisson)
+        return any(self._strikes(at, t) for at in self._starts())
+
+    def _starts(self) -> list[float]:
+        """When :meth:`due` may next act: the next timed fault's time, and each Poisson failure rate's start."""
+        return [at for at, _, _ in self.timed[:1]] + [float(s.at or 0.0) for s in self.poisson]
 
     def due(self, t: float, role: np.ndarray, state: np.ndarray, deployed: np.ndarray) -> list[tuple[str, np.ndarray]]:
         """The faults of the step that starts at ``t``: ``(kind, node ids)`` per event, ids sorted.
