@@ -56,6 +56,8 @@ class ObstacleMemory:
         if capacity == 0 or len(robots) == 0:
             return
         row, beam = np.nonzero(scans < sensor_range - 1e-9)
+        # nonzero's rows are a strided view, but contiguous for one hit: one layout, so the kernel compiles once
+        row = np.ascontiguousarray(row)
         angle = heading[robots[row]] + beam_angles(scans.shape[1])[beam]
         geometric = table.geometric
         _remember(robots, row, scans[row, beam], np.cos(angle), np.sin(angle), xy, radius,
