@@ -80,11 +80,11 @@ def test_the_ring_in_one_pass_is_the_grid_then_the_bodies_bit_for_bit():
     from amronet.engine.sensing import QuietRing, cast_rings, quiet_cells
 
     @njit
-    def rings(grid, ring, xy, heading, radius, csr, out):
+    def rings(grid, ring, xy, heading, radius, csr, out, cells):
         dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
         who = np.arange(xy.shape[0])
         cast_rings(grid, ring, who, xy, heading, radius, radius.max(), True, csr, dirs, out,
-                   (0.0, np.empty(xy.shape[0] + 1, np.int64), np.empty(csr[1].shape[0] + 1, np.int64)))
+                   (0.0, np.empty(xy.shape[0] + 1, np.int64), np.empty(csr[1].shape[0] + 1, np.int64), cells))
 
     omap, max_range = _cluttered_map(), 0.14
     rng = np.random.default_rng(1)
@@ -97,7 +97,11 @@ def test_the_ring_in_one_pass_is_the_grid_then_the_bodies_bit_for_bit():
     table = UnitDisk(1.0).update(xy)
     want = range_scan(omap, xy, heading, np.arange(1500), 12, max_range, radius=radius, table=table)
     got = np.empty_like(want)
-    rings(grid_of(omap), QuietRing(beam_angles(12), max_range, quiet_cells(omap, max_range)), xy, heading, radius,
-          (table.indptr, table.indices, table.dist), got)
+    cells = np.empty(1500, np.uint8)
+    quiet = quiet_cells(omap, max_range)
+    rings(grid_of(omap), QuietRing(beam_angles(12), max_range, quiet), xy, heading, radius,
+          (table.indptr, table.indices, table.dist), got, cells)
     assert (want < max_range).any(axis=1).mean() > 0.3  # walls and bodies seen by many
     np.testing.assert_array_equal(got, want)
+    rows, cols = omap.world_to_cell(xy)
+    np.testing.assert_array_equal(cells, quiet[rows, cols])  # each robot's cell flags, for its move

@@ -30,6 +30,14 @@ def _free_points(omap, rng, n):
     return np.array(omap.origin) + (np.stack([cols[pick], rows[pick]], axis=1) + rng.random((n, 2))) * omap.resolution
 
 
+def _cells(omap, flags, xy, movers):
+    """Each mover's byte of ``flags`` where it stands (0 off the map), as the rings hand them to the moves."""
+    rows, cols = omap.world_to_cell(xy[movers])
+    inside = (rows >= 0) & (rows < flags.shape[0]) & (cols >= 0) & (cols < flags.shape[1])
+    return np.where(inside, flags[np.clip(rows, 0, flags.shape[0] - 1), np.clip(cols, 0, flags.shape[1] - 1)],
+                    0).astype(np.uint8)
+
+
 def test_the_flags_are_the_rings_and_the_moves_own_tests():
     omap = _cluttered_map()
     grid = grid_of(omap)
@@ -51,7 +59,7 @@ def test_a_ring_reads_only_bit_0_of_its_quiet_cells():
         dirs = (np.empty(out.shape[1]), np.empty(out.shape[1]))
         who = np.arange(xy.shape[0])
         cast_rings(grid, ring, who, xy, heading, radius, radius.max(), False, csr, dirs, out,
-                   (0.0, np.empty(xy.shape[0] + 1, np.int64), np.empty(1, np.int64)))
+                   (0.0, np.empty(xy.shape[0] + 1, np.int64), np.empty(1, np.int64), np.empty(xy.shape[0], np.uint8)))
 
     omap = _cluttered_map()
     grid = grid_of(omap)
@@ -89,8 +97,8 @@ def test_a_move_by_the_flags_is_the_move_by_the_clearance_bit_for_bit():
         refused = np.empty(n, dtype=bool)
         distance = np.zeros(n)
         if drive == "flags":
-            drive_rooms(grid, flags, ROOM, np.arange(n), heading, length, xy, radius, False, csr, (refused, distance),
-                        _unlisted(1.0))
+            drive_rooms(grid, _cells(omap, flags, xy, np.arange(n)), ROOM, np.arange(n), heading, length, xy, radius,
+                        False, csr, (refused, distance), _unlisted(1.0))
         else:
             for i in range(n):
                 refused[i], distance[i] = drive_one(grid, i, heading[i], length[i], xy, radius, False, csr, 1.0)
@@ -123,8 +131,8 @@ def test_moves_among_bodies_by_the_flags_are_drive_one_in_turn_bit_for_bit():
         refused = np.zeros(n, dtype=bool)
         distance = np.zeros(n)
         if drive == "flags":
-            drive_rooms(grid, flags, ROOM, movers, heading, length, xy, radius, True, csr, (refused, distance),
-                        _unlisted(near))
+            drive_rooms(grid, _cells(omap, flags, xy, movers), ROOM, movers, heading, length, xy, radius, True, csr,
+                        (refused, distance), _unlisted(near))
         else:
             for m, i in enumerate(movers):
                 refused[i], distance[i] = drive_one(grid, i, heading[i], length[m], xy, radius, True, csr, near)
@@ -148,8 +156,10 @@ def test_moves_from_the_links_the_rings_listed_are_the_moves_from_the_rows_bit_f
         edges = np.empty(csr[1].shape[0] + 1, np.int64)
         scans = np.empty((movers.shape[0], ring.angles.shape[0]))
         dirs = (np.empty(ring.angles.shape[0]), np.empty(ring.angles.shape[0]))
-        cast_rings(grid, ring, movers, xy, heading, radius, radius.max(), True, csr, dirs, scans, (reach, first, edges))
-        drive_rooms(grid, ring.quiet, ROOM, movers, heading, length, xy, radius, True, csr, (refused, distance),
+        cells = np.empty(movers.shape[0], np.uint8)
+        cast_rings(grid, ring, movers, xy, heading, radius, radius.max(), True, csr, dirs, scans,
+                   (reach, first, edges, cells))
+        drive_rooms(grid, cells, ROOM, movers, heading, length, xy, radius, True, csr, (refused, distance),
                     (near, True, reach, first, edges))
         return first, edges
 

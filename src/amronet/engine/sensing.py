@@ -147,25 +147,32 @@ def cast_rings(grid, ring, who, xy, heading, radius, big, bodies, csr, dirs, out
     Bit for bit :func:`cast_grid_one`, then (``bodies``) :func:`cast_bodies_one`. ``grid``: the map's
     :class:`~amronet.engine.kernel_data.Grid`; ``ring``: a :class:`QuietRing`; ``radius`` and ``big``: every
     robot's body radius and the largest; ``csr``: ``(indptr, indices, dist)``, the bodies near each
-    robot; ``dirs``: scratch ``(cos, sin)``, ``(n_beams,)`` each. ``close``: ``(reach, first, edges)``: with
+    robot; ``dirs``: scratch ``(cos, sin)``, ``(n_beams,)`` each. ``close``: ``(reach, first, edges, cells)``,
+    what a later pass over the same robots (their moves) reads: ``cells`` ``uint8 (len(who),)`` gets each robot's
+    byte of ``ring.quiet`` where it stands (0 off the grid); with
     ``bodies``, robot ``who[m]``'s links no longer than ``reach`` (at least ``ring.sensor_range + big``) are listed,
     in row order, as the positions ``edges[first[m]:first[m + 1]]`` in ``csr`` (``first``: ``(len(who) + 1,)``;
     ``edges``: as long as ``csr``'s links, and one more), and the bodies are cast from that list: a later pass over
     the same robots' near links (their moves) reads a link or two each instead of a dozen. Where a robot's cell is
     quiet the grid's beams read the range without a march, and each beam's direction is computed once, for the grid
-    and the bodies, and only when one of them needs it: the same numbers, fewer sines. The loop over the robots is
+    and the bodies, and only when one of them needs it: the same numbers, fewer sines. Elsewhere the beams march
+    side by side, a step of each beam still marching in turn (each beam's steps are those of
+    :func:`cast_grid_one`, and the processor overlaps the beams' chains of dependent loads). The loop over the robots is
     written here, not around a per-robot function: numba counts the references of every array handed to a function,
     even an inlined one, at each call, and at N = 3 000 those atomic counts took longer than the rings themselves.
     """
     angles, max_range, quiet = ring
     indptr, indices, dist = csr
     cos_a, sin_a = dirs
-    reach, first, edges = close
+    reach, first, edges, cells = close
     reach = max(reach, max_range + big)
     listed = 0
     first[0] = 0
     blocked, clear, ox, oy, res = grid
     rows, cols = blocked.shape
+    n_beams = angles.shape[0]
+    travel = np.empty(n_beams)  # the march: how far each beam has come, and the beams still marching
+    marching = np.empty(n_beams, np.int64)
     for m in range(who.shape[0]):
         i = who[m]
         x = xy[i, 0]
@@ -174,34 +181,44 @@ def cast_rings(grid, ring, who, xy, heading, radius, big, bodies, csr, dirs, out
         c0 = int(math.floor((x - ox) / res))
         r0 = int(math.floor((y - oy) / res))
         have = False
+        inside = 0 <= r0 < rows and 0 <= c0 < cols
+        flags = quiet[r0, c0] if inside else 0
+        cells[m] = flags
         # the quiet bit first: one byte, where blocked and clear take a cache line each (a quiet cell is free)
-        if 0 <= r0 < rows and 0 <= c0 < cols and ((quiet[r0, c0] & 1) != 0 or (not blocked[r0, c0] and
-                                                                               clear[r0, c0] - res >= max_range)):
-            for k in range(angles.shape[0]):
+        if inside and ((flags & 1) != 0 or (not blocked[r0, c0] and clear[r0, c0] - res >= max_range)):
+            for k in range(n_beams):
                 out[m, k] = max_range
         else:
             have = True
-            for k in range(angles.shape[0]):  # cast_grid_one's march
+            for k in range(n_beams):
                 a = h + angles[k]
-                dx = math.cos(a)
-                dy = math.sin(a)
-                cos_a[k] = dx
-                sin_a[k] = dy
-                t = 0.0
-                hit = max_range
-                while t < max_range:
-                    px = x + dx * t
-                    py = y + dy * t
+                cos_a[k] = math.cos(a)
+                sin_a[k] = math.sin(a)
+                out[m, k] = max_range
+                travel[k] = 0.0
+                marching[k] = k
+            live = n_beams if 0.0 < max_range else 0
+            while live > 0:  # cast_grid_one's march, the beams side by side
+                kept = 0
+                for q in range(live):
+                    k = marching[q]
+                    t = travel[k]
+                    px = x + cos_a[k] * t
+                    py = y + sin_a[k] * t
                     c = int(math.floor((px - ox) / res))
                     r = int(math.floor((py - oy) / res))
                     if r < 0 or r >= rows or c < 0 or c >= cols or blocked[r, c]:
-                        hit = t
-                        break
+                        out[m, k] = min(t, max_range)
+                        continue
                     step = clear[r, c] - res
                     if step < 0.5 * res:
                         step = 0.5 * res
                     t += step
-                out[m, k] = min(hit, max_range)
+                    if t < max_range:
+                        travel[k] = t
+                        marching[kept] = k
+                        kept += 1
+                live = kept
         if not bodies:
             continue
         start = listed
@@ -220,7 +237,7 @@ def cast_rings(grid, ring, who, xy, heading, radius, big, bodies, csr, dirs, out
             dist2 = vx * vx + vy * vy
             if dist2 > (max_range + rj) ** 2:
                 continue
-            for k in range(angles.shape[0]):
+            for k in range(n_beams):
                 if not have:
                     a = h + angles[k]
                     cos_a[k] = math.cos(a)

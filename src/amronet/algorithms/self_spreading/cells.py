@@ -7,8 +7,9 @@ step (:func:`~amronet.engine.motion.plan_one`). Routers stand all over the map, 
 of its own (at N = 3 000 on the scaled ``hospital_section`` the three arrays hold 4.8 MB, more than the processor's
 second-level cache); nearly always (97 % of the routers there) the answers are "no beam meets the grid" and "room
 enough". :func:`cell_flags` keeps both answers in one byte per cell (0.5 MB for that map), so that the common case
-reads one line; where a flag is not set the kernels ask the arrays themselves, as before. The flags are the same
-comparisons on the same numbers, so every ring and move is the same bit for bit:
+reads one line, once: the ring hands the byte it read to the move (:func:`drive_rooms`); where a flag is not set the
+kernels ask the arrays themselves, as before. The flags are the same comparisons on the same numbers, so every ring
+and move is the same bit for bit:
 
 * :data:`QUIET_RING` is the ring's own test (:func:`~amronet.engine.sensing.cast_rings`): the cell is free and
   its clearance less one cell reaches beyond the beams, or no beam cast from it can meet the grid.
@@ -69,13 +70,15 @@ def cell_flags(omap: OccupancyMap, grid: Grid, sensor_range: float, roomy: Roomy
 
 
 @njit(cache=True, inline="always")
-def drive_rooms(grid, flags, roomy, movers, heading, length, xy, radius, bodies, csr, done,
+def drive_rooms(grid, cells, roomy, movers, heading, length, xy, radius, bodies, csr, done,
                 near):  # pragma: no cover - numba
     """:func:`~amronet.engine.motion.drive_one` for each of ``movers`` in turn, asking the :data:`ROOMY` flag first.
 
     Bit for bit. Mover ``m`` (robot ``i = movers[m]``) goes ``length[m]`` along ``heading[i]``; with ``done``
     ``(refused, distance)``, ``refused[i]`` says whether it was refused and ``distance[i]`` grows by how far it
-    went. Where the flag holds for its cell and its body and step are no larger than ``roomy``'s, the path is clear
+    went. ``cells[m]``: the flags of the cell it stands in before its move (0 off the map), as
+    :func:`~amronet.engine.sensing.cast_rings` read them for its ring (nobody moves a mover but its own move). Where
+    the flag holds for its cell and its body and step are no larger than ``roomy``'s, the path is clear
     of the map (the test :func:`~amronet.engine.motion.plan_one` would make passes); otherwise
     :func:`~amronet.engine.motion.plan_one` asks the clearance itself. The bodies' half is
     :func:`~amronet.engine.motion.commit_one`'s, written out in the loop: numba counts the references of every array
@@ -91,16 +94,12 @@ def drive_rooms(grid, flags, roomy, movers, heading, length, xy, radius, bodies,
     refused, distance = done
     near, listed, reach, first, edges = near
     listed = listed and near <= reach
-    rows, cols = flags.shape
     for m in range(movers.shape[0]):
         i = movers[m]
         step = length[m]
         x0 = xy[i, 0]
         y0 = xy[i, 1]
-        c0 = int(math.floor((x0 - ox) / res))
-        r0 = int(math.floor((y0 - oy) / res))
-        if (0 <= r0 < rows and 0 <= c0 < cols and (flags[r0, c0] & ROOMY) != 0 and step <= roomy.length
-                and radius[i] <= roomy.radius):
+        if (cells[m] & ROOMY) != 0 and step <= roomy.length and radius[i] <= roomy.radius:
             free = True
             nx = x0 + step * math.cos(heading[i])  # plan_one's end point
             ny = y0 + step * math.sin(heading[i])

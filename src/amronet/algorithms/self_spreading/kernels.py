@@ -238,9 +238,10 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
     reach = max(sensor_range + big, 2.0 * big + 2.0 * moves.roomy.length) + 1e-6
     first = np.empty(movers.shape[0] + 1, np.int64)
     edges = np.empty(s_indices.shape[0] + 1, np.int64)
+    cells = np.empty(movers.shape[0], np.uint8)  # each mover's cell flags, read by its ring, again by its move
     # sense: every mover's ring, from where everybody stands now
     cast_rings(data.grid, ring, movers, xy, heading, radius, big, sense_bodies, s_csr, dirs, scans,
-               (reach, first, edges))
+               (reach, first, edges, cells))
     w = 0
     longest = 0.0
     for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
@@ -261,7 +262,7 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
     near = 2.0 * big + 2.0 * longest
     refused[:] = False
     listed = sense_bodies and same_rows(s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist)
-    drive_rooms(data.grid, ring.quiet, moves.roomy, movers, heading, length, xy, radius, drive_bodies,
+    drive_rooms(data.grid, cells, moves.roomy, movers, heading, length, xy, radius, drive_bodies,
                 (d_indptr, d_indices, d_dist), (refused, distance),
                 (near, listed, reach, first, edges))  # move, one after another
     _arrive(movers, state, xy, steering.goal)
