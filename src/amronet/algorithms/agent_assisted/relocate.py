@@ -173,6 +173,8 @@ class Relocator:
         if not due.any():
             return none
         chosen = self._choose(np.flatnonzero(due), table, sw)
+        if not len(chosen):  # (every router due waits: nothing to start, no loss to forget)
+            return none
         started = self._li[chosen]
         self._begin(chosen, sw)
         self._keep(~np.isin(self._li, started))
@@ -182,6 +184,21 @@ class Relocator:
     def waiting_movable(self, sw: Swarm) -> np.ndarray:
         """Per loss waiting, whether its router may move (:meth:`_movable`)."""
         return self._movable(self._li, sw) if len(self._li) else np.zeros(0, dtype=bool)
+
+    def could_start(self, t: float, table: NeighbourTable, sw: Swarm) -> bool:
+        """Whether :meth:`update` at ``t`` on ``table`` could start a move.
+
+        Only a loss waiting now can start one (a loss noticed at ``t`` is due ``confirm_s`` later), once it is due, its
+        router may move and has no path to a base station on ``table`` (found afresh here, as :meth:`_start` finds it
+        after the look).
+        """
+        if not len(self._li) or t - self._since[0] < self.confirm_s - 1e-9:  # (oldest first: none is due)
+            return False
+        due = (t - self._since >= self.confirm_s - 1e-9) & self._movable(self._li, sw)
+        if not due.any():
+            return False
+        cut = ~connected_to(table, np.flatnonzero(sw.role == Role.BASE), sw.role != Role.AGENT)
+        return bool(cut[self._li[due]].any())
 
     def may_start(self, table: NeighbourTable, sw: Swarm) -> bool:
         """Whether a loss waits whose router may move and is cut off: a move may start once it is due."""

@@ -146,17 +146,17 @@ class RepairStep:
     def _look(self, now: StepInput) -> bool:
         """The relocator's look of this step (its ``update``), taken at the start of a stretch; whether it is idle then.
 
-        Only where the look can start and stop nothing (nobody relocates or drives, no loss waits whose router may
-        move, and a loss it notices now is not due before ``confirm_s``), and no router can be picked up in the step
-        (no reverse drops), so that it leaves what the step's own look would: the same call on the same table, and a
-        second call in the step (an agent acts in it) adds at most the links of a router put down. Under ``retrace``
-        the odometry is not recorded here: the stretch records its first step's (or the step's own look, where an agent
-        acts in it, after the agent has put its router down and extended its way).
+        Only where the look can start and stop nothing (nobody relocates or drives, no move can start now
+        (:meth:`.Relocator.could_start`), and a loss it notices now is not due before ``confirm_s``), and no router can
+        be picked up in the step (no reverse drops), so that it leaves what the step's own look would: the same call on
+        the same table, and a second call in the step (an agent acts in it) adds at most the links of a router put
+        down. Under ``retrace`` the odometry is not recorded here: the stretch records its first step's (or the step's
+        own look, where an agent acts in it, after the agent has put its router down and extended its way).
         """
         c, r, table = self.controller, self.relocator, now.table
         sw = c.swarm
         if (not self.fixed_links or c.trails is not None or len(table.indptr) - 1 != len(sw) or r.confirm_s <= 1e-9
-                or r.waiting_movable(sw).any()
+                or r.could_start(now.t, table, sw)
                 or (sw.state == State.TRIANGLE).any() or (sw.state == State.STRIP).any()):
             return False
         started, stopped = Relocator.update(r, now.t, table, sw)  # (without Retracer.update's odometry)

@@ -138,10 +138,11 @@ class Retracer(Relocator):
         _, first = np.unique(self._li[due], return_index=True)
         chosen: list[int] = []
         started: list[int] = []
+        relocating = sw.state == State.RELOCATING
         for k in due[np.sort(first)]:
             i = int(self._li[k])
             heard = table.indices[table.indptr[i]:table.indptr[i + 1]]
-            if not ((sw.state[heard] == State.RELOCATING).any() or np.isin(heard, started).any()):
+            if not (relocating[heard].any() or (started and np.isin(heard, started).any())):
                 chosen.append(int(k))
                 started.append(i)
         return np.array(chosen, dtype=np.int64)
@@ -196,6 +197,9 @@ class Retracer(Relocator):
             speed: The speeds the explorer gave them; a backing agent goes at its top speed.
             dt: Step length, seconds.
         """
+        if not self.backing.any() and contact.all():  # (most steps: every agent in contact, none backs up)
+            self.contact_at[:] = t
+            return speed
         self.contact_at[contact] = t
         self.backing &= ~contact
         start = ~contact & ~self.backing & ~self.on_path & (t - self.contact_at >= self.confirm_s - 1e-9)

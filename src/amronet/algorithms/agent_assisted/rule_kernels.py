@@ -34,7 +34,7 @@ from amronet.algorithms.common.references import _best_margin as best_margins
 from amronet.engine.network import agents_linked_kernel
 
 __all__ = ["JUNCTION", "LIMITS", "LINK", "LOSING", "PAPER", "RADIUS", "RuleBooks", "RuleInputs", "RuleStep",
-           "rule_acts", "rule_commit", "rule_quiet"]
+           "path_turning", "ring_openings", "rule_acts", "rule_commit", "rule_quiet"]
 
 PAPER = -1
 """No check: the paper's rule alone (an agent acts when the tracking finds it about to lose its last reference)."""
@@ -137,8 +137,11 @@ def _nearest(x, y, pts):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _openings(scan, open_range):  # pragma: no cover - numba
-    """Separate openings of one ring, as ``drops.junction.count_openings`` counts them."""
+def ring_openings(scan, open_range):  # pragma: no cover - numba
+    """Separate openings of one ring ``(n_beams,)``: circular runs of beams reading at least ``open_range``.
+
+    A ring whose every beam is open (open floor) has one opening; one with none has zero.
+    """
     nb = scan.shape[0]
     n = 0
     every = True
@@ -151,8 +154,13 @@ def _openings(scan, open_range):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _turning(m, x, y, samples, new, spacing, cos_angle):  # pragma: no cover - numba
-    """Agent ``m``'s samples after this step into ``new`` and whether it is on a turn (``PathTurns.update``)."""
+def path_turning(m, x, y, samples, new, spacing, cos_angle):  # pragma: no cover - numba
+    """Agent ``m``'s samples after this step into ``new`` and whether it is on a turn.
+
+    ``samples`` ``(A, 3, 2)``: each agent's oldest, middle and newest sample (nan: none yet). A new sample is taken
+    where the agent at ``(x, y)`` is at least ``spacing`` from the newest; it is on a turn when the cosine of the
+    angle between its two last directions is below ``cos_angle`` (no direction yet, a nan: no turn).
+    """
     for j in range(3):
         new[m, j, 0] = samples[m, j, 0]
         new[m, j, 1] = samples[m, j, 1]
@@ -201,10 +209,10 @@ def rule_quiet(books, inputs):  # pragma: no cover - numba
             drop = (losing or (not np.isnan(limits[_EVERY]) and t - last_drop[m] >= limits[_EVERY])) and can
         elif code == JUNCTION:
             near = _nearest(x, y, relay_xy)
-            turning = _turning(m, x, y, samples, new_samples, limits[_SPACING], limits[_COS])
+            turning = path_turning(m, x, y, samples, new_samples, limits[_SPACING], limits[_COS])
             losing = near > limits[_FAR]
             allowed = contact[m] and can and _nearest(x, y, base_xy) > limits[_BASE]
-            junction = _openings(scans[m], limits[_OPEN]) >= 3
+            junction = ring_openings(scans[m], limits[_OPEN]) >= 3
             drop = allowed and (losing or (junction and near > limits[_JUNCTION]) or (turning and near > limits[_TURN]))
         else:
             margin = best[m]

@@ -25,6 +25,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from amronet.algorithms.agent_assisted.drops.base import DROP_RULES, AgentView, DropContext, DropRule
+from amronet.algorithms.agent_assisted.rule_kernels import path_turning, ring_openings
 
 __all__ = ["DistanceJunction", "DistanceJunctionParams", "PathTurns", "count_openings"]
 
@@ -58,12 +59,12 @@ class DistanceJunctionParams(BaseModel):
 def count_openings(scans: np.ndarray, open_range: float) -> np.ndarray:
     """Number of separate openings in each ring of range readings ``(A, n_beams)``: circular runs of open beams.
 
-    A ring whose every beam is open (open floor) has one opening; one with none has zero.
+    A ring whose every beam is open (open floor) has one opening; one with none has zero (the compiled check's
+    count, per ring: :mod:`~amronet.algorithms.agent_assisted.rule_kernels`).
     """
-    is_open = scans >= open_range
-    starts = is_open & ~np.roll(is_open, 1, axis=1)  # an open beam after a closed one starts a run
-    n = starts.sum(axis=1)
-    return np.where(is_open.all(axis=1), 1, n)
+    scans = np.ascontiguousarray(scans, dtype=np.float64)
+    open_range = float(open_range)
+    return np.array([ring_openings(scan, open_range) for scan in scans], dtype=np.int64)
 
 
 class PathTurns:
@@ -82,19 +83,21 @@ class PathTurns:
         self.spacing = travel / 2.0
         self.cos_angle = float(np.cos(np.radians(angle_deg)))
         self.samples = np.full((n, 3, 2), np.nan)
+        """The oldest, middle and newest sample of each agent ``(A, 3, 2)`` (nan: none yet), updated in place."""
+        self._new = np.empty_like(self.samples)
 
     def update(self, xy: np.ndarray) -> np.ndarray:
-        """Feed the agents' positions ``(A, 2)``; which agents are on a turn ``(A,)``."""
-        first = np.isnan(self.samples[:, 2, 0])
-        self.samples[first, 2] = xy[first]
-        moved = np.linalg.norm(xy - self.samples[:, 2], axis=1) >= self.spacing
-        if moved.any():
-            self.samples[moved] = np.concatenate([self.samples[moved, 1:], xy[moved, None, :]], axis=1)
-        a, b, c = self.samples[:, 0], self.samples[:, 1], self.samples[:, 2]
-        u, v = b - a, c - b
-        with np.errstate(invalid="ignore"):
-            cos = (u * v).sum(axis=1) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
-        return np.nan_to_num(cos, nan=1.0) < self.cos_angle
+        """Feed the agents' positions ``(A, 2)``; which agents are on a turn ``(A,)``.
+
+        The compiled check's arithmetic, agent by agent (:mod:`~amronet.algorithms.agent_assisted.rule_kernels`): a
+        sample is taken where the agent is at least :attr:`spacing` from the newest, and the directions compared by
+        their cosine (none, a nan, is no turn).
+        """
+        new, spacing, cos_angle = self._new, float(self.spacing), float(self.cos_angle)
+        turning = np.array([path_turning(m, float(x), float(y), self.samples, new, spacing, cos_angle)
+                            for m, (x, y) in enumerate(xy.tolist())], dtype=np.bool_)
+        self.samples[...] = new
+        return turning
 
 
 @DROP_RULES.register("distance-junction")
