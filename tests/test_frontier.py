@@ -100,7 +100,8 @@ def find_path(grid, start, covered, visited=None, robots=None, claims=None, *, c
     every = np.ones(rows, dtype=bool)
     update_window_counts(grid.score, grid.seen, covered, window, every, every, marks, counts)
     path = np.zeros(rows * cols, dtype=np.int64)
-    targets = Targets(mask(grid, visited), counts, gap_weight * gap_to_uncovered(covered), window)
+    gap = gap_weight * gap_to_uncovered(covered)
+    targets = Targets(mask(grid, visited), counts, gap, window, max(0.0, float(gap.min())))
     n, _, kind = search_target(grid.score, grid.seen, traversable(grid, clearance, robots), tuple(targets),
                                tuple(Claims(claims.reshape(-1, 2), float((claim_radius / grid.resolution) ** 2))),
                                start[0], start[1], escape, search_buffers(rows * cols), path)

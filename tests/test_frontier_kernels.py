@@ -143,14 +143,15 @@ def test_the_search_leaves_its_scratch_buffers_as_it_found_them():
         update_window_counts(score, seen, covered, 2, every, every, marks, counts)
         visited = np.zeros((rows, cols), dtype=bool)
         gap = rng.random((rows, cols))
+        targets = (visited, counts, gap, 2, max(0.0, gap.min()))
         claims = np.full((0, 2), -1, dtype=np.int64)
         search = search_buffers(rows * cols)
         kept = trav.copy()
         for _ in range(3):
             sr, sc = int(rng.integers(rows)), int(rng.integers(cols))
-            fresh = search_target(score, seen, trav, (visited, counts, gap, 2), (claims, 1.0), sr, sc, 3,
+            fresh = search_target(score, seen, trav, targets, (claims, 1.0), sr, sc, 3,
                                   search_buffers(rows * cols), np.zeros(rows * cols, np.int64))
-            reused = search_target(score, seen, trav, (visited, counts, gap, 2), (claims, 1.0), sr, sc, 3, search,
+            reused = search_target(score, seen, trav, targets, (claims, 1.0), sr, sc, 3, search,
                                    np.zeros(rows * cols, np.int64))
             assert fresh == reused
             assert (search[0] == -1).all() and (trav == kept).all()
@@ -174,7 +175,8 @@ def test_a_search_with_no_cell_marked_finds_nothing_without_searching():
         search[1:] = -7
         before, kept, path = search.copy(), trav.copy(), np.full(rows * cols, -5, np.int64)
         sr, sc = int(rng.integers(rows)), int(rng.integers(cols))
-        got = search_target(score, seen, trav, (np.zeros((rows, cols), bool), counts, rng.random((rows, cols)), 2),
+        gap = rng.random((rows, cols))
+        got = search_target(score, seen, trav, (np.zeros((rows, cols), bool), counts, gap, 2, float(gap.min())),
                             (np.full((0, 2), -1, dtype=np.int64), 1.0), sr, sc, 3, search, path)
         assert got == (0, -1, 0)
         assert (search == before).all() and (trav == kept).all() and (path == -5).all()
@@ -194,9 +196,10 @@ def test_a_search_stops_at_its_target_when_no_gap_farther_out_could_make_up_for_
     search = search_buffers(rows * cols)
     search[2] = -7
     path = np.zeros(rows * cols, np.int64)
-    n, goal, kind = search_target(score, seen, trav, (np.zeros((rows, cols), bool), counts,
-                                                       np.full((rows, cols), float(rows + cols)), 2),
-                                  (np.full((0, 2), -1, dtype=np.int64), 1.0), 5, 12, 3, search, path)
+    gap = float(rows + cols)
+    targets = (np.zeros((rows, cols), bool), counts, np.full((rows, cols), gap), 2, gap)
+    n, goal, kind = search_target(score, seen, trav, targets, (np.full((0, 2), -1, dtype=np.int64), 1.0), 5, 12, 3,
+                                  search, path)
     assert kind == FRONTIER and goal == 5 * cols + 8 and n == 4 and path[n - 1] == goal
     assert (search[2] != -7).sum() < 200  # queued: the cells a few steps from the start, not the whole floor
 

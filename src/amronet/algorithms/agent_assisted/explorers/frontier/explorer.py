@@ -31,6 +31,11 @@ from amronet.engine.sensing import beam_angles
 __all__ = ["FrontierExplorer", "FrontierTuning"]
 
 
+def _least(gap: np.ndarray) -> float:
+    """``max(0, gap.min())``: the least a target's gap adds to its score (``gap`` holds no NaN)."""
+    return max(0.0, float(gap.min()))
+
+
 @dataclass(frozen=True)
 class FrontierTuning:
     """How the frontier explorer's strategy is tuned; the defaults are those of an explorer picked by name.
@@ -121,7 +126,8 @@ class FrontierExplorer(Explorer):
         # synced: -1, every view is computed again on the first plan (see NavBuffers)
         self._work = NavBuffers(search=search_buffers(rows * cols), trav=np.zeros((2, rows, cols), dtype=np.bool_),
                                 marks=marks, counts=counts, synced=np.full(4, -1, dtype=np.int64),
-                                cells_r=np.zeros(0, dtype=np.int64), cells_c=np.zeros(0, dtype=np.int64))
+                                cells_r=np.zeros(0, dtype=np.int64), cells_c=np.zeros(0, dtype=np.int64),
+                                least_gap=np.array([_least(self.gap)]))
         self._nodes_key: bytes | None = None
         """The deployed nodes' coordinates as last painted, as bytes: a change of any of them repaints."""
         self._nodes = np.zeros((0, 2))
@@ -156,6 +162,7 @@ class FrontierExplorer(Explorer):
             self._nodes_key = key
             self._paint(np.ascontiguousarray(deployed_xy, dtype=float).reshape(-1, 2))
             self.gap = self.gap_weight * gap_to_uncovered(self.covered)
+            self._work.least_gap[0] = _least(self.gap)
             self._work.synced[1:3] = -1  # the uncovered counts and the traversable cells must be computed again
         settings, avoid = self._settings(sensor_range)
         fresh = -np.pi + (2.0 * np.pi) * rng.random(m)  # rng.uniform(-pi, pi, m), the same numbers at less cost

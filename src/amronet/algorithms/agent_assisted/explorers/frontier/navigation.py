@@ -123,7 +123,7 @@ def navigate_kernel(step, layers, cfg, plans, work):  # pragma: no cover - numba
      approach_steps, reach, stuck_radius, claim_r2, reach_tol, lane) = cfg
     (goal, kind, path, path_len, path_pos, through_nodes, last_plan, reason, anchor, last_move, approach,
      approach_until, active) = plans
-    search, trav, marks, counts, synced, cells_r, cells_c = work
+    search, trav, marks, counts, synced, cells_r, cells_c, least_gap = work
     ox = origin_x
     oy = origin_y
     res = resolution
@@ -221,16 +221,16 @@ def navigate_kernel(step, layers, cfg, plans, work):  # pragma: no cover - numba
                 if j != m and goal[j] >= 0:
                     claims[j, 0] = goal[j] // cols
                     claims[j, 1] = goal[j] - claims[j, 0] * cols
-            n, g, k = search_target(score, seen, trav[0], (visited, counts, gap, win), (claims, claim_r2), sr, sc,
-                                    escape, search, path[m])
+            targets = (visited, counts, gap, win, least_gap[0])
+            n, g, k = search_target(score, seen, trav[0], targets, (claims, claim_r2), sr, sc, escape, search, path[m])
             through_nodes[m] = False
             if g < 0:
                 if not ready_soft:
                     update_passable(score, seen, no_robots, off_r, off_c, row_stamp > synced[3], trav[1])
                     synced[3] = stamp
                     ready_soft = True
-                n, g, k = search_target(score, seen, trav[1], (visited, counts, gap, win), (claims, claim_r2), sr,
-                                        sc, escape, search, path[m])
+                n, g, k = search_target(score, seen, trav[1], targets, (claims, claim_r2), sr, sc, escape, search,
+                                        path[m])
                 through_nodes[m] = g >= 0
             rbm = no_robots if through_nodes[m] else robots
             last_plan[m] = now

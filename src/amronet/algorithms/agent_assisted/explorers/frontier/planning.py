@@ -47,6 +47,8 @@ class Targets(NamedTuple):
     """Per cell, what its distance to uncovered space adds to a target's score ``(rows, cols)``."""
     win: int
     """Window half-width in cells."""
+    least_gap: float
+    """``max(0, gap.min())``: no target's score is below its depth plus this."""
 
 
 class Claims(NamedTuple):
@@ -249,7 +251,7 @@ def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, pa
         ``(n, goal, kind)``: path length, flat goal cell (-1: none) and its target kind; ``(0, -1, 0)`` at once,
         nothing searched, when no cell is marked in ``counts`` (an agent with nothing left to explore replans often).
     """
-    visited, counts, gap, win = targets
+    visited, counts, gap, win, least_gap = targets
     goals, claim_r2 = claims
     rows, cols = score.shape
     if not (counts[:, :, cols] != 0).any():  # no cell marked (a row's last count is its total): no target anywhere
@@ -275,7 +277,7 @@ def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, pa
     tail = 1
     best = -1
     best_score = np.inf
-    floor = 0.0  # once a target is found: no score below depth + max(0, least gap), so none beats it farther out
+    floor = 0.0  # once a target is found: no score below depth + least_gap, so none beats it farther out
     best_kind = 0
     backup = -1
     backup_score = np.inf
@@ -307,8 +309,7 @@ def search_target(score, seen, trav, targets, claims, sr, sc, escape, search, pa
                 if s < backup_score:
                     backup, backup_score, backup_kind = u, s, kind
             elif s < best_score:
-                if best < 0:
-                    floor = max(0.0, gap.min())
+                floor = least_gap
                 best, best_score, best_kind = u, s, kind
         # neighbours in a fixed order: E, N, W, S, then NE, NW, SW, SE (no corner cutting)
         e = c + 1 < cols and trav[r, c + 1]

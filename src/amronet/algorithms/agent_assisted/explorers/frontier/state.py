@@ -224,6 +224,9 @@ class NavBuffers(NamedTuple):
             ``robots`` change).
         cells_r: Scratch rows of the cells a segment crosses.
         cells_c: Scratch columns of those cells.
+        least_gap: ``max(0, gap.min())`` of the layers' ``gap`` ``(1,)``, the floor of the searches' scores
+            (:class:`~amronet.algorithms.agent_assisted.explorers.frontier.planning.Targets`; the explorer's
+            business when ``gap`` changes).
     """
 
     search: np.ndarray
@@ -233,3 +236,4 @@ class NavBuffers(NamedTuple):
     synced: np.ndarray
     cells_r: np.ndarray
     cells_c: np.ndarray
+    least_gap: np.ndarray
