@@ -21,7 +21,7 @@ from amronet.engine.links import NO_PREVIOUS, candidate_margins, open_pair, open
 from amronet.engine.neighbours import neighbour_csr
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import make_medium
-from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
+from amronet.engine.wall_bits import ROW_LEVELS, box_clear_bits, count_walls_bits, count_walls_lines, wall_bits
 from amronet.engine.walls import LEAP_CELLS, box_clear, count_walls, count_walls_many, wall_grid, wall_sums
 from amronet.world.builtin import BUILTIN_MAPS, resolve_map
 from amronet.world.occupancy import OccupancyMap
@@ -45,6 +45,14 @@ def _boxes_many(bits, cols, ox, oy, res, a, b):  # pragma: no cover - numba
 
 
 @njit(cache=True)
+def _lines_many(bits, cols, ox, oy, res, a, b, limit):  # pragma: no cover - numba
+    out = np.empty(a.shape[0], np.int64)
+    for k in range(a.shape[0]):
+        out[k] = count_walls_lines(bits, cols, ox, oy, res, a[k, 0], a[k, 1], b[k, 0], b[k, 1], limit[k])
+    return out
+
+
+@njit(cache=True)
 def _sums_many(sums, ox, oy, res, a, b):  # pragma: no cover - numba
     out = np.empty(a.shape[0], np.bool_)
     for k in range(a.shape[0]):
@@ -59,14 +67,22 @@ def test_the_bit_grids_are_the_wall_cells_and_the_leap_cells():
     omap = OccupancyMap("hand", 0.05, (1.0, -2.0), cells)
     walls, jump = wall_grid(omap)
     bits = wall_bits(omap)
-    assert bits.shape == (2, 70, 3) and bits.dtype == np.uint64 and not bits.flags.writeable
+    assert bits.shape == (5 + ROW_LEVELS, 70, 3) and bits.dtype == np.uint64 and not bits.flags.writeable
     assert wall_bits(omap) is bits  # cached with the map
-    unpacked = ((bits[:, :, :, None] >> np.arange(64, dtype=np.uint64)) & np.uint64(1)).reshape(2, 70, 192) == 1
+    unpacked = ((bits[:2, :, :, None] >> np.arange(64, dtype=np.uint64)) & np.uint64(1)).reshape(2, 70, 192) == 1
     np.testing.assert_array_equal(unpacked[0, :, :150], walls != 0)
     leap = jump.astype(np.float64) > LEAP_CELLS * 0.05
     assert leap.any() and not leap.all()
     np.testing.assert_array_equal(unpacked[1, :, :150], leap)
     assert not unpacked[:, :, 150:].any()  # the padding is no wall and no leap
+    # the wall cells transposed: column c in row c % 70 of grid 2 + c // 70, rows in its first two words
+    flip = bits[2:5, :, :2].reshape(210, 2)[:150]
+    columns = ((flip[:, :, None] >> np.arange(64, dtype=np.uint64)) & np.uint64(1)).reshape(150, 128) == 1
+    np.testing.assert_array_equal(columns[:, :70], (walls != 0).T)
+    assert not columns[:, 70:].any()
+    for k in range(1, ROW_LEVELS + 1):  # then the wall words OR'ed over 2**k rows from each row on
+        expect = np.array([np.bitwise_or.reduce(bits[0, r:r + 2**k], axis=0) for r in range(70)])
+        np.testing.assert_array_equal(bits[4 + k], expect)
 
 
 @settings(max_examples=500, deadline=None)
@@ -103,6 +119,31 @@ def test_the_bit_walk_on_every_map(name):
                                       count_walls_many(walls, jump, ox, oy, res, a, b, limit))
     np.testing.assert_array_equal(_boxes_many(bits, walls.shape[1], ox, oy, res, a, b),
                                   _sums_many(wall_sums(omap), ox, oy, res, a, b))
+
+
+@pytest.mark.parametrize("name", ["hospital_section", "office-32x32"])
+def test_the_line_count_is_the_walks_next_to_cell_corners(name):
+    """Segments through cell corners and 1e-13 to 1e-3 of a cell beside them, ends on and next to cell borders."""
+    omap = resolve_map(name)
+    walls, jump = wall_grid(omap)
+    bits = wall_bits(omap)
+    ox, oy, res = float(omap.origin[0]), float(omap.origin[1]), float(omap.resolution)
+    rng = np.random.default_rng(5)
+    n = 30_000
+    corner = np.column_stack([rng.integers(0, walls.shape[1] + 1, n), rng.integers(0, walls.shape[0] + 1, n)])
+    angle = rng.uniform(0.0, 2.0 * np.pi, n)
+    along = np.column_stack([np.cos(angle), np.sin(angle)])
+    beside = rng.choice([0.0, 1e-13, 1e-10, 1e-7, 1e-6, 2e-6, 1e-5, 1e-3], n)[:, None] * along[:, ::-1] * (-1, 1)
+    a = corner - rng.uniform(0.0, 30.0, n)[:, None] * along + beside
+    b = corner + rng.uniform(0.0, 30.0, n)[:, None] * along + beside
+    a[::5] = np.round(a[::5]) + rng.choice([0.0, 1e-9, -1e-7, 3e-6], (len(a[::5]), 2))  # ends at and by corners
+    b[::7] = np.round(b[::7] * 2.0) / 2.0 + rng.choice([0.0, 1e-9, -1e-7, 3e-6], (len(b[::7]), 2))
+    a, b = a * res + (ox, oy), b * res + (ox, oy)
+    for limit in (np.full(n, BIG), rng.integers(0, 4, n)):
+        lines = _lines_many(bits, walls.shape[1], ox, oy, res, a, b, limit)
+        decided = lines >= 0
+        assert 0.2 < decided.mean() < 0.95  # both the lines and the walk count
+        np.testing.assert_array_equal(lines[decided], count_walls_many(walls, jump, ox, oy, res, a, b, limit)[decided])
 
 
 @pytest.mark.parametrize("shadowing_db", [0.0, 5.0])

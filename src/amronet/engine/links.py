@@ -19,7 +19,7 @@ from numba import uint64 as _u  # unsigned indices: numba then skips its negativ
 from amronet.engine.hearing import named_inputs, open_margin, path_loss_margin, wall_limit
 from amronet.engine.propagation import delivery_ratio
 from amronet.engine.shadowing import cell_value
-from amronet.engine.wall_bits import box_clear_bits, count_walls_bits
+from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, count_walls_lines
 
 __all__ = ["NO_PREVIOUS", "candidate_margins", "distance_margins", "fresh_margin", "keep_entries", "losses",
            "mirror", "open_pair", "open_radius", "path_loss_candidate_margins"]
@@ -186,8 +186,7 @@ def path_loss_candidate_margins(xy, indptr, indices, dist, prev_xy, prev_indptr,
                 m = open_margin(d, sa, sb, r_c, n10, corr, clip)
                 if walled and m >= 0.0 and not d < ra + radius[_u(j)] and not box_clear_bits(
                         bits, cols, ox, oy, res, xa, ya, xb, yb):
-                    m -= wall_db * count_walls_bits(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb,
-                                                    wall_limit(m, 0.0, wall_db))
+                    m -= wall_db * _walls(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb, wall_limit(m, 0.0, wall_db))
             out[_u(e)] = m
             f = cursor[_u(j)]
             cursor[_u(j)] = f + 1
@@ -212,8 +211,19 @@ def fresh_margin(d, end_a, end_b, law, bits, blocked, jump):  # pragma: no cover
     m = open_margin(d, sa, sb, r_c, n10, corr, clip)
     if wall_db > 0.0 and m >= 0.0 and not open_pair(d, ra, rb) and not box_clear_bits(bits, cols, ox, oy, res, xa,
                                                                                        ya, xb, yb):
-        m -= wall_db * count_walls_bits(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb, wall_limit(m, 0.0, wall_db))
+        m -= wall_db * _walls(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb, wall_limit(m, 0.0, wall_db))
     return m
+
+
+@njit(cache=True, inline="always")
+def _walls(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb, limit):  # pragma: no cover - numba
+    """:func:`~amronet.engine.wall_bits.count_walls_bits`, asking its line-by-line count first.
+
+    The same count (where the lines do not decide, the walk asks them again and walks): most links then pass one
+    array to a call, not three (each array passed costs two atomic reference counts, more than a short count).
+    """
+    k = count_walls_lines(bits, blocked.shape[1], ox, oy, res, xa, ya, xb, yb, limit)
+    return k if k >= 0 else count_walls_bits(bits, blocked, jump, ox, oy, res, xa, ya, xb, yb, limit)
 
 
 @njit(cache=True)
