@@ -16,8 +16,8 @@ from numba import njit, prange
 from amronet.algorithms.common.goto import steer_one
 from amronet.algorithms.common.references import track_state_rows
 from amronet.algorithms.common.swarm_stretch_kernels import BAD_DRAW, CANDIDATES, QUIET, after_step_skin
-from amronet.algorithms.self_spreading.cells import drive_rooms, same_rows
 from amronet.algorithms.self_spreading.kernel_data import Draws
+from amronet.algorithms.self_spreading.step_passes import arrive, drive_movers, sense_movers
 from amronet.algorithms.self_spreading.triangle_kernels import settle_with_triangles
 from amronet.algorithms.self_spreading.walk_kernels import (
     GROWTH,
@@ -30,7 +30,7 @@ from amronet.engine.bitgen import draw_normal_uniform
 from amronet.engine.kernel_data import Csr
 from amronet.engine.motion import commit_one, plan_one
 from amronet.engine.robots import State
-from amronet.engine.sensing import cast_bodies_one, cast_grid_one, cast_rings
+from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 from amronet.engine.skin_table import no_skin
 
 __all__ = [
@@ -194,12 +194,35 @@ def sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_di
     With more than one robot the rings meet the bodies of the neighbour list ``s_indptr, s_indices, s_dist``, and
     (with collisions) the moves those of ``d_indptr, d_indices, d_dist``: this step's lists come as arrays, not as
     :class:`~amronet.engine.kernel_data.Csr` s (numba types a named tuple field by field at every call from Python, and
-    three of them would cost more than all the arrays they hold). The other walk rules take
-    :func:`sense_steer_drive_rules`; this one is compiled for the random walk alone (no branch on the rule per walker,
-    none of the growth walks' arguments).
+    three of them would cost more than all the arrays they hold). The rings and the moves are
+    :mod:`~amronet.algorithms.self_spreading.step_passes`'; the decide loop between them is written for the random
+    walk alone (no branch on the rule per walker, none of the other rules' code); the other walk rules take
+    :func:`sense_steer_drive_rules`.
     """
-    _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist,
-                       Csr(s_indptr, s_indices, s_dist), RANDOM)
+    robots, steering, walk, ring = data.robots, data.steering, data.walk, data.ring
+    xy, heading, state, max_speed = robots.xy, robots.heading, robots.state, robots.max_speed
+    scans, length, refused, turn_sigma = data.moves.scans, data.moves.length, walk.refused, walk.turn_sigma
+    r_eff, dt = data.tracking.r_eff, data.dt
+    movers = data.tracked.movers[:n_movers]
+    big, close = sense_movers(data, n_movers, s_indptr, s_indices, s_dist)
+    w = 0
+    longest = 0.0
+    for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
+        i = movers[m]
+        if state[i] == _EXPLORE:
+            heading[i] = random_heading(heading[i], scans[m], ring, refused[i], normal[w], uniform[w], turn_sigma)
+            w += 1
+            speed = max_speed[i]
+        else:
+            step, done = steer_one(i, xy, heading, steering, scans[m], ring.angles, ring.sensor_range,
+                                   max_speed[i] * dt, r_eff)
+            if done:
+                state[i] = _TRIANGLE_SETTLED
+            speed = step / dt
+        length[m] = speed * dt
+        if m == 0 or length[m] > longest:
+            longest = length[m]
+    drive_movers(data, n_movers, big, longest, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist, close)
 
 
 @njit(cache=True)
@@ -211,40 +234,17 @@ def sense_steer_drive_rules(data, n_movers, normal, uniform, s_indptr, s_indices
     growth walks' field, :func:`~amronet.algorithms.self_spreading.walk_kernels.growth_field_kernel`, computed first).
     """
     rows = Csr(table[0], table[1], table[2])
-    walk = data.walk
-    if walk.rule >= GROWTH:
-        growth_field_kernel(walk, data.tracking.deployed, data.robots.state, rows.indptr, rows.indices, t)
-    _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist,
-                       rows, walk.rule)
-
-
-@njit(cache=True, inline="always")
-def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist, rows,
-                       rule):  # pragma: no cover - numba
-    """:func:`sense_steer_drive`'s passes under the walk rule ``rule`` (a constant there: that rule's code alone)."""
-    robots, steering, moves, walk, ring = data.robots, data.steering, data.moves, data.walk, data.ring
-    xy, heading, state, max_speed, radius, distance = (robots.xy, robots.heading, robots.state, robots.max_speed,
-                                                       robots.radius, robots.distance)
-    refused, angles, sensor_range = walk.refused, ring.angles, ring.sensor_range
-    scans, length = moves.scans, moves.length
+    robots, steering, walk, ring = data.robots, data.steering, data.walk, data.ring
+    xy, heading, state, max_speed = robots.xy, robots.heading, robots.state, robots.max_speed
+    scans, length, refused, rule = data.moves.scans, data.moves.length, walk.refused, walk.rule
     r_eff, dt = data.tracking.r_eff, data.dt
     movers = data.tracked.movers[:n_movers]
-    big = radius.max()
-    sense_bodies = xy.shape[0] > 1
-    drive_bodies = data.collisions and sense_bodies
-    s_csr = (s_indptr, s_indices, s_dist)
-    dirs = (np.empty(angles.shape[0]), np.empty(angles.shape[0]))
-    # the links the moves may meet a body on (their step at most the walkers'), listed by the rings' pass
-    reach = max(sensor_range + big, 2.0 * big + 2.0 * moves.roomy.length) + 1e-6
-    first = np.empty(movers.shape[0] + 1, np.int64)
-    edges = np.empty(s_indices.shape[0] + 1, np.int64)
-    cells = np.empty(movers.shape[0], np.uint8)  # each mover's cell flags, read by its ring, again by its move
-    # sense: every mover's ring, from where everybody stands now
-    cast_rings(data.grid, ring, movers, xy, heading, radius, big, sense_bodies, s_csr, dirs, scans,
-               (reach, first, edges, cells))
+    if rule >= GROWTH:
+        growth_field_kernel(walk, data.tracking.deployed, state, rows.indptr, rows.indices, t)
+    big, close = sense_movers(data, n_movers, s_indptr, s_indices, s_dist)
     w = 0
     longest = 0.0
-    for m in range(movers.shape[0]):  # decide: walkers walk, triangle routers steer to their goals
+    for m in range(movers.shape[0]):  # decide, as sense_steer_drive does under the rule
         i = movers[m]
         if state[i] == _EXPLORE:
             heading[i] = walk_heading(i, heading, scans[m], ring, refused[i], normal[w], uniform[w], walk, xy, rows,
@@ -252,20 +252,15 @@ def _sense_steer_drive(data, n_movers, normal, uniform, s_indptr, s_indices, s_d
             w += 1
             speed = max_speed[i]
         else:
-            step, done = steer_one(i, xy, heading, steering, scans[m], angles, sensor_range, max_speed[i] * dt, r_eff)
+            step, done = steer_one(i, xy, heading, steering, scans[m], ring.angles, ring.sensor_range,
+                                   max_speed[i] * dt, r_eff)
             if done:
                 state[i] = _TRIANGLE_SETTLED
             speed = step / dt
         length[m] = speed * dt
         if m == 0 or length[m] > longest:
             longest = length[m]
-    near = 2.0 * big + 2.0 * longest
-    refused[:] = False
-    listed = sense_bodies and same_rows(s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist)
-    drive_rooms(data.grid, cells, moves.roomy, movers, heading, length, xy, radius, drive_bodies,
-                (d_indptr, d_indices, d_dist), (refused, distance),
-                (near, listed, reach, first, edges))  # move, one after another
-    _arrive(movers, state, xy, steering.goal)
+    drive_movers(data, n_movers, big, longest, s_indptr, s_indices, s_dist, d_indptr, d_indices, d_dist, close)
 
 
 @njit(cache=True, inline="always")
@@ -275,18 +270,6 @@ def _longest(length, n):  # pragma: no cover - numba
         if m == 0 or length[m] > longest:
             longest = length[m]
     return longest
-
-
-@njit(cache=True)
-def _arrive(movers, state, xy, goal):  # pragma: no cover - numba
-    """A triangle router on its goal has arrived."""
-    for m in range(movers.shape[0]):
-        i = movers[m]
-        if state[i] == _TRIANGLE:
-            dx = xy[i, 0] - goal[i, 0]
-            dy = xy[i, 1] - goal[i, 1]
-            if math.sqrt(dx * dx + dy * dy) <= 1e-9:
-                state[i] = _TRIANGLE_SETTLED
 
 
 @njit(cache=True)
@@ -356,7 +339,7 @@ def commit_moves(data, n_movers, d_indptr, d_indices, d_dist, drive_bodies):  # 
             r, travelled = True, 0.0
         refused[i] = r
         distance[i] += travelled
-    _arrive(movers, state, xy, data.steering.goal)
+    arrive(movers, state, xy, data.steering.goal)
 
 
 @njit(cache=True)

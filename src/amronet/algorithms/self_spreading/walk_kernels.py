@@ -175,9 +175,8 @@ def walk_heading(i, heading, scan, ring, refused, normal, uniform, walk, xy, tab
     ``walk``: the fast step's :class:`~amronet.algorithms.self_spreading.kernel_data.Walk`; ``table``: the step's
     neighbour table (the growth rules read it). The draws are scaled as the reference scales them
     (:func:`~amronet.engine.motion.random_walk`, :meth:`~amronet.algorithms.self_spreading.walks.Walker.steer`).
-    Inlined with a constant ``rule`` (:data:`RANDOM` in
-    :func:`~amronet.algorithms.self_spreading.kernels.sense_steer_drive`) it leaves only that rule's code: no branch
-    on the rule per walker.
+    The paper's random walk alone (:func:`~amronet.algorithms.self_spreading.kernels.sense_steer_drive`) calls
+    :func:`random_heading` itself: no branch on the rule per walker, none of the other rules' code to compile.
     """
     if rule == RANDOM:
         return random_heading(heading[i], scan, ring, refused, normal, uniform, walk.turn_sigma)
