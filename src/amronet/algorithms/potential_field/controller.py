@@ -120,14 +120,15 @@ class PotentialField(Controller):
         speed = np.empty(len(self.routers))
         n_movers = wake_and_accelerate(
             self.routers, robots_of(sw), Csr(table.indptr, table.indices, table.dist), field_state_of(self),
-            field_constants_of(self, self.dt), State.EXPLORE, State.REFERENCE, movers, speed)
+            field_constants_of(self, self.dt), np.int64(State.EXPLORE), np.int64(State.REFERENCE), movers,
+            speed)
         return Command(movers[:n_movers], speed[:n_movers])
 
     def after_move(self, movers: np.ndarray, refused: np.ndarray) -> None:  # noqa: D102
         if len(movers) == 0:
             return
         come_to_rest(np.asarray(movers, dtype=np.int64), np.asarray(refused, dtype=np.bool_), robots_of(self.swarm),
-                     field_state_of(self), field_constants_of(self, self.dt), State.REFERENCE)
+                     field_state_of(self), field_constants_of(self, self.dt), np.int64(State.REFERENCE))
 
     def report(self) -> dict[str, object]:
         """The force constants used and how often resting routers woke up."""

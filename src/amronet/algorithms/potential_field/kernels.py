@@ -132,8 +132,8 @@ def field_step(data, indptr, indices, dist, s_indptr, s_indices, s_dist, sense_b
                                 scan)
             obstacle_force[i, 0], obstacle_force[i, 1] = inverse_square_one(scan, heading[i], angles, sensor_range,
                                                                             constants.k_obstacle, constants.cap)
-    n = wake_and_accelerate(routers, robots, Csr(indptr, indices, dist), field, constants, _EXPLORE, _REFERENCE,
-                            movers, speed)
+    n = wake_and_accelerate(routers, robots, Csr(indptr, indices, dist), field, constants, np.int64(_EXPLORE),
+                            np.int64(_REFERENCE), movers, speed)
     if n == 0:
         return
     longest = 0.0
@@ -147,7 +147,7 @@ def field_step(data, indptr, indices, dist, s_indptr, s_indices, s_dist, sense_b
         refused[m], travelled = drive_one(grid, i, heading[i], speed[m] * dt, xy, radius, drive_bodies,
                                           Csr(d_indptr, d_indices, d_dist), near)
         distance[i] += travelled
-    come_to_rest(movers[:n], refused[:n], robots, field, constants, _REFERENCE)
+    come_to_rest(movers[:n], refused[:n], robots, field, constants, np.int64(_REFERENCE))
 
 
 @njit(cache=True)

@@ -87,7 +87,7 @@ def track_explorers(data, indptr, indices, dist):  # pragma: no cover - numba
     n = state.shape[0]
     for j in range(n):
         is_ref[j] = tracking.deployed[state[j]]
-    k = track_state_rows(state, _EXPLORE, current, is_ref, status, indptr, indices, dist, tracking.want_other,
+    k = track_state_rows(state, np.int64(_EXPLORE), current, is_ref, status, indptr, indices, dist, tracking.want_other,
                          (explorers, new_current, nearest, other))
     candidates = 0
     for m in range(k):
