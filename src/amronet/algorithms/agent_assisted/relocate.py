@@ -161,13 +161,17 @@ class Relocator:
             self._cut_links = self._network
         return self._cut
 
+    def _due(self, t: float, sw: Swarm) -> np.ndarray | None:
+        """Per loss waiting, whether it is due at ``t`` and its router may move; ``None`` where none is."""
+        if not len(self._li) or t - self._since[0] < self.confirm_s - 1e-9:  # (oldest first: none is due)
+            return None
+        due = (t - self._since >= self.confirm_s - 1e-9) & self._movable(self._li, sw)
+        return due if due.any() else None
+
     def _start(self, t: float, table: NeighbourTable, sw: Swarm) -> np.ndarray:
         none = np.zeros(0, dtype=np.int64)
-        if not len(self._li) or t - self._since[0] < self.confirm_s - 1e-9:  # (oldest first: none is due)
-            return none
-        due = t - self._since >= self.confirm_s - 1e-9
-        due &= self._movable(self._li, sw)
-        if not due.any():
+        due = self._due(t, sw)
+        if due is None:
             return none
         due &= self._cut_off(table, sw)[self._li]
         if not due.any():
@@ -192,10 +196,8 @@ class Relocator:
         router may move and has no path to a base station on ``table`` (found afresh here, as :meth:`_start` finds it
         after the look).
         """
-        if not len(self._li) or t - self._since[0] < self.confirm_s - 1e-9:  # (oldest first: none is due)
-            return False
-        due = (t - self._since >= self.confirm_s - 1e-9) & self._movable(self._li, sw)
-        if not due.any():
+        due = self._due(t, sw)
+        if due is None:
             return False
         cut = ~connected_to(table, np.flatnonzero(sw.role == Role.BASE), sw.role != Role.AGENT)
         return bool(cut[self._li[due]].any())
