@@ -31,10 +31,12 @@ import numpy as np
 from numba import njit
 
 from amronet.algorithms.common.references import _best_margin as best_margins
+from amronet.engine.hearing import open_margin
 from amronet.engine.network import agents_linked_kernel
 
 __all__ = ["JUNCTION", "LIMITS", "LINK", "LOSING", "PAPER", "RADIUS", "RuleBooks", "RuleInputs", "RuleStep",
-           "path_turning", "ring_openings", "rule_acts", "rule_commit", "rule_quiet"]
+           "agents_contact", "best_distance_margins", "junction_causes", "nearest_distances", "path_turning",
+           "ring_openings", "rule_acts", "rule_commit", "rule_quiet", "same_network"]
 
 PAPER = -1
 """No check: the paper's rule alone (an agent acts when the tracking finds it about to lose its last reference)."""
@@ -134,6 +136,44 @@ def _nearest(x, y, pts):  # pragma: no cover - numba
         if d < best:
             best = d
     return best
+
+
+@njit(cache=True)
+def nearest_distances(xy, pts, out):  # pragma: no cover - numba
+    """``out[m]``: the distance from ``xy[m]`` to the nearest of ``pts`` (:func:`_nearest`; none: ``inf``)."""
+    for m in range(xy.shape[0]):
+        out[m] = _nearest(xy[m, 0], xy[m, 1], pts)
+
+
+@njit(cache=True)
+def junction_causes(xy, relay_xy, base_xy, scans, allowed, turns, limits, out):  # pragma: no cover - numba
+    """Why each agent drops under ``distance-junction``: ``out[m]`` 0 (it does not), 1 distance, 2 junction, 3 turn.
+
+    What :meth:`~.drops.junction.DistanceJunction.decide` asks, agent by agent, as :func:`rule_quiet` does: ``xy``
+    the agents' positions ``(A, 2)``, ``scans`` their rings, ``allowed`` the agents in contact that may drop ``(A,)``;
+    ``turns`` = ``(samples, new, spacing, cos_angle)`` (:class:`~.drops.junction.PathTurns`, its samples kept in
+    place); ``limits`` = ``(far, junction_clear, turn_clear, base_clear, open_range)`` in metres.
+    """
+    samples, new, spacing, cos_angle = turns
+    far, junction_clear, turn_clear, base_clear, open_range = limits
+    for m in range(xy.shape[0]):
+        x = xy[m, 0]
+        y = xy[m, 1]
+        turning = path_turning(m, x, y, samples, new, spacing, cos_angle)
+        near = _nearest(x, y, relay_xy)
+        junction = ring_openings(scans[m], open_range) >= 3
+        out[m] = 0
+        if allowed[m] and _nearest(x, y, base_xy) > base_clear:
+            if near > far:
+                out[m] = 1
+            elif junction and near > junction_clear:
+                out[m] = 2
+            elif turning and near > turn_clear:
+                out[m] = 3
+    for m in range(samples.shape[0]):  # (loops, not a slice copy: see rule_commit)
+        for k in range(samples.shape[1]):
+            for c in range(samples.shape[2]):
+                samples[m, k, c] = new[m, k, c]
 
 
 @njit(cache=True)
@@ -244,19 +284,85 @@ def rule_commit(books):  # pragma: no cover - numba
             smoothed[m] = new_smoothed[m]
 
 
+@njit(cache=True, inline="always")
+def same_network(bases, relaying, rule_bases, rule_relaying):  # pragma: no cover - numba
+    """Whether the connection books and the drop rule ask for the agents' paths to the same bases and relays.
+
+    Then the books' links at the end of a step (:func:`~.stretch_books.observe_links`) are the rule's contact at the
+    next.
+    """
+    if bases.shape[0] != rule_bases.shape[0] or relaying.shape[0] != rule_relaying.shape[0]:
+        return False
+    for k in range(bases.shape[0]):
+        if bases[k] != rule_bases[k]:
+            return False
+    for k in range(relaying.shape[0]):
+        if relaying[k] != rule_relaying[k]:
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def agents_contact(after, needed, links, agents, rules, books):  # pragma: no cover - numba
+    """The agents' contact with a base station at the start of a stretch's step, into the rule's ``contact`` scratch.
+
+    ``after``: a step after the first, where the connection books' ``linked`` at the end of the step before
+    (:func:`~.stretch_books.observe_links`) is that contact when both ask about the same network
+    (:func:`same_network`): copied; else, where ``needed``, found on the table ``links`` = ``(indptr, indices)``.
+    ``rules``: the drop rule's :class:`RuleStep`; ``books``: the connection books. Returns whether ``contact`` holds
+    it.
+    """
+    _, _, _, bases, relaying, _, _, contact, _ = rules
+    if after and same_network(books[0], books[1], bases, relaying):
+        linked = books[2][0]
+        for j in range(agents.shape[0]):
+            contact[j] = linked[j]
+        return True
+    if needed:
+        agents_linked_kernel(links[0], links[1], agents, bases, relaying, contact)
+    return needed
+
+
 @njit(cache=True)
-def rule_acts(rules, done, agents, xy, current, nearest_d, left, scans, links, is_ref):  # pragma: no cover - numba
+def best_distance_margins(who, is_reference, indptr, indices, dist, r_c, n10, out):  # pragma: no cover - numba
+    """``out[m]``: the best margin from ``who[m]`` to a reference it hears, its links' margins by their lengths.
+
+    What :func:`~amronet.algorithms.common.references.best_reference_margin` reads of a table whose margins are
+    :func:`~amronet.engine.links.distance_margins` (the unit disk, the path-loss law without walls and shadowing),
+    each margin the same function of the same length, taken for the rows of ``who`` alone.
+    """
+    for m in range(who.shape[0]):
+        i = who[m]
+        best = -np.inf
+        for e in range(indptr[i], indptr[i + 1]):
+            if is_reference[indices[e]]:
+                v = open_margin(dist[e], 0.0, 0.0, r_c, n10, 0.0, 0.0)
+                if v > best:
+                    best = v
+        out[m] = best
+
+
+@njit(cache=True)
+def rule_acts(rules, done, agents, xy, current, nearest_d, left, scans, links, is_ref,
+              known):  # pragma: no cover - numba
     """Whether an agent acts in step ``done`` of a stretch by the rule's check (:func:`rule_quiet`) on its table.
 
     ``rules``: a :class:`RuleStep`; the other arguments as :class:`RuleInputs` has them; ``links``: the table's
-    ``(indptr, indices, margin)`` (its margins where the link-quality rule reads them); ``is_ref``: which nodes are
-    references ``(N,)``.
+    ``(indptr, indices, dist, margin, law)``, ``law`` = ``(by_distance, r_c, n10)``: its margins (where the
+    link-quality rule reads them) are those of its links' lengths, :func:`best_distance_margins`, else ``margin``;
+    ``is_ref``: which nodes are references ``(N,)``; ``known``: the agents' contact with a base station on this
+    table is in the :class:`RuleStep`'s ``contact`` already.
     """
     books, relay_xy, base_xy, bases, relaying, first, dt, contact, best = rules
-    indptr, indices, margin = links
+    indptr, indices, dist, margin, law = links
+    by_distance, r_c, n10 = law
     if books[0] == JUNCTION:
-        agents_linked_kernel(indptr, indices, agents, bases, relaying, contact)
+        if not known:
+            agents_linked_kernel(indptr, indices, agents, bases, relaying, contact)
     elif books[0] == LINK:  # what best_reference_margin reads of the table
-        best_margins(agents, is_ref, indptr, indices, margin, best)
+        if by_distance:
+            best_distance_margins(agents, is_ref, indptr, indices, dist, r_c, n10, best)
+        else:
+            best_margins(agents, is_ref, indptr, indices, margin, best)
     t = (first + done) * dt
     return not rule_quiet(books, (t, agents, xy, current, nearest_d, left, relay_xy, base_xy, contact, best, scans))

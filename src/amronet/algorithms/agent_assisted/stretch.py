@@ -271,11 +271,12 @@ class QuietStretch:
     def _radio(self, table: NeighbourTable, margins: bool, silent: np.ndarray | None) -> tuple:
         """The kernel's :class:`~.stretch_links.Radio` of this step's ``table`` (``margins``: the rule reads them).
 
-        ``table`` has lost the ``silent`` nodes' links (its geometric view has them).
+        ``table`` has lost the ``silent`` nodes' links (its geometric view has them). Margins of the links' lengths
+        alone (no walls, no shadowing) the kernel takes of the lengths (:func:`~.stretch_links.margin_law`).
         """
         near = table.geometric
         assert self.hearing is not None  # (applies)
-        return tuple(Radio(self.radio_reach, table.indptr, table.indices, table.dist,
-                           table.margin if margins else NO_MARGIN, near.indptr, near.indices, near.dist, near.xy,
-                           near.link_margin if self.laws else NO_MARGIN, self.hearing,
+        margin = table.margin if margins and self.laws else NO_MARGIN
+        return tuple(Radio(self.radio_reach, table.indptr, table.indices, table.dist, margin, near.indptr, near.indices,
+                           near.dist, near.xy, near.link_margin if self.laws else NO_MARGIN, self.hearing,
                            _NONE_SILENT if silent is None else silent))

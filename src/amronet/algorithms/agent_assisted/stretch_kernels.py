@@ -32,13 +32,12 @@ from numba import njit
 
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
-from amronet.algorithms.agent_assisted.rule_kernels import LINK, PAPER, rule_acts, rule_commit
+from amronet.algorithms.agent_assisted.rule_kernels import JUNCTION, LINK, PAPER, agents_contact, rule_acts, rule_commit
 from amronet.algorithms.agent_assisted.stretch_books import Links, back_up, back_up_starts, observe_links
-from amronet.algorithms.agent_assisted.stretch_links import Radio, next_radio
+from amronet.algorithms.agent_assisted.stretch_links import Radio, margin_law, next_radio
 from amronet.algorithms.common.goto import Steering, goal_ends, steer_one
 from amronet.engine.bitgen import next_double
 from amronet.engine.motion import random_walk_drawing
-from amronet.engine.network import agents_linked_kernel
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
 __all__ = ["ACTS", "LINKED", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL",
@@ -233,7 +232,7 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
      active) = frontier
     blocked, clear, ox, oy, res = grid
     trail, contact_at, on_path, confirm, first, step_dt = retracing
-    _, _, _, rule_bases, rule_relaying, rule_first, rule_dt, rule_contact, _ = rules
+    _, _, _, _, _, rule_first, rule_dt, rule_contact, _ = rules
     linked = books[2][0]
     m = agents.shape[0]
     n = xy.shape[0]
@@ -253,7 +252,9 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     uniform = np.empty(m)
     no_bodies = (np.zeros(n + 1, np.int64), np.zeros(0, np.int32), np.zeros(0))
     paper = rules[0][0] == PAPER
-    margins = rules[0][0] == LINK  # (the rule reads the links' margins)
+    backing = reverse_drop[0].shape[0] > 0  # (agents.reverse_drop)
+    margins, law = margin_law(rules[0][0] == LINK, radio[10])  # (whether the tables keep the margins the rule reads)
+    contact = rules[0][0] == JUNCTION or backing  # (the rule or the reverse drop reads the agents' contact)
     done = 0
     looked = 0
     idle = 0
@@ -272,16 +273,16 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         _, indptr, indices, dist, margin, near_indptr, near_indices, near_dist, _, _, _, _ = radio
         scans = np.empty((m, angles.shape[0]))
         near = (near_indptr, near_indices, near_dist)  # the rings and the moves read every pair within r
-        if reverse_drop[0].shape[0]:  # reverse drop: stop before a step in which an agent starts to back up
-            agents_linked_kernel(indptr, indices, agents, rule_bases, rule_relaying, rule_contact)
-            if back_up_starts(reverse_drop, (rule_first + done) * rule_dt, agents, left, rule_contact):
-                return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
+        known = agents_contact(contact and done > 0, backing, (indptr, indices), agents, rules, books)
+        if backing and back_up_starts(reverse_drop, (rule_first + done) * rule_dt, agents, left, rule_contact):
+            # (reverse drop: stop before a step in which an agent starts to back up)
+            return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
         n_cand, n_losing = sense_track_agents(grid, robots, agents, ring, near, scans, tracking,
                                               (indptr, indices, dist), paper, knowledge, stamp + 1)
         if not paper:  # the drop rule decides who acts
             if ((n_cand and triangle_goes(triangles, agents, current, other_ref, left, xy))
                     or rule_acts(rules, np.int64(done), agents, xy, current, nearest_d, left, scans,  # (no literal 0)
-                                 (indptr, indices, margin), is_ref)):
+                                 (indptr, indices, dist, margin, law), is_ref, known)):
                 return StretchEnd(done, ACTS, n_cand, n_losing, radio, scans, stamp, now, looked, idle)
             rule_commit(rules[0])
             looked += 1 if n_cand else 0
@@ -308,7 +309,7 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         # ... then the agents its plans left idle walk at random (steer_idle; a plan may come back any step)
         walked = random_walk_drawing(bitgen, heading, agents, active, avoided, angles, avoid, refused_m, sigma, normal,
                                      uniform)
-        if reverse_drop[0].shape[0]:  # the reverse drop's books, and the agents that back up (their contact as above)
+        if backing:  # the reverse drop's books, and the agents that back up (their contact as above)
             back_up(reverse_drop, (rule_first + done) * rule_dt, agents, xy, heading, rule_contact)
         reach_now = reach
         if nt:  # the triangle and strip routers' rings, then their steering, unless one arrives or gives up now

@@ -39,7 +39,7 @@ from amronet.engine.links import distance_margins, fresh_margin, keep_entries, o
 from amronet.engine.neighbours import search_kernel
 from amronet.engine.shadowing import cell_value
 
-__all__ = ["FEW_MOVED", "NO_MARGIN", "Radio", "moved_nodes", "moved_radio", "next_radio", "rebuilt_radio"]
+__all__ = ["FEW_MOVED", "NO_MARGIN", "Radio", "margin_law", "moved_nodes", "moved_radio", "next_radio", "rebuilt_radio"]
 
 NO_MARGIN = np.zeros(0)
 """The margins of a table whose margins nobody reads (a stand-in of their type)."""
@@ -78,6 +78,20 @@ class Radio(NamedTuple):
     link."""
     silent: np.ndarray
     """Which robots send nothing ``(N,)`` (failed ones; no entries: none), a link of which is none."""
+
+
+@njit(cache=True, inline="always")
+def margin_law(reads, hearing):  # pragma: no cover - numba
+    """``(margins, law)``: whether the tables keep their links' margins, and how the rule reads them.
+
+    ``reads``: the drop rule reads the links' margins; ``hearing``: the :attr:`Radio.hearing`. Where they are those of
+    the links' lengths alone (no walls, no shadowing: :func:`~amronet.engine.links.distance_margins`) the tables keep
+    none and ``law`` = ``(True, r_c, n10)`` tells the rule to take them of the lengths it reads
+    (:func:`~.rule_kernels.best_distance_margins`); else ``margins`` is ``reads`` and ``law`` starts with ``False``.
+    """
+    h = named_inputs(hearing)
+    by_distance = h.wall_db == 0.0 and h.clip == 0.0
+    return reads and not by_distance, (by_distance, h.r_c, h.n10)
 
 
 @njit(cache=True)

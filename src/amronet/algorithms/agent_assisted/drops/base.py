@@ -22,6 +22,7 @@ from typing import ClassVar
 import numpy as np
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from amronet.algorithms.agent_assisted.rule_kernels import nearest_distances
 from amronet.registry import Registry
 
 __all__ = ["DROP_RULES", "AgentView", "DropContext", "DropRule", "NoParams", "validate_drop_params"]
@@ -90,7 +91,10 @@ class AgentView:
         pts = self.relay_xy if among is None else among
         if len(pts) == 0:
             return np.full(len(self.xy), np.inf)
-        return np.sqrt(((self.xy[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+        out = np.empty(len(self.xy))  # (a compiled loop: the distances NumPy's broadcast gives, bit for bit)
+        nearest_distances(np.ascontiguousarray(self.xy, dtype=np.float64), np.ascontiguousarray(pts, dtype=np.float64),
+                          out)
+        return out
 
 
 class DropRule(ABC):

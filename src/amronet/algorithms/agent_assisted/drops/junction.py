@@ -25,7 +25,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from amronet.algorithms.agent_assisted.drops.base import DROP_RULES, AgentView, DropContext, DropRule
-from amronet.algorithms.agent_assisted.rule_kernels import path_turning, ring_openings
+from amronet.algorithms.agent_assisted.rule_kernels import junction_causes, path_turning, ring_openings
 
 __all__ = ["DistanceJunction", "DistanceJunctionParams", "PathTurns", "count_openings"]
 
@@ -86,6 +86,10 @@ class PathTurns:
         """The oldest, middle and newest sample of each agent ``(A, 3, 2)`` (nan: none yet), updated in place."""
         self._new = np.empty_like(self.samples)
 
+    def books(self) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """``(samples, scratch, spacing, cos_angle)``, as :func:`~.rule_kernels.junction_causes` updates them."""
+        return self.samples, self._new, float(self.spacing), float(self.cos_angle)
+
     def update(self, xy: np.ndarray) -> np.ndarray:
         """Feed the agents' positions ``(A, 2)``; which agents are on a turn ``(A,)``.
 
@@ -114,22 +118,21 @@ class DistanceJunction(DropRule):
         super().__init__(params, context)
         self.turns = PathTurns(context.n_agents, params.turn_travel * context.r_c, params.turn_angle_deg)
         self.by_cause = {"distance": 0, "junction": 0, "turn": 0}
+        """Drops by their first cause, in :func:`~.rule_kernels.junction_causes`' order."""
+        r_c = context.r_c
+        self._limits = (float(params.far * r_c), float(params.junction_clear * r_c), float(params.turn_clear * r_c),
+                        float(params.base_clear * r_c), float(params.open_fraction * context.sensor_range))
 
     def decide(self, view: AgentView) -> np.ndarray:  # noqa: D102
-        p, r_c = self.params, self.context.r_c
         assert view.in_contact is not None and view.scans is not None
-        turning = self.turns.update(view.xy)
-        near = view.nearest_relay_distance()
-        junction = count_openings(view.scans, p.open_fraction * self.context.sensor_range) >= 3
-        allowed = view.in_contact & view.can_drop & (view.nearest_relay_distance(view.base_xy) > p.base_clear * r_c)
-        by_distance = near > p.far * r_c
-        by_junction = junction & (near > p.junction_clear * r_c)
-        by_turn = turning & (near > p.turn_clear * r_c)
-        drop = allowed & (by_distance | by_junction | by_turn)
+        cause = np.empty(len(view.xy), dtype=np.int64)  # (one compiled call)
+        junction_causes(np.ascontiguousarray(view.xy, dtype=np.float64), view.relay_xy, view.base_xy,
+                        np.ascontiguousarray(view.scans, dtype=np.float64), view.in_contact & view.can_drop,
+                        self.turns.books(), self._limits, cause)
+        drop = cause > 0
         if drop.any():
-            self.by_cause["distance"] += int(np.count_nonzero(drop & by_distance))
-            self.by_cause["junction"] += int(np.count_nonzero(drop & ~by_distance & by_junction))
-            self.by_cause["turn"] += int(np.count_nonzero(drop & ~by_distance & ~by_junction & by_turn))
+            for k, name in enumerate(self.by_cause, start=1):
+                self.by_cause[name] += int(np.count_nonzero(cause == k))
         return drop
 
     def losing(self, view: AgentView) -> np.ndarray:
