@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from amronet.engine.cell_boxes import BLOCK
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.coverage_heard import HeardCells
-from amronet.engine.coverage_union import BYTES_PER_CELL, block_grid, full_window
+from amronet.engine.coverage_union import BYTES_PER_CELL, _blocks_holding, block_grid, full_window
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import RadioMedium, make_medium
 from amronet.world.builtin import resolve_map
@@ -249,3 +249,14 @@ def test_a_block_with_no_cell_left_to_decide_is_not_looked_at_again():
     for xy in (routers[1:], routers[2:], pool[:3]):
         np.testing.assert_array_equal(heard.covered(area, xy, medium.reach), _afresh(medium, area, xy))
         assert not ((union.blocks == 0) & _blocks_with_cells_left(area, union.union)).any()
+
+
+def test_blocks_holding_marks_the_blocks_of_the_true_cells():
+    rng = np.random.default_rng(3)
+    for i0, j0, rows, cols in [(0, 0, 16, 24), (5, 3, 37, 50), (13, 7, 1, 1), (9, 62, 20, 70)]:
+        cells = rng.random((rows, cols)) < 0.01
+        want = np.zeros(((i0 + rows - 1) // BLOCK - i0 // BLOCK + 1, (j0 + cols - 1) // BLOCK - j0 // BLOCK + 1),
+                        np.uint8)
+        for i, j in zip(*np.nonzero(cells), strict=True):
+            want[(i0 + i) // BLOCK - i0 // BLOCK, (j0 + j) // BLOCK - j0 // BLOCK] = 1
+        assert np.array_equal(_blocks_holding(cells, i0, j0), want)

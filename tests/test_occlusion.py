@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from amronet.engine.occlusion import BINS, EPS, NEAR, SHRINK, _span, behind, clear, shade
+from amronet.engine.occlusion import BINS, EPS, NEAR, SHRINK, _span, behind, clear, dark, look, shade
 from amronet.engine.wall_bits import wall_bits
 from amronet.engine.walls import count_walls_many, wall_grid
 from amronet.world.builtin import resolve_map
@@ -223,3 +223,24 @@ def test_shade_draws_few_of_the_wall_cells_behind_the_nearest_walls():
         i1, j1 = math.floor((node[1] + REACH - oy) / res), math.floor((node[0] + REACH - ox) / res)
         walls += int(np.count_nonzero(grid[0][i0:i1 + 1, j0:j1 + 1] == 1))  # the wall cells in its box
     assert 0 < drawn < walls // 2
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), where=st.sampled_from(["free", "face", "corner", "wall"]))
+def test_a_dark_block_has_every_cell_centre_in_a_shadow(seed, where):
+    """Where ``dark`` says so of a block of 8 x 8 cell centres, ``look`` finds each of them in a shadow."""
+    omap, grid, bits = _office()
+    rng = np.random.default_rng(seed)
+    res, ox, oy = float(omap.resolution), float(omap.origin[0]), float(omap.origin[1])
+    node = _node(omap, grid, rng, where)
+    shadows, lit = _shade(omap, bits, *node)
+    near2 = (NEAR * res) ** 2
+    found = 0
+    for i0, j0 in rng.integers(0, omap.shape[0] - 8, (300, 2)):
+        cx = ox + (np.arange(j0, j0 + 8) + 0.5) * res - node[0]
+        cy = oy + (np.arange(i0, i0 + 8) + 0.5) * res - node[1]
+        if not dark(lit, shadows, cx[0], cx[-1], cy[0], cy[-1], near2):
+            continue
+        found += 1
+        assert all(look(lit, shadows, dx, dy, dx * dx + dy * dy, near2) == -1 for dx in cx for dy in cy)
+    assert found > 0 or where == "wall"

@@ -144,7 +144,10 @@ class HeardUnion:
         if len(rows) == 0:  # they marked no cell first
             return
         self.union[i0:i1 + 1, j0:j1 + 1][mine] = False
-        self.blocks[i0 // BLOCK:i1 // BLOCK + 1, j0 // BLOCK:j1 // BLOCK + 1] = 1  # their cells to decide again
+        freed = _blocks_holding(mine, i0, j0)  # the blocks of their cells: to decide again
+        self.blocks[i0 // BLOCK:i1 // BLOCK + 1, j0 // BLOCK:j1 // BLOCK + 1] |= freed
+        todo_blocks = np.zeros_like(self.blocks)  # the pass looks at those blocks only
+        todo_blocks[i0 // BLOCK:i1 // BLOCK + 1, j0 // BLOCK:j1 // BLOCK + 1] = freed
         self._todo[i0:i1 + 1, j0:j1 + 1][mine] = True
         owner[mine] = -1
         window = (i0 + int(rows[0]), i0 + int(rows[-1]), j0 + int(cols[0]), j0 + int(cols[-1]))
@@ -155,7 +158,7 @@ class HeardUnion:
         near = near[np.argsort(self._joined[near], kind="stable")]  # oldest first: the invariant (module doc)
         if len(near):
             # (the pass sees the cells to decide again only: what it finds of the blocks is not kept)
-            mark(self._xy[near], near, self._todo_read, self.union, self.owner, window, self.blocks.copy())
+            mark(self._xy[near], near, self._todo_read, self.union, self.owner, window, todo_blocks)
         self._todo[window[0]:window[1] + 1, window[2]:window[3] + 1] = False
 
     def _slots(self, n: int) -> np.ndarray:
@@ -169,3 +172,19 @@ class HeardUnion:
             self._joined = np.concatenate([self._joined, np.zeros(grow, dtype=np.int64)])
             self._free.extend(range(size + grow - 1, size - 1, -1))
         return np.array([self._free.pop() for _ in range(n)], dtype=np.int32)
+
+
+def _blocks_holding(cells: np.ndarray, i0: int, j0: int) -> np.ndarray:
+    """Which blocks hold a true cell of ``cells``, a window of a grid that starts at cell ``(i0, j0)``.
+
+    Returns:
+        Per block of :data:`BLOCK` cells a side that the window touches, from ``(i0 // BLOCK, j0 // BLOCK)``: 1
+        where it holds a true cell, else 0 (``uint8``). A block's row of 8 cells is one 8-byte word.
+    """
+    rows, cols = cells.shape
+    di, dj = i0 % BLOCK, j0 % BLOCK
+    nb_r, nb_c = -(-(di + rows) // BLOCK), -(-(dj + cols) // BLOCK)
+    padded = np.zeros((nb_r * BLOCK, nb_c * BLOCK), dtype=bool)
+    padded[di:di + rows, dj:dj + cols] = cells
+    words = padded.view(np.uint64).reshape(nb_r, BLOCK, nb_c)  # a block's row of 8 cells: one word
+    return (np.bitwise_or.reduce(words, axis=1) != 0).view(np.uint8)

@@ -32,7 +32,7 @@ from numba import njit
 
 from amronet.engine.cell_boxes import BLOCK, Cells, block_gap, cells_of, named_cells, node_box
 from amronet.engine.kernel_data import Grid
-from amronet.engine.occlusion import BINS, NEAR, look, shade
+from amronet.engine.occlusion import BINS, NEAR, dark, look, shade
 from amronet.engine.propagation import MIN_DISTANCE_M, LinkBudget
 from amronet.engine.shadowing import FieldGrid, ShadowingField, field_at, link_shadowing
 from amronet.engine.wall_bits import box_clear_bits, count_walls_bits, wall_bits
@@ -220,6 +220,15 @@ def node_reach(s, reach, h):  # pragma: no cover - numba
     return hi
 
 
+@njit(cache=True, inline="always")
+def _in_shadow(x, y, cells, bi, bj, rows, cols, lit, shadows, near2):  # pragma: no cover - numba
+    """Whether every cell centre of block ``(bi, bj)`` lies in a wall's shadow of ``(x, y)`` (:func:`dark`)."""
+    i0, j0 = bi * BLOCK, bj * BLOCK
+    i1, j1 = min(i0 + BLOCK - 1, rows - 1), min(j0 + BLOCK - 1, cols - 1)
+    return dark(lit, shadows, cells.ox + (j0 + 0.5) * cells.res - x, cells.ox + (j1 + 0.5) * cells.res - x,
+                cells.oy + (i0 + 0.5) * cells.res - y, cells.oy + (i1 + 0.5) * cells.res - y, near2)
+
+
 @njit(cache=True)
 def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field, blocks):  # pragma: no cover - numba
     """Mark ``out[i, j]`` for the ``mask`` cells ``(i, j)`` of ``window`` heard from the node at ``(x, y)``.
@@ -265,6 +274,8 @@ def _mark_node(x, y, mask, cells, reach, out, owner, key, window, h, top_field, 
                 continue
             far2 = _heard_within2(sa + at_block[bi, bj] if shadowed else 0.0, h) if model_is_path_loss else math.inf
             dim = model_is_path_loss and walled and up < h.wall_db - 1e-9  # no cell of the block allows a wall
+            if dim and asked >= SHADE_AFTER and _in_shadow(x, y, cells, bi, bj, rows, cols, lit, shadows, near2):
+                continue  # every cell of the block in a wall's shadow: none heard
             ia, ib = max(bi * BLOCK, i0), min(bi * BLOCK + BLOCK, i1 + 1)
             ja, jb = max(bj * BLOCK, j0), min(bj * BLOCK + BLOCK, j1 + 1)
             left = 0  # the block's mask cells still not marked

@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 from numba import uint64 as _u
 
-__all__ = ["BINS", "behind", "clear", "look", "pseudo_angle", "shade"]
+__all__ = ["BINS", "behind", "clear", "dark", "look", "pseudo_angle", "shade"]
 
 BINS = 4096
 """Bins of directions around a node (a quarter turn is :data:`BINS` / 4 of them)."""
@@ -274,3 +274,25 @@ def look(lit, shadows, dx, dy, dd, near2):  # pragma: no cover - numba
     if dd > near2 and dd > shadows[b] * (1.0 + 1e-9):
         return -1
     return 0
+
+
+@njit(cache=True)
+def dark(lit, shadows, dx0, dx1, dy0, dy1, near2):  # pragma: no cover - numba
+    """Whether :func:`look` answers -1 for every point of the rectangle ``[dx0, dx1] x [dy0, dy1]`` from the node.
+
+    True when the rectangle's nearest point is farther than ``near2`` and than the shadow of every bin its
+    directions reach (one bin to spare on each side, for the rounding of :func:`pseudo_angle`), and no nearer than
+    their clear lines: the squared distance of a point of it, computed as ``dx * dx + dy * dy`` from coordinates
+    differences at least as large, is no smaller, so :func:`look` finds it in a shadow.
+    """
+    gx = dx0 if dx0 > 0.0 else (-dx1 if dx1 < 0.0 else 0.0)
+    gy = dy0 if dy0 > 0.0 else (-dy1 if dy1 < 0.0 else 0.0)
+    g2 = gx * gx + gy * gy
+    if not g2 > near2:
+        return False
+    lo, hi = _span(dx0, dx1, dy0, dy1)
+    for b in range(int(math.floor(lo * _SCALE)) - 1, int(math.floor(hi * _SCALE)) + 2):
+        i = b % BINS
+        if not g2 > shadows[i] * (1.0 + 1e-9) or g2 < lit[i] * (1.0 - 1e-9):
+            return False
+    return True

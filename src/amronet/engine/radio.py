@@ -314,7 +314,7 @@ class RadioMedium:
             return area.fraction(xy, self.r_c, method=method)
         if method != "raster":
             raise ValueError(f"coverage method {method!r} is only defined for the unit disk; use raster")
-        return self.covered_mask(area, xy).sum() / area.n_cells
+        return np.float64(np.count_nonzero(self.covered_mask(area, xy))) / area.n_cells
 
     def covered_mask(self, area: CoverageArea, xy: np.ndarray) -> np.ndarray:
         """Boolean mask of the cells of ``area`` where a receiver would hear a node of ``xy``."""
