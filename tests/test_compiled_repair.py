@@ -145,6 +145,8 @@ def test_repairing_runs_take_the_compiled_step_bit_for_bit(name):
     if isinstance(source, tuple):  # the fault cut routers off, and they moved
         assert a.summary["faults"] and a.summary["mission"]["relocations"] > 0
     assert (relocator.agent_backs > 0) == backs if isinstance(relocator, Retracer) else not backs
+    if not isinstance(relocator, Retracer):  # routers relocated in stretches too
+        assert fast.compiled.repair.relocating_steps > 0
     # stretches took steps, and the idle relocator's update was left out in them and in compiled steps
     assert sum(fast.compiled.quiet.ends.values()) > 0
     assert fast.compiled.repair.updates_skipped > fast.steps / 4

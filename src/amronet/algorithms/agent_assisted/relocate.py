@@ -189,18 +189,34 @@ class Relocator:
         """Per loss waiting, whether its router may move (:meth:`_movable`)."""
         return self._movable(self._li, sw) if len(self._li) else np.zeros(0, dtype=bool)
 
-    def could_start(self, t: float, table: NeighbourTable, sw: Swarm) -> bool:
+    def could_start(self, t: float, table: NeighbourTable, sw: Swarm, cut: np.ndarray | None = None) -> bool:
         """Whether :meth:`update` at ``t`` on ``table`` could start a move.
 
         Only a loss waiting now can start one (a loss noticed at ``t`` is due ``confirm_s`` later), once it is due, its
         router may move and has no path to a base station on ``table`` (found afresh here, as :meth:`_start` finds it
-        after the look).
+        after the look, unless the caller found it: ``cut``).
         """
         due = self._due(t, sw)
         if due is None:
             return False
-        cut = ~connected_to(table, np.flatnonzero(sw.role == Role.BASE), sw.role != Role.AGENT)
+        if cut is None:
+            cut = ~connected_to(table, np.flatnonzero(sw.role == Role.BASE), sw.role != Role.AGENT)
         return bool(cut[self._li[due]].any())
+
+    def quiet_steps(self, index: int, dt: float, limit: int, cut: np.ndarray, sw: Swarm) -> int:
+        """How many steps from step ``index`` on (at most ``limit``) come before a loss of a cut-off router falls due.
+
+        Only losses whose router may move (:meth:`_movable`) and is cut off (the mask ``cut``) count; the steps' times
+        are the loop's (``step * dt``).
+        """
+        waiting = self.waiting_movable(sw)
+        if len(waiting):
+            waiting &= cut[self._li]
+        if not waiting.any():
+            return limit
+        t = (index + np.arange(limit, dtype=np.int64)) * dt
+        due = (t[:, None] - self._since[waiting][None, :] >= self.confirm_s - 1e-9).any(axis=1)
+        return int(np.argmax(due)) if due.any() else limit
 
     def may_start(self, table: NeighbourTable, sw: Swarm) -> bool:
         """Whether a loss waits whose router may move and is cut off: a move may start once it is due."""

@@ -7,7 +7,11 @@ the agents' odometry is recorded, and agents out of contact for ``repair_confirm
 (:meth:`.Retracer.steer_agents`). :class:`RepairStep` does this part of a step where the compiled step
 (:class:`~.fast.CompiledAgents`) and its quiet stretches (:class:`~.stretch.QuietStretch`) take the rest:
 
-* A step in which routers relocate or agents back up goes phase by phase (:meth:`RepairStep.busy`).
+* A step in which routers relocate or agents back up goes phase by phase (:meth:`RepairStep.busy`), but under
+  ``relocate`` the relocating routers are steered in stretches while the repair's look changes nothing
+  (:meth:`RepairStep.relocating_start`): this step's look is taken at the start, the stretch ends before a loss of
+  a cut-off router falls due, and its kernel stops before a step whose table has other links among the base nodes and
+  routers than this one (a loss noticed or heard again, a router that finds a path).
 * The relocator is *idle* when nobody relocates, no loss waits whose router may move and is cut off, and the links
   among the watched nodes are those it last saw. Deployed nodes do not move, so under a radio whose links are decided
   by the positions (:attr:`~amronet.algorithms.stepping.StepContext.link_inputs`: the unit disk, the built-in
@@ -29,12 +33,13 @@ from typing import Any
 import numpy as np
 
 from amronet.algorithms.agent_assisted.relocate import Relocator
+from amronet.algorithms.agent_assisted.relocate_kernels import network_links
 from amronet.algorithms.agent_assisted.retrace import Retracer
 from amronet.algorithms.agent_assisted.stretch_books import Retracing, no_retracing
 from amronet.algorithms.base import StepInput
 from amronet.algorithms.stepping import StepContext
-from amronet.engine.network import agents_connected
-from amronet.engine.robots import State
+from amronet.engine.network import agents_connected, connected_to
+from amronet.engine.robots import Role, State
 
 __all__ = ["RepairStep"]
 
@@ -57,9 +62,14 @@ class RepairStep:
         """What the relocator was found idle with: the controller's deployed mask, the robots, the failed nodes."""
         self.updates_skipped = 0
         """Compiled steps in which the idle relocator's ``update`` was not called."""
+        self.watch: tuple | None = None
+        """In a stretch that steers relocating routers: the routers, their steering, the base nodes and routers
+        (a mask) and the links among them (:func:`~.relocate_kernels.network_links`); else ``None``."""
+        self.relocating_steps = 0
+        """Steps taken in stretches with routers relocating."""
 
     def busy(self) -> bool:
-        """Whether routers relocate or agents back up: the step goes phase by phase."""
+        """Whether routers relocate or agents back up: the step goes phase by phase (or a stretch steers them)."""
         if (self.controller.swarm.state == State.RELOCATING).any():
             return True
         return self.retracer is not None and bool(self.retracer.backing.any())
@@ -113,18 +123,20 @@ class RepairStep:
         self._note_idle(now.table)
         return speed
 
-    def stretch_start(self, now: StepInput, limit: int) -> Retracing | None:
-        """What a stretch keeps of the repair from this step on (:class:`~.stretch_books.Retracing`).
+    def stretch_start(self, now: StepInput, limit: int) -> tuple[Retracing, int] | None:
+        """What a stretch keeps of the repair from this step on (:class:`~.stretch_books.Retracing`); its most steps.
 
         ``None``: no stretch now (the relocator is not idle, not even after its look taken here (:meth:`_look`), or
         routers drive that ``retrace`` would record, or a relocating router's loss might start; an agent starts to
-        back up now). Under ``retrace`` this step's contact is noted, as :meth:`.Retracer.steer_agents` notes it
-        first.
+        back up now; routers relocate that :meth:`relocating_start` does not let move in it). Under ``retrace`` this
+        step's contact is noted, as :meth:`.Retracer.steer_agents` notes it first.
         """
         c, r = self.controller, self.relocator
         sw = c.swarm
+        self.watch = None
         if self.busy():
-            return None
+            limit = self.relocating_start(now, limit) if self.retracer is None else 0
+            return (no_retracing(len(c.agents)), limit) if limit else None
         b = self.retracer
         driving = c.moving_triangles or (c.strips is not None and c.strips.moving)
         if b is not None:
@@ -138,10 +150,38 @@ class RepairStep:
             return None  # (triangle or strip routers on their way add to their way, or may cut a router off)
         m = len(c.agents)
         if b is None:
-            return no_retracing(m)
+            return no_retracing(m), limit
         b.contact_at[:] = at
         return Retracing(np.empty((limit, m, 2)), b.contact_at, b.on_path, float(b.confirm_s), int(now.index),
-                         float(now.dt))
+                         float(now.dt)), limit
+
+    def relocating_start(self, now: StepInput, limit: int) -> int:
+        """Routers relocating in a stretch (``relocate``): this step's look, taken here; how many steps (0: none).
+
+        Only where :meth:`_look` may look (links decided by the positions, no reverse drops, the table has every
+        robot), no triangle or strip router drives, and the look starts and stops nothing: no relocating router has a
+        path to a base station and no move could start now. In the stretch's later steps the look would change
+        nothing as long as the links among the base nodes and routers are this table's (:attr:`watch`: the kernel
+        stops before a step whose table has others) and no loss of a cut-off router that may move falls due
+        (:meth:`.Relocator.quiet_steps`: the stretch ends before). A router that finds a path again does so in the
+        stretch's last step, which the faults' books see.
+        """
+        c, r, table = self.controller, self.relocator, now.table
+        sw = c.swarm
+        if (not self.fixed_links or c.trails is not None or len(table.indptr) - 1 != len(sw) or r.confirm_s <= 1e-9
+                or c.moving_triangles or (c.strips is not None and c.strips.moving)
+                or (sw.state == State.TRIANGLE).any() or (sw.state == State.STRIP).any()):
+            return 0
+        network = sw.role != Role.AGENT
+        cut = ~connected_to(table, np.flatnonzero(sw.role == Role.BASE), network)
+        moving = np.flatnonzero(sw.state == State.RELOCATING)
+        if not cut[moving].all() or r.could_start(now.t, table, sw, cut):
+            return 0
+        started, stopped = r.update(now.t, table, sw)
+        assert not len(started) and not len(stopped), "a look at the start of a stretch moved a router"
+        self._note_idle(table)
+        self.watch = (moving, r.steering, network, network_links(table.indptr, table.indices, network))
+        return r.quiet_steps(int(now.index), float(now.dt), limit, cut, sw)
 
     def _look(self, now: StepInput) -> bool:
         """The relocator's look of this step (its ``update``), taken at the start of a stretch; whether it is idle then.
@@ -167,5 +207,8 @@ class RepairStep:
     def stretch_end(self, done: int, retracing: Retracing) -> None:
         """After a stretch of ``done`` whole steps: ``retrace``'s odometry of them (the kernel noted the contact)."""
         self.updates_skipped += done
+        if self.watch is not None:
+            self.relocating_steps += done
+            self.watch = None
         if self.retracer is not None and done:
             self.retracer.crumbs.replay(retracing.trail[:done])

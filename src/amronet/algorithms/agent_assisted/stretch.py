@@ -59,6 +59,7 @@ __all__ = ["QuietStretch"]
 _NO_ROBOTS = np.zeros(0, dtype=np.int64)
 _NO_STEPS = np.zeros(0)
 _NONE_SILENT = np.zeros(0, dtype=np.bool_)
+_NO_LINKS = np.zeros(0, dtype=np.int64)
 _ONE_BEAM = beam_angles(1)  # (read-only)
 
 
@@ -105,7 +106,9 @@ class QuietStretch:
         """The kernel's :class:`~.stretch_kernels.Moving`: the triangle and strip routers driving to their goals.
 
         The triangle routers, then the strip routers (the order in which ``movers_command`` moves them), each kind
-        with the ``r_keep`` it steers with (:meth:`.strip_driving.StripDrivers.drive`: the rule's keep radius).
+        with the ``r_keep`` it steers with (:meth:`.strip_driving.StripDrivers.drive`: the rule's keep radius); or
+        the relocating routers with the repair's steering, where the repair lets them move in the stretch
+        (:attr:`.repair_step.RepairStep.watch`).
         ``None`` when their steps cannot be taken in the stretch: routers of several models, or of the agents' model,
         or whose rings or moves reach beyond the radio's table (the sense and move phases would search anew).
         """
@@ -114,14 +117,19 @@ class QuietStretch:
         steering = c.steering
         strips_moving = c.strips is not None and c.strips.moving
         largest = a.largest_radius()
-        if not c.moving_triangles and not strips_moving:  # (most calls: no router drives, nothing to look up)
+        watch = None if comp.repair is None else comp.repair.watch
+        if not c.moving_triangles and not strips_moving and watch is None:  # (most calls: no router drives)
             return Moving(_NO_ROBOTS, _ONE_BEAM, 0.0, _NO_STEPS, steering.goal, steering.anchors,
                           steering.last_to_goal, steering.blocked_steps, int(steering.give_up_steps),
                           float(steering.min_progress), _NO_STEPS, float(c.dt), largest, steering.refs,
-                          steering.heard_xy, 0)
+                          steering.heard_xy, 0, _NONE_SILENT, _NO_LINKS)
         tri = np.flatnonzero(sw.state == State.TRIANGLE) if c.moving_triangles else _NO_ROBOTS
         keep = np.full(len(tri), float(c.r_eff))
         tested = 0 if c.links_by_distance else len(tri)  # (the link test at settling: .movers)
+        network, links = _NONE_SILENT, _NO_LINKS
+        if watch is not None:  # (no triangle or strip router drives then)
+            tri, steering, network, links = watch
+            keep = np.full(len(tri), float(c.r_eff))
         if strips_moving:
             assert c.strips is not None
             strips = np.flatnonzero(sw.state == State.STRIP)
@@ -129,7 +137,7 @@ class QuietStretch:
             keep = np.concatenate([keep, np.full(len(strips), float(c.strips.rule.keep_radius()))])
         steer = (steering.goal, steering.anchors, steering.last_to_goal, steering.blocked_steps,
                  int(steering.give_up_steps), float(steering.min_progress), keep, float(c.dt), largest,
-                 steering.refs, steering.heard_xy, tested)
+                 steering.refs, steering.heard_xy, tested, network, links)
         if len(tri) == 0:
             return Moving(_NO_ROBOTS, _ONE_BEAM, 0.0, _NO_STEPS, *steer)
         model = int(sw.model[tri[0]])
@@ -182,9 +190,10 @@ class QuietStretch:
         if reverse is None:  # (the retrace repair's agents back up their own way)
             return None
         backing = bool(c.reversing.any())
-        retracing = self.no_retracing if comp.repair is None else comp.repair.stretch_start(now, limit)
-        if retracing is None:  # (the repair is not idle, or an agent backs up now)
+        start = (self.no_retracing, limit) if comp.repair is None else comp.repair.stretch_start(now, limit)
+        if start is None:  # (the repair is not idle, or an agent backs up now)
             return None
+        retracing, limit = start
         length, reach = comp.moves()
         if a.sensor_range + a.largest_radius() > table.r or (a.collisions and reach > table.r):
             return None
@@ -192,8 +201,8 @@ class QuietStretch:
         if moving is None:
             return None
         tri = moving.tri
-        if restoring and len(tri):  # (a relay on its way could give a cut-off router its path back, or take it)
-            return None
+        if restoring and len(tri) and not len(moving.network):  # (watched: RepairStep.relocating_start)
+            return None  # (a relay on its way could give a cut-off router its path back, or take it)
         m = len(c.agents)
         is_ref, deployed_xy = c.deployed_nodes()
         inputs = explorer.navigation_inputs(a.sensor_range, m, deployed_xy)

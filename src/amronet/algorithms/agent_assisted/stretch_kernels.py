@@ -12,14 +12,11 @@ compares).
 
 A step in which an agent hears a reference of another network (a triangle candidate) is quiet too when no triangle
 would go ahead by the local rule or none (:func:`~amronet.algorithms.common.triangular.select_triangles`): the
-controller
-then does nothing but what a quiet step does. Under the global rule such a step ends the stretch. Triangle routers
-driving to their goals, and ``strip-goals``' routers driving to theirs (the same steering, another keep radius), are
-steered and moved with the agents, as the controller and the move phase do it, in the steps before one of them arrives
-or gives up.
-
-It stops at the first step that is not quiet, part-way through it, and says where: the Python path finishes that
-step.
+controller then does nothing but what a quiet step does. Under the global rule such a step ends the stretch. Triangle
+routers driving to their goals, ``strip-goals``' routers driving to theirs (the same steering, another keep radius),
+or routers relocating (``repair: relocate``, their own steering), are steered and moved with the agents, as the
+controller and the move phase do it, in the steps before one of them arrives or gives up. It stops at the first step
+that is not quiet, part-way through it, and says where: the Python path finishes that step.
 """
 
 from __future__ import annotations
@@ -32,6 +29,7 @@ from numba import njit
 
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
+from amronet.algorithms.agent_assisted.relocate_kernels import same_network_links
 from amronet.algorithms.agent_assisted.rule_kernels import JUNCTION, LINK, PAPER, agents_contact, rule_acts, rule_commit
 from amronet.algorithms.agent_assisted.stretch_books import Links, back_up, back_up_starts, observe_links
 from amronet.algorithms.agent_assisted.stretch_links import Radio, margin_law, next_radio
@@ -101,15 +99,15 @@ class Triangles(NamedTuple):
 
 
 class Moving(NamedTuple):
-    """The triangle and strip routers driving to their goals, and how they steer.
+    """The triangle and strip routers driving to their goals, or the relocating routers, and how they steer.
 
-    ``goal`` to ``min_progress`` as :class:`~amronet.algorithms.common.goto.GoalSteering` keeps them (both kinds
-    steer with the controller's).
+    ``goal`` to ``min_progress`` as :class:`~amronet.algorithms.common.goto.GoalSteering` keeps them (triangle and
+    strip routers steer with the controller's, relocating routers with the repair's).
     """
 
     tri: np.ndarray
-    """The routers ``(T,)``: the triangle routers, then the strip routers, as the controller moves them (empty:
-    none)."""
+    """The routers ``(T,)``: the triangle routers, then the strip routers, as the controller moves them; or the
+    relocating routers (empty: none)."""
     angles: np.ndarray
     """Their ring's beam angles."""
     sensor_range: float
@@ -135,6 +133,11 @@ class Moving(NamedTuple):
     """How many of the routers, the first (triangle routers), take the link test at settling: each step, one whose
     row of the table holds one of its ``refs`` is noted where it is (``GoalSteering.check_links``; 0: none, links
     decided by distance)."""
+    network: np.ndarray
+    """Relocating routers: the base nodes and routers ``(N,)``, whose links among them must stay ``links``
+    (:func:`~.relocate_kernels.network_links`) for the repair to look at nothing new (empty: not watched)."""
+    links: np.ndarray
+    """Those links' keys (:func:`~.relocate_kernels.network_links`)."""
 
 
 class Frontier(NamedTuple):
@@ -225,7 +228,7 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     current, is_ref, _, left, _, nearest_d, other_ref, refused = tracking
     triangles, rules = who_acts
     (tri, t_angles, t_sensor_range, max_step, goal, anchors, last_to_goal, blocked_steps, give_up, min_progress,
-     r_keep, dt, largest, refs, heard_xy, tested) = moving
+     r_keep, dt, largest, refs, heard_xy, tested, network, links) = moving
     cells, _, _, _, _ = knowledge
     score, seen, _, _, _, row_stamp = cells
     (now, stamp, avoid, bitgen, sigma, layer_robots, no_robots, covered, gap, visited, settings, plans, buffers,
@@ -259,6 +262,8 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     looked = 0
     idle = 0
     while done < limit:
+        if done and network.shape[0] and not same_network_links(radio[1], radio[2], network, links):  # (relocate)
+            return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
         if trail.shape[0]:  # retrace: who was in contact, who would back up now; the agents' odometry
             t = (first + done) * step_dt
             for j in range(m if done else 0):

@@ -45,9 +45,9 @@ def warm_ups() -> list[WarmUp]:
                 "agents.reverse_drop": 1.0, "algorithm.params.drop_rule": "distance-junction", **frontier}),
         WarmUp("triangles in the compiled step", "agent-assisted-office-4bs",  # (steps a stretch does not take)
                {"agents.per_base": 1, "radio.model": "multi-wall", **frontier}, seconds=40.0),
-        WarmUp("faults and relocation", PRESET,
-               {"faults": [{"at": 1.0, "routers": 0.5}], "algorithm.params.repair": "relocate", **frontier,
-                "sim.coverage_target": "off"}),
+        WarmUp("faults and relocation", PRESET,  # (late enough that routers relocate in a stretch)
+               {"faults": [{"at": 45.0, "routers": 0.5}], "algorithm.params.repair": "relocate", **frontier,
+                "sim.coverage_target": "off"}, seconds=90.0),
         WarmUp("faults and retrace", PRESET,  # (the breadcrumbs' kernel)
                {"faults": [{"at": 1.0, "routers": 0.5}], "algorithm.params.repair": "retrace", **frontier,
                 "sim.coverage_target": "off"}),
