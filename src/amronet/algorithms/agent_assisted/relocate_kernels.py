@@ -48,14 +48,10 @@ def network_links(indptr: np.ndarray, indices: np.ndarray, network: np.ndarray) 
 @njit(cache=True)
 def same_network_links(indptr: np.ndarray, indices: np.ndarray, network: np.ndarray, keys: np.ndarray) -> bool:
     """Whether a table's links among the nodes ``network`` are ``keys`` (:func:`network_links` of another table)."""
-    n = network.shape[0]
-    k = 0
-    for i in range(n):
-        if network[i]:
-            for p in range(indptr[i], indptr[i + 1]):
-                j = indices[p]
-                if network[j]:
-                    if k == keys.shape[0] or keys[k] != i * n + j:
-                        return False
-                    k += 1
-    return k == keys.shape[0]
+    now = network_links(indptr, indices, network)
+    if now.shape[0] != keys.shape[0]:
+        return False
+    for k in range(now.shape[0]):
+        if now[k] != keys[k]:
+            return False
+    return True
