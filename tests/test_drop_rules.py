@@ -9,8 +9,9 @@ from hypothesis import strategies as st
 
 import amronet
 from amronet.algorithms.agent_assisted.drops import DROP_RULES, AgentView, DropContext, validate_drop_params
-from amronet.algorithms.agent_assisted.drops.junction import PathTurns, count_openings
+from amronet.algorithms.agent_assisted.drops.junction import PathTurns
 from amronet.algorithms.agent_assisted.drops.trail import Trails
+from amronet.algorithms.agent_assisted.rule_kernels import path_turning, ring_openings
 from amronet.engine.propagation import LinkBudget
 from amronet.engine.radio import make_medium
 from amronet.engine.robots import State
@@ -103,8 +104,8 @@ def test_openings_of_a_room_a_corridor_and_a_junction():
     corridor = [far] + [closed] * 7 + [far] + [closed] * 7
     tee = [far, far] + [closed] * 3 + [far, far] + [closed] * 4 + [far, far] + [closed] * 3
     dead_end = [closed] * 16
-    got = count_openings(np.array([room, corridor, tee, dead_end]), 0.95 * far)
-    assert got.tolist() == [1, 2, 3, 0]
+    got = [ring_openings(np.array(ring, dtype=float), 0.95 * far) for ring in (room, corridor, tee, dead_end)]
+    assert got == [1, 2, 3, 0]
 
 
 def test_path_turns_are_seen_on_corners_not_on_straight_lines():
@@ -114,7 +115,10 @@ def test_path_turns_are_seen_on_corners_not_on_straight_lines():
         s = 0.05 * k
         straight = (s, 0.0)
         corner = (s, 0.0) if s <= 1.0 else (1.0, s - 1.0)
-        seen |= turns.update(np.array([straight, corner]))
+        samples, new, spacing, cos_angle = turns.books()
+        for m, (x, y) in enumerate((straight, corner)):
+            seen[m] |= path_turning(m, x, y, samples, new, spacing, cos_angle)
+        samples[...] = new
     assert seen.tolist() == [False, True]
 
 

@@ -25,9 +25,9 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from amronet.algorithms.agent_assisted.drops.base import DROP_RULES, AgentView, DropContext, DropRule
-from amronet.algorithms.agent_assisted.rule_kernels import junction_causes, path_turning, ring_openings
+from amronet.algorithms.agent_assisted.rule_kernels import junction_causes
 
-__all__ = ["DistanceJunction", "DistanceJunctionParams", "PathTurns", "count_openings"]
+__all__ = ["DistanceJunction", "DistanceJunctionParams", "PathTurns"]
 
 Fraction = Annotated[float, Field(strict=True, ge=0, le=2, allow_inf_nan=False)]
 
@@ -56,17 +56,6 @@ class DistanceJunctionParams(BaseModel):
     open_fraction: Annotated[float, Field(strict=True, gt=0, le=1, allow_inf_nan=False)] = 0.95
 
 
-def count_openings(scans: np.ndarray, open_range: float) -> np.ndarray:
-    """Number of separate openings in each ring of range readings ``(A, n_beams)``: circular runs of open beams.
-
-    A ring whose every beam is open (open floor) has one opening; one with none has zero (the compiled check's
-    count, per ring: :mod:`~amronet.algorithms.agent_assisted.rule_kernels`).
-    """
-    scans = np.ascontiguousarray(scans, dtype=np.float64)
-    open_range = float(open_range)
-    return np.array([ring_openings(scan, open_range) for scan in scans], dtype=np.int64)
-
-
 class PathTurns:
     """Turns of each agent's path from odometry: the heading change between the two halves of its last stretch.
 
@@ -89,19 +78,6 @@ class PathTurns:
     def books(self) -> tuple[np.ndarray, np.ndarray, float, float]:
         """``(samples, scratch, spacing, cos_angle)``, as :func:`~.rule_kernels.junction_causes` updates them."""
         return self.samples, self._new, float(self.spacing), float(self.cos_angle)
-
-    def update(self, xy: np.ndarray) -> np.ndarray:
-        """Feed the agents' positions ``(A, 2)``; which agents are on a turn ``(A,)``.
-
-        The compiled check's arithmetic, agent by agent (:mod:`~amronet.algorithms.agent_assisted.rule_kernels`): a
-        sample is taken where the agent is at least :attr:`spacing` from the newest, and the directions compared by
-        their cosine (none, a nan, is no turn).
-        """
-        new, spacing, cos_angle = self._new, float(self.spacing), float(self.cos_angle)
-        turning = np.array([path_turning(m, float(x), float(y), self.samples, new, spacing, cos_angle)
-                            for m, (x, y) in enumerate(xy.tolist())], dtype=np.bool_)
-        self.samples[...] = new
-        return turning
 
 
 @DROP_RULES.register("distance-junction")
