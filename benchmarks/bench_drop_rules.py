@@ -6,7 +6,8 @@ frontier explorer, the map's ``r_c``), run for ``--seconds`` simulated seconds w
 the CPU time of the run over its steps, and the time of sense, decide and move alone (the loop's phase timer: the
 step's own cost, without the radio and the metrics, whose cost grows with the relays a rule drops), the median of
 ``--rounds`` rounds, every case once per round in turn. The ratios are to the paper's rule (``last-reference``) on the
-same scenario (target: within 1.5). The faults cases fail 30 % of the routers at half time (``coverage_target``
+same scenario (target: within 1.5); ``relays``: the routers the agents put down in the run (the same in every round:
+the same seed). The faults cases fail 30 % of the routers at half time (``coverage_target``
 off); the repair cases repair them as ``reproduce failures`` does. ``--reference`` adds the
 phase-by-phase path's cost of each case (what a run without the compiled step costs).
 """
@@ -18,6 +19,9 @@ import statistics
 import time
 from typing import Any
 
+import numpy as np
+
+from amronet.engine.robots import Role
 from amronet.experiments.buildings import BUILDINGS, RADIOS
 from amronet.experiments.common import agent_scenario
 from amronet.experiments.failures import WALL_DROP_RULE
@@ -57,14 +61,15 @@ def _scenario(map_name: str, radio: str, seconds: float, case: str) -> dict[str,
     return sc
 
 
-def _per_step(sc: dict[str, Any], seed: int, step: str) -> tuple[float, float]:
-    """CPU seconds per step of the whole run, and wall seconds per step of sense, decide and move alone."""
+def _per_step(sc: dict[str, Any], seed: int, step: str) -> tuple[float, float, int]:
+    """CPU seconds per step of the whole run, wall seconds per step of sense, decide and move alone, relays put down."""
     sim = Simulation(load_scenario(sc), seed, step=step)
     t = time.process_time()
     sim.run()
+    cpu = time.process_time() - t
     steps = max(sim.steps, 1)
     own = sum(v for k, v in sim.phase_seconds.items() if k != "radio")
-    return (time.process_time() - t) / steps, own / steps
+    return cpu / steps, own / steps, int(np.count_nonzero(sim.swarm.role == Role.ROUTER))
 
 
 def main() -> None:
@@ -81,7 +86,8 @@ def main() -> None:
     for sc in scenarios.values():  # compile and load every kernel first
         for step in steps:
             _per_step(sc, args.seed, step)
-    times: dict[tuple[str, str], list[tuple[float, float]]] = {(case, step): [] for case in CASES for step in steps}
+    times: dict[tuple[str, str], list[tuple[float, float, int]]] = {
+        (case, step): [] for case in CASES for step in steps}
     for _ in range(args.rounds):
         for case, sc in scenarios.items():
             for step in steps:
@@ -93,14 +99,14 @@ def main() -> None:
     print(f"{args.map}, {args.radio}, {args.seconds:g} s, seed {args.seed}; µs per step, median of {args.rounds}: the "
           "whole run's CPU time, and sense + decide + move alone (the loop's phase timer: no radio, no metrics)")
     extra = " reference (µs/step) |" if args.reference else ""
-    print("| case | compiled (µs/step) | rounds | × paper's rule | sense+decide+move (µs/step) | × paper's rule |"
-          + extra)
-    print("|---|---:|---|---:|---:|---:|" + ("---:|" if args.reference else ""))
+    print("| case | compiled (µs/step) | rounds | × paper's rule | sense+decide+move (µs/step) | × paper's rule "
+          "| relays |" + extra)
+    print("|---|---:|---|---:|---:|---:|---:|" + ("---:|" if args.reference else ""))
     for case in CASES:
         med, own = median(case, "compiled", 0), median(case, "compiled", 1)
         rounds = " / ".join(f"{1e6 * v[0]:.0f}" for v in times[case, "compiled"])
         line = (f"| {case} | {1e6 * med:.0f} | {rounds} | {med / paper:.2f} | {1e6 * own:.0f} | "
-                f"{own / paper_own:.2f} |")
+                f"{own / paper_own:.2f} | {times[case, 'compiled'][-1][2]} |")
         if args.reference:
             line += f" {1e6 * median(case, 'reference', 0):.0f} |"
         print(line, flush=True)
