@@ -10,7 +10,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from amronet.algorithms.agent_assisted import kernels, rule_kernels, stretch_books, stretch_kernels, stretch_links
+from amronet.algorithms.agent_assisted import (
+    kernels,
+    rule_kernels,
+    stretch_books,
+    stretch_kernels,
+    stretch_links,
+    stretch_tuples,
+)
 from amronet.algorithms.agent_assisted.controller import _pair_key
 from amronet.algorithms.agent_assisted.explorers.frontier import knowledge, planning
 from amronet.algorithms.agent_assisted.stretch import QuietStretch
@@ -157,16 +164,16 @@ def test_a_recorded_run_is_stepped_one_by_one_to_the_same_end():
         np.testing.assert_array_equal(_books(recorded)[key], value, err_msg=key)
 
 
-K, S, R = kernels, stretch_kernels, rule_kernels
+K, S, R, T = kernels, stretch_kernels, rule_kernels, stretch_tuples
 UNPACKED = {  # (module, kernel): {tuple it unpacks: the named structure laid out in it}
     (K, "sense_track_agents"): {"grid": Grid, "robots": K.Robots, "ring": K.Ring, "near": Csr,
                                 "tracking": K.Tracking, "table": Csr},
     (K, "integrate_agents"): {"robots": K.Robots, "ring": K.Ring, "knowledge": K.Knowledge},
     (K, "drive_movers"): {"robots": K.Robots},
-    (S, "quiet_stretch"): {"grid": Grid, "robots": K.Robots, "ring": K.Ring, "moves": S.Moves, "radio": S.Radio,
-                           "tracking": K.Tracking, "moving": S.Moving, "knowledge": K.Knowledge,
-                           "cells": knowledge.Cells, "frontier": S.Frontier, "rules": R.RuleStep},
-    (S, "triangle_goes"): {"triangles": S.Triangles},
+    (S, "quiet_stretch"): {"grid": Grid, "robots": K.Robots, "ring": K.Ring, "moves": T.Moves, "radio": S.Radio,
+                           "tracking": K.Tracking, "moving": T.Moving, "knowledge": K.Knowledge,
+                           "cells": knowledge.Cells, "frontier": T.Frontier, "rules": R.RuleStep},
+    (S, "triangle_goes"): {"triangles": T.Triangles},
     (R, "rule_quiet"): {"books": R.RuleBooks, "inputs": R.RuleInputs},
     (R, "rule_commit"): {"books": R.RuleBooks},
     (R, "rule_acts"): {"rules": R.RuleStep},

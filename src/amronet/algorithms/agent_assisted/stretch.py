@@ -35,13 +35,10 @@ from amronet.algorithms.agent_assisted.stretch_kernels import (
     LINKED,
     NON_FINITE,
     TRIANGLES_END,
-    Frontier,
-    Moves,
-    Moving,
-    Triangles,
     quiet_stretch,
 )
 from amronet.algorithms.agent_assisted.stretch_links import NO_MARGIN, Radio
+from amronet.algorithms.agent_assisted.stretch_tuples import Frontier, Moves, Moving, Triangles
 from amronet.algorithms.stepping import RESTORING_AGENTS, AgentBooks, StepContext, Stretched
 from amronet.engine import bitgen
 from amronet.engine.hearing import HearingInputs
@@ -103,7 +100,7 @@ class QuietStretch:
         """The kernel's :class:`~.stretch_books.ReverseDrop` without ``agents.reverse_drop``."""
 
     def _moving(self, length: np.ndarray, r: float) -> Moving | None:
-        """The kernel's :class:`~.stretch_kernels.Moving`: the triangle and strip routers driving to their goals.
+        """The kernel's :class:`~.stretch_tuples.Moving`: the triangle and strip routers driving to their goals.
 
         The triangle routers, then the strip routers (the order in which ``movers_command`` moves them), each kind
         with the ``r_keep`` it steers with (:meth:`.strip_driving.StripDrivers.drive`: the rule's keep radius); or

@@ -39,8 +39,7 @@ from amronet.engine.motion import random_walk_drawing
 from amronet.engine.sensing import cast_bodies_one, cast_grid_one
 
 __all__ = ["ACTS", "LINKED", "NON_FINITE", "QUIET", "TRIANGLES_ACT", "TRIANGLES_END", "TRIANGLES_LOCAL",
-           "TRIANGLES_NONE", "TRIANGLE_RULES", "Frontier", "Links", "Moves", "Moving", "Radio", "StretchEnd",
-           "Triangles", "quiet_stretch", "triangle_goes"]
+           "TRIANGLES_NONE", "TRIANGLE_RULES", "Links", "Radio", "StretchEnd", "quiet_stretch", "triangle_goes"]
 
 QUIET = 0
 """Every step asked for was done."""
@@ -49,7 +48,7 @@ ACTS = 1
 NON_FINITE = 3
 """A robot's position became non-finite in the last step done (its radio table was not built)."""
 LINKED = 5
-"""Every agent had a path to a base station after the last step done (:attr:`Moves.until_linked`)."""
+"""Every agent had a path to a base station after the last step done (:attr:`~.stretch_tuples.Moves.until_linked`)."""
 
 TRIANGLES_END = 4
 """The step after the last one done: a triangle or strip router driving to its goal arrives or gives up. Sensed,
@@ -63,115 +62,6 @@ TRIANGLES_ACT = 2
 """Any other rule: a triangle candidate ends the stretch (the controller decides)."""
 TRIANGLE_RULES = {"none": TRIANGLES_NONE, "local": TRIANGLES_LOCAL}
 """The triangle rules the kernel decides itself (``algorithm.params.triangular``), by name."""
-
-
-class Moves(NamedTuple):
-    """The agents and their moves."""
-
-    agents: np.ndarray
-    """The agents ``(A,)``."""
-    length: np.ndarray
-    """Each one's move per step ``(A,)``."""
-    reach: float
-    """The reach of the moves' collision checks."""
-    collisions: bool
-    """Whether bodies stop moves."""
-    retracing: tuple
-    """``repair: retrace``'s books of the agents (:class:`~.stretch_books.Retracing`, a plain tuple)."""
-    reverse_drop: tuple
-    """``agents.reverse_drop``'s books of the agents (:class:`~.stretch_books.ReverseDrop`, a plain tuple)."""
-    until_linked: bool
-    """Whether to stop after a step at whose end every agent has a path to a base station (a fault's damage may be
-    repaired then)."""
-
-
-class Triangles(NamedTuple):
-    """The triangle rule's inputs (:func:`_triangle_goes`)."""
-
-    rule: int
-    """A ``TRIANGLES_*`` code."""
-    r_c: float
-    """A candidate goes ahead when its references are farther apart than this."""
-    disabled: np.ndarray
-    """The nodes' local-rule flags ``(N,)``."""
-    served: np.ndarray
-    """The triangles served as rows ``(agent, lower reference, higher reference)``."""
-
-
-class Moving(NamedTuple):
-    """The triangle and strip routers driving to their goals, or the relocating routers, and how they steer.
-
-    ``goal`` to ``min_progress`` as :class:`~amronet.algorithms.common.goto.GoalSteering` keeps them (triangle and
-    strip routers steer with the controller's, relocating routers with the repair's).
-    """
-
-    tri: np.ndarray
-    """The routers ``(T,)``: the triangle routers, then the strip routers, as the controller moves them; or the
-    relocating routers (empty: none)."""
-    angles: np.ndarray
-    """Their ring's beam angles."""
-    sensor_range: float
-    """Their ring's range."""
-    max_step: np.ndarray
-    """Each one's longest step ``(T,)``."""
-    goal: np.ndarray
-    anchors: np.ndarray
-    last_to_goal: np.ndarray
-    blocked_steps: np.ndarray
-    give_up: int
-    min_progress: float
-    r_keep: np.ndarray
-    """A move may take each router no farther than this from an anchor (or than it is) ``(T,)``."""
-    dt: float
-    largest: float
-    """The largest body radius."""
-    refs: np.ndarray
-    """``(N, n_anchors)``: the nodes each robot must hear where it settles (``GoalSteering.refs``)."""
-    heard_xy: np.ndarray
-    """``(N, 2)``: where each robot's table row last held one of them, kept in place (``GoalSteering.heard_xy``)."""
-    tested: int
-    """How many of the routers, the first (triangle routers), take the link test at settling: each step, one whose
-    row of the table holds one of its ``refs`` is noted where it is (``GoalSteering.check_links``; 0: none, links
-    decided by distance)."""
-    network: np.ndarray
-    """Relocating routers: the base nodes and routers ``(N,)``, whose links among them must stay ``links``
-    (:func:`~.relocate_kernels.network_links`) for the repair to look at nothing new (empty: not watched)."""
-    links: np.ndarray
-    """Those links' keys (:func:`~.relocate_kernels.network_links`)."""
-
-
-class Frontier(NamedTuple):
-    """The frontier explorer's state and inputs for its navigation kernel, step after step.
-
-    ``robots``, ``no_robots``, ``covered``, ``gap`` and ``visited`` are its layers, as in
-    :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.MapLayers`.
-    """
-
-    now: int
-    """Its step count."""
-    stamp: int
-    """The knowledge grid's stamp."""
-    avoid: float
-    """Its avoidance reach."""
-    bitgen: int
-    """The run's generator's bit generator (:func:`amronet.engine.bitgen.addresses`): the fresh headings' uniforms,
-    the idle agents' normals and uniforms are drawn from it in place, step by step, in the order the explorer draws."""
-    sigma: float
-    """The idle agents' heading noise per step, as
-    :meth:`~amronet.algorithms.agent_assisted.explorers.random_walk.RandomExplorer.steer` scales it."""
-    robots: np.ndarray
-    no_robots: np.ndarray
-    covered: np.ndarray
-    gap: np.ndarray
-    visited: np.ndarray
-    settings: tuple
-    """Its :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.NavSettings` (a plain tuple)."""
-    plans: tuple
-    """Its :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.AgentPlans` (a plain tuple)."""
-    buffers: tuple
-    """Its :class:`~amronet.algorithms.agent_assisted.explorers.frontier.state.NavBuffers` (a plain tuple)."""
-    active: np.ndarray
-    """The plans' ``active``."""
 
 
 class StretchEnd(NamedTuple):
@@ -207,17 +97,17 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     Every argument but ``limit`` is a named structure, as a plain tuple: the map's
     :class:`~amronet.engine.kernel_data.Grid`; the robots (:class:`~amronet.algorithms.agent_assisted.kernels.Robots`,
     updated in place) and the agents' :class:`~amronet.algorithms.agent_assisted.kernels.Ring`; the agents' moves
-    (:class:`Moves`); the :class:`~.stretch_links.Radio` (its tables built anew every step,
+    (:class:`~.stretch_tuples.Moves`); the :class:`~.stretch_links.Radio` (its tables built anew every step,
     :func:`~.stretch_links.next_radio`); the controller's
     :class:`~amronet.algorithms.agent_assisted.kernels.Tracking`; who acts, ``(triangles, rules)``: the
-    :class:`Triangles` and the drop rule's :class:`~amronet.algorithms.agent_assisted.rule_kernels.RuleStep`; the
-    triangle routers driving to
-    their goals (:class:`Moving`); the frontier explorer's shared grid
+    :class:`~.stretch_tuples.Triangles` and the drop rule's
+    :class:`~amronet.algorithms.agent_assisted.rule_kernels.RuleStep`; the triangle routers driving to
+    their goals (:class:`~.stretch_tuples.Moving`); the frontier explorer's shared grid
     (:class:`~amronet.algorithms.agent_assisted.kernels.Knowledge`; the deployed nodes are fixed in a quiet stretch) and
-    its state (:class:`Frontier`); the agents' connection books
+    its state (:class:`~.stretch_tuples.Frontier`); the agents' connection books
     (:class:`~amronet.algorithms.stepping.AgentBooks`, its arrays a :class:`Links`,
     :meth:`amronet.sim.run.Run.connection_books`). ``limit``: the most steps to do. Under ``repair: retrace``
-    (:attr:`Moves.retracing`) it may stop between two steps.
+    (:attr:`~.stretch_tuples.Moves.retracing`) it may stop between two steps.
 
     Returns:
         A :class:`StretchEnd`.
@@ -373,7 +263,8 @@ def triangle_goes(triangles, agents, current, other, left, xy):  # pragma: no co
 
     The candidates are the agents that hear a reference of another status (``other[m]``) and carry a router, less
     the triangles they served already; one goes ahead when its references are farther apart than ``r_c`` (the
-    distance as ``numpy.linalg.norm`` computes it) and, by the local rule, not both disabled (:class:`Triangles`).
+    distance as ``numpy.linalg.norm`` computes it) and, by the local rule, not both disabled
+    (:class:`~.stretch_tuples.Triangles`).
     """
     rule, r_c, disabled, served = triangles
     if rule == TRIANGLES_ACT:
