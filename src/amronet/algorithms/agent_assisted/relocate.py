@@ -161,11 +161,18 @@ class Relocator:
             self._cut_links = self._network
         return self._cut
 
+    def confirmed(self, t: float | np.ndarray, since: float | np.ndarray) -> bool | np.ndarray:
+        """Whether what began at ``since`` has lasted ``confirm_s`` at ``t`` (arrays broadcast).
+
+        A hair of slack (1e-9 s) for the rounding of the steps' times.
+        """
+        return t - since >= self.confirm_s - 1e-9
+
     def _due(self, t: float, sw: Swarm) -> np.ndarray | None:
         """Per loss waiting, whether it is due at ``t`` and its router may move; ``None`` where none is."""
-        if not len(self._li) or t - self._since[0] < self.confirm_s - 1e-9:  # (oldest first: none is due)
+        if not len(self._li) or not self.confirmed(t, self._since[0]):  # (oldest first: none is due)
             return None
-        due = (t - self._since >= self.confirm_s - 1e-9) & self._movable(self._li, sw)
+        due = self.confirmed(t, self._since) & self._movable(self._li, sw)
         return due if due.any() else None
 
     def _start(self, t: float, table: NeighbourTable, sw: Swarm) -> np.ndarray:
@@ -215,7 +222,7 @@ class Relocator:
         if not waiting.any():
             return limit
         t = (index + np.arange(limit, dtype=np.int64)) * dt
-        due = (t[:, None] - self._since[waiting][None, :] >= self.confirm_s - 1e-9).any(axis=1)
+        due = self.confirmed(t[:, None], self._since[waiting][None, :]).any(axis=1)
         return int(np.argmax(due)) if due.any() else limit
 
     def may_start(self, table: NeighbourTable, sw: Swarm) -> bool:

@@ -28,7 +28,7 @@ Every other step of the controller's (an agent acts, triangle or strip routers d
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -37,11 +37,25 @@ from amronet.algorithms.agent_assisted.relocate_kernels import network_links
 from amronet.algorithms.agent_assisted.retrace import Retracer
 from amronet.algorithms.agent_assisted.stretch_books import Retracing, no_retracing
 from amronet.algorithms.base import StepInput
+from amronet.algorithms.common.goto import GoalSteering
 from amronet.algorithms.stepping import StepContext
 from amronet.engine.network import agents_connected, connected_to
 from amronet.engine.robots import Role, State
 
-__all__ = ["RepairStep"]
+__all__ = ["RelocatingWatch", "RepairStep"]
+
+
+class RelocatingWatch(NamedTuple):
+    """What a stretch that steers relocating routers needs of the repair (:meth:`RepairStep.relocating_start`)."""
+
+    routers: np.ndarray
+    """The relocating routers."""
+    steering: GoalSteering
+    """Their steering, the repair's."""
+    network: np.ndarray
+    """The base nodes and routers (a mask over the robots)."""
+    links: np.ndarray
+    """The links among them on the table the stretch starts from (:func:`~.relocate_kernels.network_links`)."""
 
 
 class RepairStep:
@@ -62,9 +76,8 @@ class RepairStep:
         """What the relocator was found idle with: the controller's deployed mask, the robots, the failed nodes."""
         self.updates_skipped = 0
         """Compiled steps in which the idle relocator's ``update`` was not called."""
-        self.watch: tuple | None = None
-        """In a stretch that steers relocating routers: the routers, their steering, the base nodes and routers
-        (a mask) and the links among them (:func:`~.relocate_kernels.network_links`); else ``None``."""
+        self.watch: RelocatingWatch | None = None
+        """In a stretch that steers relocating routers: what it watches; else ``None``."""
         self.relocating_steps = 0
         """Steps taken in stretches with routers relocating."""
 
@@ -142,7 +155,7 @@ class RepairStep:
         if b is not None:
             contact = agents_connected(now.table, c.agents, c.bases, sw.relaying)
             at = np.where(contact, now.t, b.contact_at)
-            if (~contact & ~b.on_path & (now.t - at >= b.confirm_s - 1e-9)).any():
+            if (~contact & ~b.on_path & b.confirmed(now.t, at)).any():
                 return None
         if not self.idle() and (driving or not self._look(now)):
             return None
@@ -180,7 +193,7 @@ class RepairStep:
         started, stopped = r.update(now.t, table, sw)
         assert not len(started) and not len(stopped), "a look at the start of a stretch moved a router"
         self._note_idle(table)
-        self.watch = (moving, r.steering, network, network_links(table.indptr, table.indices, network))
+        self.watch = RelocatingWatch(moving, r.steering, network, network_links(table.indptr, table.indices, network))
         return r.quiet_steps(int(now.index), float(now.dt), limit, cut, sw)
 
     def _look(self, now: StepInput) -> bool:

@@ -202,7 +202,7 @@ class Retracer(Relocator):
             return speed
         self.contact_at[contact] = t
         self.backing &= ~contact
-        start = ~contact & ~self.backing & ~self.on_path & (t - self.contact_at >= self.confirm_s - 1e-9)
+        start = ~contact & ~self.backing & ~self.on_path & self.confirmed(t, self.contact_at)
         self.agent_backs += int(np.count_nonzero(start))
         self.backing |= start
         if not self.backing.any():

@@ -125,7 +125,7 @@ class QuietStretch:
         tested = 0 if c.links_by_distance else len(tri)  # (the link test at settling: .movers)
         network, links = _NONE_SILENT, _NO_LINKS
         if watch is not None:  # (no triangle or strip router drives then)
-            tri, steering, network, links = watch
+            tri, steering, network, links = watch.routers, watch.steering, watch.network, watch.links
             keep = np.full(len(tri), float(c.r_eff))
         if strips_moving:
             assert c.strips is not None
