@@ -52,17 +52,22 @@ _TRIANGLE_SETTLED = State.TRIANGLE_SETTLED
 
 @njit(cache=True)
 def list_movers(state, movers, walkers):  # pragma: no cover - numba
-    """The routers that move this step (exploring or on their way to a triangle goal), and the walkers among them."""
+    """The routers that move this step (exploring or on their way to a triangle goal), and the walkers among them.
+
+    Their counts ``(m, w)``; listed without a branch (``movers`` and ``walkers`` ``(N,)``: past the counts they
+    hold scratch).
+    """
+    if movers.shape[0] < state.shape[0] or walkers.shape[0] < state.shape[0]:
+        raise ValueError("list_movers: movers and walkers must hold a slot per robot")
     m = 0
     w = 0
     for i in range(state.shape[0]):
         s = state[i]
-        if s == _EXPLORE or s == _TRIANGLE:
-            movers[m] = i
-            m += 1
-            if s == _EXPLORE:
-                walkers[w] = i
-                w += 1
+        walking = s == _EXPLORE
+        movers[m] = i
+        m += walking | (s == _TRIANGLE)
+        walkers[w] = i
+        w += walking
     return m, w
 
 
