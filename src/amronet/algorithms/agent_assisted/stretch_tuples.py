@@ -34,7 +34,7 @@ class Moves(NamedTuple):
 
 
 class Triangles(NamedTuple):
-    """The triangle rule's inputs (:func:`_triangle_goes`)."""
+    """The triangle rule's inputs (:func:`~.stretch_kernels.triangle_goes`)."""
 
     rule: int
     """A ``TRIANGLES_*`` code."""
