@@ -3,7 +3,8 @@
 Each case runs once with the compiled step (stretches before the fault, compiled steps after it, the controller's own
 code where the repair acts) and once phase by phase (``step="reference"``), and compares the robots, the controller's
 and the repair's arrays, the table, the summary (its ``faults`` and ``mission`` too), the time series and the records.
-The faults cut the network: routers relocate or back up their way, and under ``retrace`` agents back up theirs.
+The faults cut the network: routers relocate or back up their way, and under ``retrace`` agents back up theirs;
+stretches take steps in which they do (counted).
 Once the damage is repaired, stretches go on with the failed nodes silent (``AFTER_FAULT``), with a repair or without.
 """
 
@@ -145,8 +146,10 @@ def test_repairing_runs_take_the_compiled_step_bit_for_bit(name):
     if isinstance(source, tuple):  # the fault cut routers off, and they moved
         assert a.summary["faults"] and a.summary["mission"]["relocations"] > 0
     assert (relocator.agent_backs > 0) == backs if isinstance(relocator, Retracer) else not backs
-    if not isinstance(relocator, Retracer):  # routers relocated in stretches too
-        assert fast.compiled.repair.relocating_steps > 0
+    repair = fast.compiled.repair
+    if isinstance(source, tuple):  # routers relocated (or retraced their way) in stretches too
+        assert repair.relocating_steps > 0
+    assert (repair.backing_steps > 0) == backs  # and agents backed up their own in stretches
     # stretches took steps, and the idle relocator's update was left out in them and in compiled steps
     assert sum(fast.compiled.quiet.ends.values()) > 0
     assert fast.compiled.repair.updates_skipped > fast.steps / 4

@@ -95,6 +95,11 @@ class Breadcrumbs:
         """Per agent, the points of its loop-erased path, from its start (copies)."""
         return [self._paths[m, :n].copy() for m, n in enumerate(self.length)]
 
+    @property
+    def path_rows(self) -> np.ndarray:
+        """The paths' rows ``(A, L)``, the first :attr:`length` of each (the array itself: a quiet stretch keeps it)."""
+        return self._paths
+
     def _room(self, k: int) -> None:
         """Make room for ``k`` more points."""
         while self.count + k > len(self.xy):
@@ -135,9 +140,13 @@ class Breadcrumbs:
         """The agents at ``xy`` ``(m, 2)`` now: those of ``who`` (a mask) that have moved ``spacing`` add a point."""
         self._replay(np.ascontiguousarray(xy, dtype=float)[None], np.ascontiguousarray(who, dtype=bool), self.spacing)
 
-    def replay(self, trail: np.ndarray) -> None:
-        """:meth:`record` of every agent at ``trail[s]`` ``(k, m, 2)``, for ``s`` in order (a quiet stretch's steps)."""
-        self._replay(np.ascontiguousarray(trail, dtype=float), np.ones(trail.shape[1], dtype=bool), self.spacing)
+    def replay(self, trail: np.ndarray, who: np.ndarray | None = None) -> None:
+        """:meth:`record` of the agents ``who`` (a mask; default all) at ``trail[s]`` ``(k, m, 2)``, ``s`` in order.
+
+        A quiet stretch's steps, replayed.
+        """
+        who = np.ones(trail.shape[1], dtype=bool) if who is None else np.ascontiguousarray(who, dtype=bool)
+        self._replay(np.ascontiguousarray(trail, dtype=float), who, self.spacing)
 
     def _replay(self, trail: np.ndarray, who: np.ndarray, spacing: float) -> None:
         """:func:`record_points` of ``trail`` ``(k, m, 2)`` for the agents ``who``, with room made first."""

@@ -7,11 +7,13 @@ the agents' odometry is recorded, and agents out of contact for ``repair_confirm
 (:meth:`.Retracer.steer_agents`). :class:`RepairStep` does this part of a step where the compiled step
 (:class:`~.fast.CompiledAgents`) and its quiet stretches (:class:`~.stretch.QuietStretch`) take the rest:
 
-* A step in which routers relocate or agents back up goes phase by phase (:meth:`RepairStep.busy`), but under
-  ``relocate`` the relocating routers are steered in stretches while the repair's look changes nothing
+* A compiled step in which routers relocate or agents back up goes phase by phase (:meth:`RepairStep.busy`), but
+  the relocating routers are steered in stretches while the repair's look changes nothing
   (:meth:`RepairStep.relocating_start`): this step's look is taken at the start, the stretch ends before a loss of
-  a cut-off router falls due, and its kernel stops before a step whose table has other links among the base nodes and
-  routers than this one (a loss noticed or heard again, a router that finds a path).
+  a cut-off router falls due (under ``retrace``: of one that would not wait for a neighbour), and its kernel stops
+  before a step whose table has other links among the base nodes and routers than this one (a loss noticed or heard
+  again, a router that finds a path). Under ``retrace`` the kernel takes the next points of the routers' ways and of
+  the backing agents' paths, and steers the backing agents (:mod:`~.retrace_kernels`).
 * The relocator is *idle* when nobody relocates, no loss waits whose router may move and is cut off, and the links
   among the watched nodes are those it last saw. Deployed nodes do not move, so under a radio whose links are decided
   by the positions (:attr:`~amronet.algorithms.stepping.StepContext.link_inputs`: the unit disk, the built-in
@@ -19,8 +21,8 @@ the agents' odometry is recorded, and agents out of contact for ``repair_confirm
   ``_nodes_changed``) or fails; meanwhile its ``update`` would change nothing but its caches of the last table,
   which are kept by value (the same links give the same answers), so it is not called (:meth:`RepairStep.quiet`).
 * ``retrace``'s agents are steered as the controller does it, in its own code, every compiled step; in a stretch the
-  kernel notes their contact and stops before one of them would back up, and their odometry is replayed from the
-  positions it hands back (:class:`~.stretch_books.Retracing`).
+  kernel notes their contact and stops before one of them would start or stop backing up, and the odometry of those
+  that do not is replayed from the positions it hands back (:class:`~.stretch_books.Retracing`).
 
 Every other step of the controller's (an agent acts, triangle or strip routers drive) runs the controller's own
 ``movers_command``, repair included.
@@ -37,7 +39,7 @@ from amronet.algorithms.agent_assisted.relocate_kernels import network_links
 from amronet.algorithms.agent_assisted.retrace import Retracer
 from amronet.algorithms.agent_assisted.stretch_books import Retracing, no_retracing
 from amronet.algorithms.base import StepInput
-from amronet.algorithms.common.goto import GoalSteering
+from amronet.algorithms.common.goto import GoalSteering, steering_of
 from amronet.algorithms.stepping import StepContext
 from amronet.engine.network import agents_connected, connected_to
 from amronet.engine.robots import Role, State
@@ -80,9 +82,13 @@ class RepairStep:
         """In a stretch that steers relocating routers: what it watches; else ``None``."""
         self.relocating_steps = 0
         """Steps taken in stretches with routers relocating."""
+        self.backing_steps = 0
+        """Steps taken in stretches with agents backing up (``retrace``)."""
+        self._backing = False
+        """Whether agents back up in the stretch under way."""
 
     def busy(self) -> bool:
-        """Whether routers relocate or agents back up: the step goes phase by phase (or a stretch steers them)."""
+        """Whether routers relocate or agents back up: a compiled step goes phase by phase (a stretch steers them)."""
         if (self.controller.swarm.state == State.RELOCATING).any():
             return True
         return self.retracer is not None and bool(self.retracer.backing.any())
@@ -140,44 +146,53 @@ class RepairStep:
         """What a stretch keeps of the repair from this step on (:class:`~.stretch_books.Retracing`); its most steps.
 
         ``None``: no stretch now (the relocator is not idle, not even after its look taken here (:meth:`_look`), or
-        routers drive that ``retrace`` would record, or a relocating router's loss might start; an agent starts to
-        back up now; routers relocate that :meth:`relocating_start` does not let move in it). Under ``retrace`` this
-        step's contact is noted, as :meth:`.Retracer.steer_agents` notes it first.
+        routers drive that ``retrace`` would record, or a relocating router's loss might start; an agent starts or
+        stops backing up now, or one is back at the start of its path; routers relocate that
+        :meth:`relocating_start` does not let move in it). Under ``retrace`` this step's contact is noted, and the
+        backing agents head for their points, as :meth:`.Retracer.steer_agents` does first.
         """
         c, r = self.controller, self.relocator
         sw = c.swarm
         self.watch = None
-        if self.busy():
-            limit = self.relocating_start(now, limit) if self.retracer is None else 0
-            return (no_retracing(len(c.agents)), limit) if limit else None
         b = self.retracer
-        driving = c.moving_triangles or (c.strips is not None and c.strips.moving)
         if b is not None:
             contact = agents_connected(now.table, c.agents, c.bases, sw.relaying)
             at = np.where(contact, now.t, b.contact_at)
-            if (~contact & ~b.on_path & b.confirmed(now.t, at)).any():
+            if (~contact & ~b.backing & ~b.on_path & b.confirmed(now.t, at)).any() or (contact & b.backing).any():
                 return None
-        if not self.idle() and (driving or not self._look(now)):
-            return None
-        if driving and (b is not None or r.waiting_movable(sw).any()):
-            return None  # (triangle or strip routers on their way add to their way, or may cut a router off)
+        if (sw.state == State.RELOCATING).any():
+            limit = self.relocating_start(now, limit)
+            if not limit:
+                return None
+        else:
+            driving = c.moving_triangles or (c.strips is not None and c.strips.moving)
+            if not self.idle() and (driving or not self._look(now)):
+                return None
+            if driving and (b is not None or r.waiting_movable(sw).any()):
+                return None  # (triangle or strip routers on their way add to their way, or may cut a router off)
         m = len(c.agents)
         if b is None:
             return no_retracing(m), limit
         b.contact_at[:] = at
+        self._backing = bool(b.backing.any())
+        crumbs = b.crumbs
         return Retracing(np.empty((limit, m, 2)), b.contact_at, b.on_path, float(b.confirm_s), int(now.index),
-                         float(now.dt)), limit
+                         float(now.dt), b.backing, float(b.reach), float(sw.models[c.agent_model].sensor_range),
+                         sw.max_speed[c.agents] * c.dt, tuple(steering_of(b.steering)), crumbs.xy, crumbs.parent,
+                         crumbs.path_rows, crumbs.length, crumbs.tip, b.node, b.skips), limit
 
     def relocating_start(self, now: StepInput, limit: int) -> int:
-        """Routers relocating in a stretch (``relocate``): this step's look, taken here; how many steps (0: none).
+        """Routers relocating in a stretch: this step's look, taken here; how many steps (0: none).
 
         Only where :meth:`_look` may look (links decided by the positions, no reverse drops, the table has every
         robot), no triangle or strip router drives, and the look starts and stops nothing: no relocating router has a
         path to a base station and no move could start now. In the stretch's later steps the look would change
         nothing as long as the links among the base nodes and routers are this table's (:attr:`watch`: the kernel
         stops before a step whose table has others) and no loss of a cut-off router that may move falls due
-        (:meth:`.Relocator.quiet_steps`: the stretch ends before). A router that finds a path again does so in the
-        stretch's last step, which the faults' books see.
+        (:meth:`.Relocator.quiet_steps`: the stretch ends before; under ``retrace`` a router that hears a relocating
+        one waits all through the stretch, :meth:`.Retracer.waiting`). A router that finds a path again does so in
+        the stretch's last step, which the faults' books see. The look records no odometry: the stretch records its
+        first step's.
         """
         c, r, table = self.controller, self.relocator, now.table
         sw = c.swarm
@@ -190,10 +205,12 @@ class RepairStep:
         moving = np.flatnonzero(sw.state == State.RELOCATING)
         if not cut[moving].all() or r.could_start(now.t, table, sw, cut):
             return 0
-        started, stopped = r.update(now.t, table, sw)
+        started, stopped = Relocator.update(r, now.t, table, sw)  # (retrace: the stretch records the odometry)
         assert not len(started) and not len(stopped), "a look at the start of a stretch moved a router"
         self._note_idle(table)
         self.watch = RelocatingWatch(moving, r.steering, network, network_links(table.indptr, table.indices, network))
+        if self.retracer is not None:  # (routers that wait for one relocating wait all through the stretch)
+            cut = cut & ~self.retracer.waiting(table, sw)
         return r.quiet_steps(int(now.index), float(now.dt), limit, cut, sw)
 
     def _look(self, now: StepInput) -> bool:
@@ -223,5 +240,8 @@ class RepairStep:
         if self.watch is not None:
             self.relocating_steps += done
             self.watch = None
+        if self._backing:
+            self.backing_steps += done
+            self._backing = False
         if self.retracer is not None and done:
-            self.retracer.crumbs.replay(retracing.trail[:done])
+            self.retracer.crumbs.replay(retracing.trail[:done], ~retracing.backing)

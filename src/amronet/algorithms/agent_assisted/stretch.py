@@ -192,9 +192,13 @@ class QuietStretch:
             return None
         retracing, limit = start
         length, reach = comp.moves()
-        if a.sensor_range + a.largest_radius() > table.r or (a.collisions and reach > table.r):
+        farthest, widest = length, reach
+        if retracing.backing.any():  # (retrace's backing agents go up to their top speed)
+            farthest = np.where(retracing.backing, retracing.max_step * (1.0 + 1e-9), length)
+            widest = max(reach, 2.0 * a.largest_radius() + 2.0 * float(farthest.max()))
+        if a.sensor_range + a.largest_radius() > table.r or (a.collisions and widest > table.r):
             return None
-        moving = self._moving(length, table.r)
+        moving = self._moving(farthest, table.r)
         if moving is None:
             return None
         tri = moving.tri

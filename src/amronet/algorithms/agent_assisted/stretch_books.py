@@ -43,8 +43,10 @@ class Retracing(NamedTuple):
     At the start of every step after its first, each agent linked at the last one's end (:class:`Links`) was in
     contact at this step's time, ``(first + steps done) * dt`` as the loop counts it (what
     :meth:`~.retrace.Retracer.steer_agents` notes); the stretch stops before a step in which an agent not on a
-    given path would start to back up (out of contact for ``confirm`` seconds). The agents' positions at the start
-    of each step go into ``trail`` (their odometry, :meth:`~.retrace.Breadcrumbs.replay`).
+    given path would start to back up (out of contact for ``confirm`` seconds), or a backing agent would stop (it is
+    linked). The agents' positions at the start of each step go into ``trail`` (the odometry of those not backing up,
+    :meth:`~.retrace.Breadcrumbs.replay`). Backing agents and retracing routers head for their points with the
+    repair's ``steering`` and take the next points of their ways (:mod:`~.retrace_kernels`).
     """
 
     trail: np.ndarray
@@ -59,6 +61,30 @@ class Retracing(NamedTuple):
     """The stretch's first step."""
     dt: float
     """Step length, seconds."""
+    backing: np.ndarray
+    """Which agents back up their own path ``(A,)`` (the repair's, the same all through the stretch)."""
+    reach: float
+    """A point of a way counts as reached within this distance (:attr:`~.retrace.Retracer.reach`)."""
+    sensor_range: float
+    """The agents' sensors' range."""
+    max_step: np.ndarray
+    """Each agent's step at its top speed ``(A,)``."""
+    steering: tuple
+    """The repair's :class:`~amronet.algorithms.common.goto.Steering` (a plain tuple), kept in place."""
+    points: np.ndarray
+    """The breadcrumbs' points ``(P, 2)`` (:attr:`~.breadcrumbs.Breadcrumbs.xy`)."""
+    parent: np.ndarray
+    """Each point's predecessor ``(P,)``."""
+    paths: np.ndarray
+    """The agents' paths ``(A, L)``, the first ``length`` of each row."""
+    length: np.ndarray
+    """Their lengths ``(A,)``, kept in place (backing agents forget the points they reach)."""
+    tip: np.ndarray
+    """Their newest points ``(A,)``, kept in place."""
+    node: np.ndarray
+    """Per robot, the point of its way it heads for ``(N,)``, kept in place (:attr:`~.retrace.Retracer.node`)."""
+    skips: np.ndarray
+    """Per robot, the points it skipped in a row ``(N,)``, kept in place."""
 
 
 class ReverseDrop(NamedTuple):
@@ -94,9 +120,17 @@ def no_reverse_drop(m: int) -> ReverseDrop:
                        np.zeros(m, dtype=np.bool_))
 
 
+_NO_STEERING = (np.zeros((0, 2)), np.zeros((0, 1), dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64), 1, 0.25)
+"""The :class:`Retracing`'s steering without ``repair: retrace`` (its types as the repair's)."""
+
+
 def no_retracing(m: int) -> Retracing:
     """The :class:`Retracing` of a stretch without ``repair: retrace``, for ``m`` agents: it keeps nothing."""
-    return Retracing(np.zeros((0, m, 2)), np.zeros(m), np.zeros(m, dtype=np.bool_), np.inf, 0, 1.0)
+    none = np.zeros(0, dtype=np.int64)
+    return Retracing(np.zeros((0, m, 2)), np.zeros(m), np.zeros(m, dtype=np.bool_), np.inf, 0, 1.0,
+                     np.zeros(m, dtype=np.bool_), 0.0, 0.0, np.zeros(m), _NO_STEERING, np.zeros((0, 2)), none,
+                     np.zeros((m, 1), dtype=np.int64), np.ones(m, dtype=np.int64), np.zeros(m, dtype=np.int64), none,
+                     none)
 
 
 @njit(cache=True)

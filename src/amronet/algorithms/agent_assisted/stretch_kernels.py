@@ -14,9 +14,11 @@ A step in which an agent hears a reference of another network (a triangle candid
 would go ahead by the local rule or none (:func:`~amronet.algorithms.common.triangular.select_triangles`): the
 controller then does nothing but what a quiet step does. Under the global rule such a step ends the stretch. Triangle
 routers driving to their goals, ``strip-goals``' routers driving to theirs (the same steering, another keep radius),
-or routers relocating (``repair: relocate``, their own steering), are steered and moved with the agents, as the
-controller and the move phase do it, in the steps before one of them arrives or gives up. It stops at the first step
-that is not quiet, part-way through it, and says where: the Python path finishes that step.
+or routers relocating (``repair: relocate``, or ``retrace`` along their ways, the repair's steering), are steered
+and moved with the agents, as the controller and the move phase do it, in the steps before one of them arrives or
+gives up. Under ``retrace`` agents that back up their own path are steered as the repair steers them
+(:mod:`~.retrace_kernels`). It stops at the first step that is not quiet, part-way through it, and says where: the
+Python path finishes that step.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from numba import njit
 from amronet.algorithms.agent_assisted.explorers.frontier.navigation import navigate_kernel
 from amronet.algorithms.agent_assisted.kernels import drive_movers, integrate_agents, sense_track_agents
 from amronet.algorithms.agent_assisted.relocate_kernels import same_network_links
+from amronet.algorithms.agent_assisted.retrace_kernels import aim_routers, retrace_stops, steer_backing
 from amronet.algorithms.agent_assisted.rule_kernels import JUNCTION, LINK, PAPER, agents_contact, rule_acts, rule_commit
 from amronet.algorithms.agent_assisted.stretch_books import Links, back_up, back_up_starts, observe_links
 from amronet.algorithms.agent_assisted.stretch_links import Radio, margin_law, next_radio
@@ -124,12 +127,14 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     (now, stamp, avoid, bitgen, sigma, layer_robots, no_robots, covered, gap, visited, settings, plans, buffers,
      active) = frontier
     blocked, clear, ox, oy, res = grid
-    trail, contact_at, on_path, confirm, first, step_dt = retracing
+    trail = retracing[0]
+    backs = trail.shape[0] > 0 and retracing[6].any()  # (retrace's agents backing up)
     _, _, _, _, _, rule_first, rule_dt, rule_contact, _ = rules
     linked = books[2][0]
     m = agents.shape[0]
     n = xy.shape[0]
     nt = tri.shape[0]
+    retraced = tri[:nt if network.shape[0] else 0]  # (under retrace: the routers retracing their way)
     movers = np.empty(m + nt, np.int64)  # the agents, then the triangle routers (the controller's order)
     lengths = np.empty(m + nt)
     for j in range(m):
@@ -148,20 +153,16 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
     backing = reverse_drop[0].shape[0] > 0  # (agents.reverse_drop)
     margins, law = margin_law(rules[0][0] == LINK, radio[10])  # (whether the tables keep the margins the rule reads)
     contact = rules[0][0] == JUNCTION or backing  # (the rule or the reverse drop reads the agents' contact)
-    done = 0
+    done = np.int64(0)  # (typed so from the start: a callee is compiled for it once)
     looked = 0
     idle = 0
     while done < limit:
         if done and network.shape[0] and not same_network_links(radio[1], radio[2], network, links):  # (relocate)
             return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked, idle)
-        if trail.shape[0]:  # retrace: who was in contact, who would back up now; the agents' odometry
-            t = (first + done) * step_dt
-            for j in range(m if done else 0):
-                if linked[j]:
-                    contact_at[j] = t
-                elif not on_path[j] and t - contact_at[j] >= confirm - 1e-9:
-                    return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked,
-                                      idle)
+        if trail.shape[0]:  # retrace: the contact, a step its own code must take (retrace_stops); the odometry
+            if retrace_stops(retracing, done, agents, xy, linked, retraced):
+                return StretchEnd(done, QUIET, 0, 0, radio, np.empty((m, angles.shape[0])), stamp, now, looked,
+                                  idle)
             for j in range(m):
                 trail[done, j, 0] = xy[agents[j], 0]
                 trail[done, j, 1] = xy[agents[j], 1]
@@ -207,11 +208,15 @@ def quiet_stretch(grid, robots, ring, moves, radio, tracking, who_acts, moving, 
         if backing:  # the reverse drop's books, and the agents that back up (their contact as above)
             back_up(reverse_drop, (rule_first + done) * rule_dt, agents, xy, heading, rule_contact)
         reach_now = reach
-        if nt:  # the triangle and strip routers' rings, then their steering, unless one arrives or gives up now
-            for q in range(nt):
-                if goal_ends(tri[q], xy, Steering(goal, anchors, last_to_goal, blocked_steps, give_up, min_progress),
-                             max_step[q]):
-                    return StretchEnd(done, TRIANGLES_END, 0, 0, radio, scans, stamp, now, looked, idle)
+        if retraced.shape[0] and trail.shape[0]:  # retrace's routers take the points they have reached
+            aim_routers(retracing, retraced, xy)
+        for q in range(nt):  # a triangle, strip or relocating router that arrives or gives up now ends the stretch
+            if goal_ends(tri[q], xy, Steering(goal, anchors, last_to_goal, blocked_steps, give_up, min_progress),
+                         max_step[q]):
+                return StretchEnd(done, TRIANGLES_END, 0, 0, radio, scans, stamp, now, looked, idle)
+        if backs:  # retrace's backing agents, as the repair steers them once the explorer has
+            reach_now = 2.0 * largest + 2.0 * steer_backing(retracing, agents, xy, heading, scans, angles, lengths, dt)
+        if nt:  # the routers' rings, then their steering
             for q in range(nt):
                 i = tri[q]
                 cast_grid_one(blocked, clear, ox, oy, res, xy[i, 0], xy[i, 1], heading[i], t_angles, t_sensor_range,
