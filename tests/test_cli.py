@@ -186,3 +186,18 @@ def test_set_reads_the_usual_float_notations(value, words, tmp_path, capsys):
                         capsys=capsys)
     assert code == 2 and cap.err.count("\n") == 1 and cap.err.startswith(f"amronet: error: {words}"), cap.err
     assert not (tmp_path / "o").exists()
+
+
+def test_bench_refuses_agent_assisted_naming_its_own_option(capsys):
+    code, cap = run_cli("bench", "--algorithm", "agent-assisted", "--map", "open-6x6", "--robots", "30", "--steps",
+                        "5", capsys=capsys)
+    assert code == 2 and cap.err.count("\n") == 1, cap.err
+    assert cap.err.startswith("amronet: error: --algorithm: bench times routers that spread by themselves; in "
+                              "agent-assisted agents release them"), cap.err
+
+
+def test_bench_says_a_too_short_radius_as_rc(capsys):
+    code, cap = run_cli("bench", "--map", "open-6x6", "--robots", "30", "--steps", "5", "--rc", "0.05", capsys=capsys)
+    assert code == 2 and cap.err.count("\n") == 1, cap.err
+    assert cap.err.startswith("amronet: error: --rc: 0.05 m is too short: the 'about to lose' band"), cap.err
+    assert cap.err.rstrip().endswith("give a larger --rc") and "sim.dt" not in cap.err

@@ -91,6 +91,14 @@ def test_replay_page_is_self_contained(recorded, tmp_path):
     assert len(header["timeseries"]["t"]) == 21
 
 
+def test_replay_reports_the_frames_the_page_holds(recorded, tmp_path, capsys):
+    out = tmp_path / "replay.html"
+    assert main(["replay", str(recorded), "--out", str(out), "--every", "3", "--max-frames", "5"]) == 0
+    assert capsys.readouterr().out.startswith("replay of 5 frames of 41 recorded, 31 robots")
+    header = json.loads(re.search(r'id="amronet-header">(.*?)</script>', out.read_text(), re.S).group(1))
+    assert header["frames"] == 5
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [

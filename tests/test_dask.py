@@ -131,3 +131,12 @@ def test_losing_the_scheduler_mid_sweep_is_one_line_and_keeps_the_finished_runs(
     kept = runs_in(store)
     assert 2 <= kept < 30
     assert main(["sweep", str(path), "--store", str(store), "--workers", "2", "--json", "-q"]) == 0
+
+
+@pytest.mark.parametrize("address", ["nonsense", "tcp://127.0.0.1:notaport", "nosuchproto://127.0.0.1:8786"])
+def test_a_malformed_scheduler_address_is_one_line(tmp_path, capsys, address):
+    path = write_sweep(tmp_path / "s.yaml", tiny_sweep())
+    assert main(["sweep", str(path), "--store", str(tmp_path / "r.sqlite"), "--scheduler", address]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"amronet: error: --scheduler: {address!r} is not a scheduler address ("), err
+    assert "\n" not in err and not (tmp_path / "r.sqlite").exists()

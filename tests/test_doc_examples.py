@@ -25,6 +25,7 @@ import pytest
 
 from amronet.scenario import load_scenario, parse_override
 from amronet.scenario.loading import list_presets
+from amronet.sim import Simulation
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
@@ -127,10 +128,11 @@ def _scenario_of(words: list[str], page_scenarios: dict[str, dict]) -> object | 
 
 
 @functools.cache
-def _named_scenarios() -> dict[str, dict]:
-    """Scenario examples written in the pages, by the file name their page gives them (``# my-scenario.yaml``)."""
+def _named_scenarios(page: Path) -> dict[str, dict]:
+    """Scenario examples written in the pages, by the file name their ``name`` gives them (``my-scenario.yaml``);
+    those of ``page`` itself win over another page's of the same name, which its reader may never see."""
     named = {}
-    for _block, doc in _yaml_docs():
+    for _block, doc in sorted(_yaml_docs(), key=lambda bd: bd[0].page == page):
         if _is_scenario(doc):
             named[f"{doc.get('name', 'scenario')}.yaml"] = doc
     return named
@@ -145,11 +147,11 @@ def test_command_examples_name_real_presets_and_valid_overrides(block, words):
     sets = [words[i + 1] for i, w in enumerate(words) if w == "--set"]
     if not sets:
         return
-    target = _scenario_of(words, _named_scenarios())
+    target = _scenario_of(words, _named_scenarios(block.page))
     overrides = dict(parse_override(s) for s in sets)
     if target is None:  # a command that takes --set without a scenario (radio-map, plan): check the values parse
         return
-    load_scenario(target, overrides)
+    Simulation(load_scenario(target, overrides), seed=0)  # set up as the command would: its controller too
 
 
 TUTORIALS = ROOT / "docs" / "tutorials"

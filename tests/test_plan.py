@@ -226,3 +226,12 @@ def test_plan_advice_names_plan_s_own_options(tmp_path, capsys, args, words):
     for foreign in ("loss_margin", "sim.dt", "--force", "sim.time_limit"):
         assert foreign not in err
     assert not (tmp_path / "p").exists()
+
+
+def test_plan_optimum_errors_name_optimum_not_a_spacing_plan_lacks(tmp_path, capsys):
+    code = main(["plan", "--map", "open-6x6", "--base", "0,0", "--rc", "50", "--runs", "1", "--optimum", "5", "-q",
+                 "--out", str(tmp_path / "p")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert err.startswith("amronet: error: --optimum: no candidate site of the 25 m lattice"), err
+    assert "amronet optimum --spacing" in err and not (tmp_path / "p").exists()

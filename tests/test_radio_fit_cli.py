@@ -80,6 +80,14 @@ def test_missing_file_and_bad_options(tmp_path, capsys):
     assert code == 2 and "cannot read" in capsys.readouterr().err
 
 
+def test_a_floor_above_readings_is_refused(tmp_path, capsys):
+    assert _run(tmp_path, extra=["--floor-dbm", "-52"]) == 2  # the readings go down to -55.8 dBm
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("amronet: error: --floor-dbm: -52 dBm is above "), err
+    assert "the weakest is -55.8 dBm" in err and "\n" not in err
+    assert not (tmp_path / "fit").exists()
+
+
 @pytest.fixture
 def flat() -> Path:
     if not (FLAT / "rssi.csv").is_file():

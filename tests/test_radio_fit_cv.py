@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,7 @@ from amronet.engine.shadowing import ShadowingField
 from amronet.radiofit import FitOptions, RadioFitError, fit_radio
 from amronet.radiofit.fit import block_size
 from amronet.radiofit.linear import block_of_spots, fold_of_blocks
+from amronet.radiofit.variogram import fit_gudmundson
 from amronet.world.builtin import resolve_map
 from test_radio_fit import synthesise
 
@@ -43,6 +46,20 @@ def test_block_size_from_the_correlation_distance_and_its_limits():
     assert side == 2.0 and "given" in rule
     with pytest.raises(RadioFitError, match=r"^--block-m: blocks of 10 m hold the positions in 4 blocks"):
         block_size(xy, 0.5, 5, given=10.0)
+
+
+def test_block_size_ends_when_the_positions_lie_within_a_centimetre():
+    # 25 positions within 1.5 cm: no side of 1 cm or more gives 10 blocks, and rounding to 1 cm stops the shrinking
+    xy = 4.2 + 0.015 * np.random.default_rng(0).random((25, 2))
+    side, block, rule = block_size(xy, 0.74, 5)
+    assert side == 0.0 and np.array_equal(block, np.arange(25)) and "own block" in rule
+
+
+def test_a_variogram_too_short_for_a_covariance_fits_without_a_warning():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        nugget, sill, _corr = fit_gudmundson(np.array([0.005, 0.01]), np.array([3.0, 3.0]), np.array([10, 10]))
+    assert np.isfinite(nugget) and np.isfinite(sill)
 
 
 def _cv_gap(tmp_path, field_sigma_db: float | None, seed: int) -> tuple[float, float]:

@@ -236,3 +236,22 @@ def test_an_override_computes_the_defaults_that_follow_the_algorithm_and_the_rob
                            "base_stations": [{"x": 1.0, "y": 1.0, "region": [1.0, 1.0]}]})
     kept = given.with_overrides({"agents.per_base": 12, "algorithm.name": "self-spreading"})
     assert kept.routers.count == 4 and kept.radio.r_c == 3.0 and kept.base_stations[0].region == (1.0, 1.0)
+
+
+@pytest.mark.parametrize(("section", "value", "message"), [
+    ("algorithm", "self-spreading", "algorithm: must be a mapping of its fields (got 'self-spreading'); its keys: "
+                                    "name, params"),
+    ("radio", 4, "radio: must be a mapping of its fields (got 4); its keys: model, r_c, "),
+    ("base_stations", [1], "base_stations[0]: must be a mapping of its fields (got 1); its keys: x, y, region, "),
+])
+def test_a_section_given_a_plain_value_names_its_keys_not_a_class(section, value, message):
+    text = str(err({**BASE, section: value}))
+    assert text.startswith(message), text
+    assert "Spec" not in text
+
+
+@pytest.mark.parametrize("text", ["", "# only a comment\n"])
+def test_an_empty_scenario_file_says_so(tmp_path, text):
+    path = tmp_path / "empty.yaml"
+    path.write_text(text)
+    assert str(err(str(path))) == f"scenario: {str(path)!r} is empty; give at least map and base_stations"

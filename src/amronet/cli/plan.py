@@ -79,8 +79,15 @@ def _optimum(args: argparse.Namespace, bases: list[tuple[float, float]]) -> dict
     from amronet.optimum import find_or_load_optimum
 
     radio = _mission(args).radio
-    opt = find_or_load_optimum(args.map, bases, args.rc, args.rc / 2, radio=radio, seed=args.seed,
-                               time_limit=args.optimum, store=args.store)
+    try:
+        opt = find_or_load_optimum(args.map, bases, args.rc, args.rc / 2, radio=radio, seed=args.seed,
+                                   time_limit=args.optimum, store=args.store)
+    except AmronetError as exc:  # plan has no --spacing: name its lattice, and the command that takes one
+        if not str(exc).startswith("--spacing: "):
+            raise
+        why = str(exc).removeprefix("--spacing: ")
+        raise AmronetError(f"--optimum: {why} (plan's lattice is r_c / 2 = {args.rc / 2:g} m; amronet optimum "
+                           "--spacing takes a finer one)") from None
     return {"routers": opt.count, "lower_bound": opt.lower, "gap": opt.gap, "optimal": opt.optimal,
             "spacing_m": opt.spacing, "time_limit_s": args.optimum, "solver_status": opt.solver["status"]}
 

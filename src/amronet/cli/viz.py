@@ -246,15 +246,18 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
+    from amronet.viz.frames import pick_frames
     from amronet.viz.recorded import check_frame_options, check_layer
     from amronet.viz.replay import replay_html
 
     def render(folder: Path, rec: Recording) -> Callable[[Path], str]:
         page = replay_html(rec, folder, every=args.every, max_frames=args.max_frames, layer=args.layer)
+        kept = len(pick_frames(rec.frames, args.every, args.max_frames))
 
         def write(tmp: Path) -> str:
             tmp.write_bytes(page)
-            return f"replay of {rec.frames} frames, {int(rec.n.max())} robots ({len(page) / 1e6:.1f} MB)"
+            return (f"replay of {kept} frames of {rec.frames} recorded, {int(rec.n.max())} robots "
+                    f"({len(page) / 1e6:.1f} MB)")
 
         return write
 

@@ -175,7 +175,7 @@ def block_size(spot_xy: np.ndarray, corr_m: float, k: int, given: float | None =
     place. Blocks hold neighbours out together. Given ``given``, blocks of that side; else
     :data:`BLOCK_CORR_LENGTHS` times ``corr_m`` (rounded to 1 cm), shrunk by factors of 0.8 until there are at
     least ``2 k`` blocks; when the residuals show no correlation (``corr_m`` not finite, or at the lower bound of
-    the variogram's fit), each spot is its own block (side 0).
+    the variogram's fit), or when even blocks of 1 cm are fewer than ``2 k``, each spot is its own block (side 0).
 
     Raises:
         RadioFitError: ``given`` leaves fewer than ``2 k`` blocks.
@@ -195,6 +195,9 @@ def block_size(spot_xy: np.ndarray, corr_m: float, k: int, given: float | None =
     block = block_of_spots(spot_xy, side)
     shrunk = False
     while int(block.max()) + 1 < 2 * k:
+        if round(0.8 * side, 2) in (side, 0.0):  # 1 cm shrinks no further: the positions lie closer than that
+            return 0.0, np.arange(len(spot_xy)), (f"the positions leave fewer than {2 * k} blocks even of 1 cm: "
+                                                  "each position is its own block")
         side, shrunk = round(0.8 * side, 2), True
         block = block_of_spots(spot_xy, side)
     if shrunk:
@@ -261,14 +264,24 @@ def _detail(r: Readings, fit: ModelFit, weights: np.ndarray, floor: float, max_l
 
 
 def fit_radio(r: Readings, opt: FitOptions) -> RadioFit:
-    """Fit the comparison table and the detailed models of ``opt`` to the readings ``r`` (see the module doc)."""
+    """Fit the comparison table and the detailed models of ``opt`` to the readings ``r`` (see the module doc).
+
+    Raises:
+        RadioFitError: ``opt.floor_dbm`` is above a reading, or the positions are too few for the folds.
+    """
+    weakest = float(np.min(r.rssi))
+    if opt.floor_dbm is not None and opt.floor_dbm > weakest:
+        below = int(np.sum(r.rssi < opt.floor_dbm))
+        raise RadioFitError(f"--floor-dbm: {opt.floor_dbm:g} dBm is above {below} of the {len(r.rssi)} readings (the "
+                            f"weakest is {weakest:g} dBm), but receivers report nothing below their floor; give "
+                            f"{weakest:g} or lower, or leave it out")
     if r.n_spots < 2 * opt.folds:
         raise RadioFitError(f"--rssi: {r.n_spots} distinct positions are too few for {opt.folds}-fold "
                             "cross-validation; give more positions or fewer --folds")
     fold_rng, boot_rng, block_rng = np.random.default_rng(opt.seed).spawn(3)
     spot_fold = fold_of_spots(fold_rng, r.n_spots, opt.folds)
     weights = spot_weights(boot_rng, r.n_spots, opt.n_boot)
-    floor = float(np.min(r.rssi)) if opt.floor_dbm is None else float(opt.floor_dbm)
+    floor = weakest if opt.floor_dbm is None else float(opt.floor_dbm)
     table = [_basic(r, LinearModel(m, pa)) for pa in (False, True) for m in MODELS]
     corr = float("nan")
     if opt.block_m is None:  # the blocks' side from the multi-wall residuals' correlation distance

@@ -17,11 +17,12 @@ residuals are those of the full fit: the variogram's spread, not the mean fit's,
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
-from scipy.optimize import curve_fit
+from scipy.optimize import OptimizeWarning, curve_fit
 from scipy.spatial import cKDTree
 
 __all__ = ["CORR_BOUNDS_M", "Variogram", "empirical_variogram", "fit_gudmundson", "gudmundson"]
@@ -113,8 +114,10 @@ def fit_gudmundson(lag: np.ndarray, gamma: np.ndarray, pairs: np.ndarray) -> tup
     p0 = (float(gamma[0]) * 0.5, max(top - float(gamma[0]) * 0.5, 1e-3), 1.0)
     try:
         bounds = ([0.0, 0.0, CORR_BOUNDS_M[0]], [np.inf, np.inf, CORR_BOUNDS_M[1]])
-        (nug, sill, corr), _ = curve_fit(gudmundson, lag, gamma, p0=p0, sigma=1.0 / np.sqrt(pairs),
-                                         bounds=bounds, max_nfev=2000)
+        with warnings.catch_warnings():  # the covariance is not used: a variogram too short for it is no news
+            warnings.simplefilter("ignore", OptimizeWarning)
+            (nug, sill, corr), _ = curve_fit(gudmundson, lag, gamma, p0=p0, sigma=1.0 / np.sqrt(pairs),
+                                             bounds=bounds, max_nfev=2000)
     except RuntimeError:  # no convergence: a flat variogram, nothing correlated to see
         return float(np.average(gamma, weights=pairs)), 0.0, float("nan")
     return float(nug), float(sill), float(corr)

@@ -79,6 +79,8 @@ def load_scenario(source: Scenario | dict[str, Any] | str | Path, overrides: dic
                 + ", ".join(list_presets())
             )
         data = load_yaml(text, "scenario", shown)
+        if data is None:  # no text, or comments only
+            raise ScenarioError("scenario", f"{shown} is empty; give at least map and base_stations")
     if overrides:
         data = apply_overrides(data if isinstance(data, dict) else {}, overrides)
     if isinstance(source, str | Path) and isinstance(data, dict) and isinstance(data.get("map"), str):

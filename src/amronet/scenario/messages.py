@@ -88,6 +88,9 @@ def to_scenario_error(exc: ValidationError, *, model: type[BaseModel], prefix: s
     shown = repr(got) if not isinstance(got, dict | list) else type(got).__name__
     if isinstance(got, float) and math.isnan(got):
         shown = "nan"
+    if err.get("type") == "model_type":  # a section given a plain value: name the keys it takes, not the class
+        keys = ", ".join(_allowed_keys(model, (*loc, None)))
+        return ScenarioError(field, f"must be a mapping of its fields (got {shown}); its keys: {keys}")
     hint = ""
     if err.get("type") == "string_type" and isinstance(got, bool | int | float):
         hint = f"; YAML read a {'boolean' if isinstance(got, bool) else 'number'}: put the value in quotes"

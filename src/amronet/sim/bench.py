@@ -24,7 +24,7 @@ from scipy import ndimage
 
 from amronet import limits
 from amronet.engine.robots import Role
-from amronet.errors import AmronetError
+from amronet.errors import AmronetError, ScenarioError
 from amronet.scenario import load_scenario
 from amronet.sim.loop import StepKind, check_seed
 from amronet.sim.simulation import Simulation
@@ -102,7 +102,8 @@ def run_bench(
     Raises:
         AmronetError: ``robots`` or ``steps`` below 1, ``r_c`` not a finite number > 0, more robots than the
             memory available holds, or (without ``force``) more than ``limits.MAX_ROBOT_STEPS`` robot-steps (named
-            as the options of ``amronet bench``).
+            as the options of ``amronet bench``); an ``r_c`` too short for the routers' step, or an algorithm
+            whose agents release the routers.
         ScenarioError: ``seed`` is not an integer in ``[0, 2**63 - 1]`` (as ``amronet run`` refuses it).
     """
     seed = check_seed(seed)
@@ -139,7 +140,17 @@ def run_bench(
     })
     t0 = time.perf_counter()
     # the work is checked above; time_limit is a sentinel
-    sim = Simulation(scenario, seed, omap=omap, force=True, step=step)
+    try:
+        sim = Simulation(scenario, seed, omap=omap, force=True, step=step)
+    except ScenarioError as exc:  # fields bench does not have, said as its own options
+        if exc.field == "algorithm.params.loss_margin":  # the band is a share of r_c
+            why = exc.message.split(";")[0]
+            raise AmronetError(f"--rc: {r_c:g} m is too short: {why}; give a larger --rc") from None
+        if exc.field not in ("routers.count", "agents.per_base"):
+            raise
+        raise AmronetError(f"--algorithm: bench times routers that spread by themselves; in {algorithm} agents "
+                           "release them: time a run instead (amronet run, e.g. --preset agent-assisted-office)"
+                           ) from None
     setup_s = time.perf_counter() - t0
     sim.step()  # warm-up (numba compilation from cache, first allocations)
     for k in sim.phase_seconds:

@@ -145,6 +145,12 @@ class DaskExecutor(Executor):
                 self.cluster.close()
             where = scheduler or "a LocalCluster"
             raise AmronetError(f"--scheduler: cannot reach {where}: {str(exc).splitlines()[0]}") from None
+        except ValueError as exc:  # an address distributed cannot parse: no port, an unknown protocol
+            if scheduler is None:
+                raise
+            self._unquiet()
+            raise AmronetError(f"--scheduler: {scheduler!r} is not a scheduler address ({str(exc).splitlines()[0]}); "
+                               "give one such as tcp://host:8786") from None
 
     @property
     def slots(self) -> int:  # noqa: D102
