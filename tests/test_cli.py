@@ -120,6 +120,15 @@ def test_maps_list_and_show(tmp_path, capsys):
     assert code == 2 and "unknown map" in cap.err and not (tmp_path / "x.png").exists()
 
 
+def test_maps_list_and_show_give_a_map_the_same_size(tmp_path, capsys):
+    """One rounding for both: depot's 307 cells of 0.05 m (15.35 m) print as 15.4 in each."""
+    listed = run_cli("maps", "list", capsys=capsys)[1].out
+    depot = next(line for line in listed.splitlines() if line.startswith("depot "))
+    code, cap = run_cli("maps", "show", "depot", "--out", str(tmp_path / "depot.png"), capsys=capsys)
+    assert " 30.2 x 15.4 " in depot, depot
+    assert code == 0 and cap.out.startswith("depot: 30.2 m x 15.4 m at 0.05 m/cell"), cap.out
+
+
 def test_bench_json(capsys):
     code, cap = run_cli("bench", "--robots", "200", "--steps", "5", "--map", "cave", "--json", capsys=capsys)
     assert code == 0

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from amronet.engine.coverage import CoverageArea
 from amronet.engine.network import connected_to
+from amronet.errors import AmronetError
 from amronet.optimum import build_instance, find_optimum
 from amronet.optimum.heuristic import connected, covers_all
 from amronet.optimum.reduce import reduce_instance
@@ -75,6 +76,17 @@ def test_one_router_in_the_middle_covers_an_open_room():
 def test_the_base_alone_covers_a_small_room():
     opt = find_optimum(room(40), [(1.0, 1.0)], r_c=2.0, spacing=0.5, time_limit=5)
     assert (opt.count, opt.lower, opt.optimal, opt.gap) == (0, 0, True, 0.0)
+
+
+@pytest.mark.parametrize("spacing", [0.5, 50.0])
+def test_the_base_alone_needs_no_site_whatever_the_spacing(spacing):
+    """On a lattice too coarse for any site the answer is still 0 routers when the base covers everything."""
+    opt = find_optimum(room(40), [(1.0, 1.0)], r_c=50.0, spacing=spacing, time_limit=5)
+    assert (opt.count, opt.lower, opt.optimal, opt.gap) == (0, 0, True, 0.0)
+    assert opt.verified == {"coverage": 1.0, "connected": True, "uncovered_cells": 0}
+    assert (opt.instance.n_sites == 0) == (spacing == 50.0)
+    with pytest.raises(AmronetError, match="no candidate site of the 50 m lattice lies where a router fits"):
+        build_instance(room(40), [(1.0, 1.0)], r_c=0.5, spacing=50.0)  # cells the base leaves need a site
 
 
 def test_walls_stop_the_multi_wall_radio_so_each_room_needs_its_router():

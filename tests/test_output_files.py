@@ -107,11 +107,21 @@ def test_empty_folders_symlinks_and_files(tmp_path):
     assert (tmp_path / "empty" / "a.txt").read_bytes() == b"x"
     (tmp_path / "target").mkdir()
     (tmp_path / "link").symlink_to(tmp_path / "target")
-    with pytest.raises(AmronetError, match="not a folder"):
-        check_output_folder(tmp_path / "link")
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    for link in ("link", "dangling"):  # refused, in words that say why: amronet writes only into a real folder
+        with pytest.raises(AmronetError, match="is a symbolic link; amronet writes only into a real folder"):
+            check_output_folder(tmp_path / link)
     (tmp_path / "file").write_text("x")
-    with pytest.raises(AmronetError, match="not a folder"):
+    with pytest.raises(AmronetError, match="exists and is not a folder"):
         check_output_folder(tmp_path / "file")
+
+
+def test_run_out_a_link_to_a_folder_is_refused_as_a_link(tmp_path, capsys):
+    (tmp_path / "target").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "target")
+    code, cap = run(["run", "--preset", "self-spreading-6x6", "--out", str(tmp_path / "link"), *FAST, "-q"], capsys)
+    assert code == 2 and cap.err.count("\n") == 1 and "is a symbolic link" in cap.err, cap.err
+    assert "not a folder" not in cap.err and not any((tmp_path / "target").iterdir())
 
 
 def test_kept_store_files_survive_and_count_as_amronet_s(tmp_path):

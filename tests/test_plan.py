@@ -228,10 +228,26 @@ def test_plan_advice_names_plan_s_own_options(tmp_path, capsys, args, words):
     assert not (tmp_path / "p").exists()
 
 
-def test_plan_optimum_errors_name_optimum_not_a_spacing_plan_lacks(tmp_path, capsys):
-    code = main(["plan", "--map", "open-6x6", "--base", "0,0", "--rc", "50", "--runs", "1", "--optimum", "5", "-q",
-                 "--out", str(tmp_path / "p")])
+@pytest.mark.parametrize(("args", "words"), [
+    (["--radio", "multi-wall"], "--optimum: 4585 reachable cells can never be covered on the 3 m lattice"),
+    (["--optimum", "1e9"], "--optimum: must be a number of seconds > 0 and at most")])
+def test_plan_optimum_errors_come_before_the_runs_and_name_optimum(args, words, tmp_path, capsys, monkeypatch):
+    """An optimum that cannot be solved is refused before any run (none is lost); plan has no --spacing."""
+
+    def no_runs(*args, **kwargs):
+        raise AssertionError("the runs started before the optimum was checked")
+
+    monkeypatch.setattr("amronet.planning.plan", no_runs)
+    code = main(["plan", "--map", "office-32x32", "--base", "1,1", "--rc", "6", "--runs", "1", "--optimum", "5", "-q",
+                 "--out", str(tmp_path / "p"), *args])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1, err
-    assert err.startswith("amronet: error: --optimum: no candidate site of the 25 m lattice"), err
-    assert "amronet optimum --spacing" in err and not (tmp_path / "p").exists()
+    assert err.startswith(f"amronet: error: {words}"), err
+    assert ("amronet optimum --spacing" in err) == ("multi-wall" in args) and not (tmp_path / "p").exists()
+
+
+def test_plan_optimum_is_0_routers_when_the_base_covers_everything(capsys):
+    code = main(["plan", "--map", "open-6x6", "--base", "0,0", "--rc", "50", "--runs", "1", "--optimum", "5", "--json"])
+    optimum = json.loads(capsys.readouterr().out)["optimum"]
+    assert code == 0 and (optimum["routers"], optimum["lower_bound"], optimum["optimal"]) == (0, 0, True)
+    assert optimum["spacing_m"] == 25.0

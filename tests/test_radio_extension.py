@@ -1,12 +1,14 @@
 """A radio model is one extension point: one class, one registry line, one margin kernel (issue #35).
 
 A toy model defined here gets a neighbour table, coverage and a signal map from its margin kernel alone, declares no
-fast path, and says once in the log which slower paths it takes.
+fast path, and says once in the log (at debug level) which slower paths it takes.
 """
 
 from __future__ import annotations
 
 import logging
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -106,7 +108,7 @@ def test_a_toy_model_says_once_which_slower_paths_it_takes(sight, caplog):
     omap = wall_map()
     xy = np.random.default_rng(1).uniform((0.2, 0.2), (9.8, 4.8), (6, 2))
     area = CoverageArea(omap, omap.free)
-    with caplog.at_level(logging.WARNING, logger="amronet.engine.radio"):
+    with caplog.at_level(logging.DEBUG, logger="amronet.engine.radio"):
         for medium in (make_medium("sight", 2.0, omap), make_medium("sight", 2.0, omap)):
             for _ in range(3):
                 medium.update(xy)
@@ -114,6 +116,7 @@ def test_a_toy_model_says_once_which_slower_paths_it_takes(sight, caplog):
                 medium.signal_dbm(omap, xy[:1])
     said = [r.getMessage() for r in caplog.records if r.name == "amronet.engine.radio"]
     assert len(said) == 1, said
+    assert [r.levelno for r in caplog.records if r.name == "amronet.engine.radio"] == [logging.DEBUG]
     for words in ("radio model sight", "no compiled stretches", "no every_pair_is_link", "no disk_coverage",
                   "no margin_bound"):
         assert words in said[0]
@@ -121,13 +124,23 @@ def test_a_toy_model_says_once_which_slower_paths_it_takes(sight, caplog):
 
 def test_a_run_under_a_toy_model(sight, caplog):
     scenario = load_scenario("self-spreading-obstacles-6x6", {"radio.model": "sight", "sim.time_limit": 4.0})
-    with caplog.at_level(logging.WARNING, logger="amronet.engine.radio"):
+    with caplog.at_level(logging.DEBUG, logger="amronet.engine.radio"):
         sim = Simulation(scenario, 1)
         assert sim.step_context().keeps_every_pair is False
         sim.run()
     assert isinstance(sim.medium, sight)
     assert 0.0 < sim.metrics().coverage <= 1.0
     assert sum(r.name == "amronet.engine.radio" for r in caplog.records) <= 1  # once per process (maybe earlier)
+
+
+@pytest.mark.parametrize("quiet", [[], ["-q"]])
+def test_a_multi_wall_run_says_nothing_on_stderr(quiet, tmp_path):
+    """Choosing multi-wall is no mistake: its slower paths are a debug message, not a warning a user sees."""
+    proc = subprocess.run([sys.executable, "-m", "amronet.cli", "run", "--preset", "self-spreading-6x6", "--out",
+                           str(tmp_path / "p"), "--set", "radio.model=multi-wall", "--set", "sim.time_limit=2",
+                           "--no-snapshot", *quiet], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    assert (proc.stdout == "") == bool(quiet)
 
 
 def test_the_built_in_models_declare_their_fast_paths():

@@ -94,9 +94,9 @@ class CompileProgress:
 
 
 def quiet_warnings() -> None:
-    """Keep amronet's warnings (a radio model that takes slower paths) out of the compile's report.
+    """Keep amronet's log messages below errors out of the compile's report.
 
-    The warm-up runs every radio model on purpose; in each of its worker processes too (their initializer).
+    The warm-up runs every radio model and path on purpose; in each of its worker processes too (their initializer).
     """
     logging.getLogger("amronet").setLevel(logging.ERROR)
 

@@ -11,6 +11,7 @@ import contextlib
 import json
 import os
 import sys
+from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
 
 from amronet.cli.common import add_executor_arguments, make_executor_from_args
@@ -71,7 +72,7 @@ def _cmd_maps_list(args: argparse.Namespace) -> int:
         return 0
     print(f"{'name':<18} {'size (m)':>13} {'m/cell':>7}  description")
     for m in infos:
-        size = f"{m.size_m[0]:.1f} x {m.size_m[1]:.1f}"
+        size = f"{_metres(m.size_m[0])} x {_metres(m.size_m[1])}"
         print(f"{m.name:<18} {size:>13} {m.resolution:>7g}  {m.description}")
     return 0
 
@@ -87,8 +88,17 @@ def _cmd_maps_show(args: argparse.Namespace) -> int:
         raise AmronetError(f"--out: {args.out!r} must end in .png or .svg")
     write_file_atomically(out, lambda tmp: save_map_picture(omap, tmp))
     w, h = omap.size_m
-    print(f"{omap.name}: {w:.1f} m x {h:.1f} m at {omap.resolution:g} m/cell -> {out}")
+    print(f"{omap.name}: {_metres(w)} m x {_metres(h)} m at {omap.resolution:g} m/cell -> {out}")
     return 0
+
+
+def _metres(length: float) -> str:
+    """A map's width or height to 0.1 m, as ``maps list`` and ``maps show`` print it.
+
+    Rounded half up from the length to 1e-9 m, so that a size the cells give exactly prints the same however its
+    float was computed (307 cells of 0.05 m: ``15.4``).
+    """
+    return str(Decimal(repr(round(length, 9))).quantize(Decimal("0.1"), rounding=ROUND_HALF_UP))
 
 
 def _cmd_presets(args: argparse.Namespace) -> int:

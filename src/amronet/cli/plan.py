@@ -16,6 +16,8 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -44,6 +46,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         raise AmronetError(f"--time-limit: must be a finite number > 0, got {args.time_limit:g}")
     if args.optimum is not None and not (math.isfinite(args.optimum) and args.optimum > 0):
         raise AmronetError(f"--optimum: must be a number of seconds > 0, got {args.optimum:g}")
+    if args.optimum is not None:
+        _check_optimum(args, bases)
     with make_executor_from_args(args) as executor:
         options = RunOptions(explorer=args.explorer, time_limit=args.time_limit, seed=args.seed, store=args.store,
                              executor=executor, show_progress=not args.quiet and not args.json,
@@ -71,6 +75,32 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0 if p.recommended is not None else 1
 
 
+def _check_optimum(args: argparse.Namespace, bases: list[tuple[float, float]]) -> None:
+    """``--optimum``: refuse, before any run, an optimum that cannot be solved (its time limit, lattice or radio).
+
+    The problem is built here and again by the solve after the runs (a build is a small part of a solve).
+    """
+    from amronet.optimum import build_instance
+    from amronet.optimum.solve import check_time_limit
+
+    check_time_limit(args.optimum, "--optimum")
+    with _lattice_named(args):
+        build_instance(args.map, bases, args.rc, args.rc / 2, radio=_mission(args).radio, seed=args.seed)
+
+
+@contextmanager
+def _lattice_named(args: argparse.Namespace) -> Iterator[None]:
+    """Turn the optimum's ``--spacing`` errors into ``--optimum`` ones: plan has no --spacing; name its lattice."""
+    try:
+        yield
+    except AmronetError as exc:
+        if not str(exc).startswith("--spacing: "):
+            raise
+        why = str(exc).removeprefix("--spacing: ")
+        raise AmronetError(f"--optimum: {why} (plan's lattice is r_c / 2 = {args.rc / 2:g} m; amronet optimum "
+                           "--spacing takes a finer one)") from None
+
+
 def _optimum(args: argparse.Namespace, bases: list[tuple[float, float]]) -> dict[str, Any]:
     """``--optimum SECONDS``: the fewest routers on a lattice of ``r_c / 2``, kept in ``--store`` when given.
 
@@ -79,15 +109,9 @@ def _optimum(args: argparse.Namespace, bases: list[tuple[float, float]]) -> dict
     from amronet.optimum import find_or_load_optimum
 
     radio = _mission(args).radio
-    try:
+    with _lattice_named(args):
         opt = find_or_load_optimum(args.map, bases, args.rc, args.rc / 2, radio=radio, seed=args.seed,
                                    time_limit=args.optimum, store=args.store)
-    except AmronetError as exc:  # plan has no --spacing: name its lattice, and the command that takes one
-        if not str(exc).startswith("--spacing: "):
-            raise
-        why = str(exc).removeprefix("--spacing: ")
-        raise AmronetError(f"--optimum: {why} (plan's lattice is r_c / 2 = {args.rc / 2:g} m; amronet optimum "
-                           "--spacing takes a finer one)") from None
     return {"routers": opt.count, "lower_bound": opt.lower, "gap": opt.gap, "optimal": opt.optimal,
             "spacing_m": opt.spacing, "time_limit_s": args.optimum, "solver_status": opt.solver["status"]}
 

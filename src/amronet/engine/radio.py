@@ -48,7 +48,7 @@ reaches farther). A model may declare the fast paths it supports (class attribut
   of the paper): coverage in closed form, both methods, all runs of a batch in one call.
 
 A model that lacks one of them takes the slower path, and the first time it does in a process it says so in the
-log (logger ``amronet.engine.radio``, one warning per model).
+log (logger ``amronet.engine.radio``, one debug message per model: a user who chose the model has nothing to fix).
 """
 
 from __future__ import annotations
@@ -278,7 +278,7 @@ class RadioMedium:
         key = (type(self), tuple(slower))
         if slower and key not in _ANNOUNCED:
             _ANNOUNCED.add(key)
-            LOG.warning("radio model %s takes slower paths: %s", self.name, "; ".join(slower))
+            LOG.debug("radio model %s takes slower paths: %s", self.name, "; ".join(slower))
 
     # -- where the nodes are heard ---------------------------------------------------------------------------
     def run_coverages(self, area: CoverageArea, xy: np.ndarray, network: np.ndarray, linked: np.ndarray,

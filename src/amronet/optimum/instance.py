@@ -182,12 +182,12 @@ def build_instance(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, flo
     anchor = (float(bases[0][0]), float(bases[0][1]))
     sites, lattice = _lattice(omap, world.reachable, world.bases_xy, anchor, float(spacing), router_radius,
                               [robot_model(b.robot, "base_stations").radius for b in scenario.base_stations])
-    if len(sites) == 0:
-        raise _fail("--spacing", f"no candidate site of the {spacing:g} m lattice lies where a router fits; "
-                                 "use a finer spacing")
     area = CoverageArea(omap, world.reachable)
     base_cov = medium.covered_mask(area, world.bases_xy)
     cells = np.flatnonzero(world.reachable & ~base_cov)
+    if len(sites) == 0 and len(cells) > 0:  # base stations that cover everything alone need no site
+        raise _fail("--spacing", f"no candidate site of the {spacing:g} m lattice lies where a router fits; "
+                                 "use a finer spacing")
     index = np.full(omap.shape[0] * omap.shape[1], -1, dtype=np.int64)
     index[cells] = np.arange(len(cells))
     hits = [_covered(medium, area, index, xy) for xy in sites]
@@ -196,7 +196,8 @@ def build_instance(map_ref: str | OccupancyMap, bases: Sequence[tuple[float, flo
     if total > MAX_INCIDENCES:
         raise _fail("--spacing", f"{len(sites)} sites cover more than {MAX_INCIDENCES:.0e} (cell, site) pairs; "
                                  "use a coarser spacing")
-    cover = _csr(np.concatenate(hits), np.repeat(np.arange(len(sites)), [len(h) for h in hits]),
+    cover = _csr(np.concatenate([np.empty(0, dtype=np.int64), *hits]),
+                 np.repeat(np.arange(len(sites)), [len(h) for h in hits]),
                  (len(cells), len(sites)))
     table = medium.update(np.vstack([world.bases_xy, sites]))
     nb = len(world.bases_xy)

@@ -58,8 +58,8 @@ def check_output_folder(out_dir: str | Path, keep: Iterable[str] = (), option: s
         ``out_dir`` as a path.
 
     Raises:
-        AmronetError: The path is empty, is the current folder or contains it, exists and is not a folder, or
-            holds anything amronet did not write there (named in the message).
+        AmronetError: The path is empty, is the current folder or contains it, is a symbolic link, exists and is
+            not a folder, or holds anything amronet did not write there (named in the message).
     """
     if not str(out_dir).strip():
         raise AmronetError(f"{option}: empty path; name a folder, e.g. runs/a")
@@ -71,7 +71,10 @@ def check_output_folder(out_dir: str | Path, keep: Iterable[str] = (), option: s
                            "name a new folder, e.g. runs/a")
     if not os.path.lexists(out_dir):
         return out_dir
-    if out_dir.is_symlink() or not out_dir.is_dir():
+    if out_dir.is_symlink():
+        raise AmronetError(f"{option}: {where!r} is a symbolic link; amronet writes only into a real folder, not "
+                           "through a link: give the folder itself or another path")
+    if not out_dir.is_dir():
         raise AmronetError(f"{option}: {where!r} exists and is not a folder; choose another path")
     foreign = _foreign_entries(out_dir, _kept_names(keep))
     if foreign:
