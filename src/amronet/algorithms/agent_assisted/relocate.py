@@ -201,14 +201,16 @@ class Relocator:
 
         Only a loss waiting now can start one (a loss noticed at ``t`` is due ``confirm_s`` later), once it is due, its
         router may move and has no path to a base station on ``table`` (found afresh here, as :meth:`_start` finds it
-        after the look, unless the caller found it: ``cut``).
+        after the look, unless the caller found it: ``cut``), and :meth:`_choose` lets it start (a rule's routers may
+        wait for one another).
         """
         due = self._due(t, sw)
         if due is None:
             return False
         if cut is None:
             cut = ~connected_to(table, np.flatnonzero(sw.role == Role.BASE), sw.role != Role.AGENT)
-        return bool(cut[self._li[due]].any())
+        due &= cut[self._li]
+        return bool(due.any()) and len(self._choose(np.flatnonzero(due), table, sw)) > 0
 
     def quiet_steps(self, index: int, dt: float, limit: int, cut: np.ndarray, sw: Swarm) -> int:
         """How many steps from step ``index`` on (at most ``limit``) come before a loss of a cut-off router falls due.

@@ -45,7 +45,6 @@ import numpy as np
 
 from amronet.algorithms.agent_assisted.breadcrumbs import Breadcrumbs
 from amronet.algorithms.agent_assisted.relocate import Relocator
-from amronet.engine.network import connected_to
 from amronet.engine.radio import NeighbourTable
 from amronet.engine.robots import Role, State, Swarm, state_lookup
 from amronet.errors import ScenarioError
@@ -147,19 +146,6 @@ class Retracer(Relocator):
                 chosen.append(int(k))
                 started.append(i)
         return np.array(chosen, dtype=np.int64)
-
-    def could_start(self, t: float, table: NeighbourTable, sw: Swarm, cut: np.ndarray | None = None) -> bool:
-        """Whether :meth:`update` at ``t`` on ``table`` would start a move (its router due and not waiting).
-
-        The moves due as :meth:`.Relocator.could_start` finds them, less those whose router waits (:meth:`_choose`).
-        """
-        due = self._due(t, sw)
-        if due is None:
-            return False
-        if cut is None:
-            cut = ~connected_to(table, np.flatnonzero(sw.role == Role.BASE), sw.role != Role.AGENT)
-        due &= cut[self._li]
-        return bool(due.any()) and len(self._choose(np.flatnonzero(due), table, sw)) > 0
 
     def waiting(self, table: NeighbourTable, sw: Swarm) -> np.ndarray:
         """Which robots hear a relocating router on ``table``.
